@@ -1,0 +1,116 @@
+#pragma once
+// The simulated rig: a 1065 and a 1047 that speak the boards' byte protocol, with the pendulum's
+// physics behind them, known true parameters, injectable faults and injectable time.
+//
+// Physics advances lazily to the Clock's time whenever a transport reads or writes, so with a
+// VirtualClock a test runs minutes of rig time in milliseconds, and with a MonotonicClock reads block
+// in real time like the hardware. Everything random comes from the seed: the same seed and the same
+// calls at the same times give the same bytes.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "furuta/firmware_bridge/clock.hpp"
+#include "furuta/firmware_bridge/codec_1047.hpp"
+#include "furuta/firmware_bridge/codec_1065.hpp"
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/firmware_bridge/transport.hpp"
+
+namespace furuta::bridge {
+
+enum class RigBoard : std::uint8_t { motor_1065 = 0, encoder_1047 = 1 };
+
+struct SimulatedRigConfig {
+  ModelParameters parameters = ModelParameters::paper_run1();
+  MotorData motor{};
+  PendulumState initial_state{};
+
+  double integration_step_s = 1e-4;
+  std::int64_t report_period_ns = 8'000'000;
+  std::int64_t encoder_report_phase_ns = 3'000'000;  // 1047 reports are offset from the 1065's
+
+  double motor_encoder_counts_per_rev = 1024.0;      // motor shaft, before the gears
+  double pendulum_encoder_counts_per_rev = 4096.0;
+  int pendulum_channel = 0;                          // 1047 input wired to the pendulum
+
+  double arm_angle_noise_rad = 0.0;       // std dev, added before quantisation
+  double pendulum_angle_noise_rad = 0.0;  // std dev, added before quantisation
+  std::int64_t usb_latency_ns = 1'000'000;
+  std::int64_t usb_latency_jitter_ns = 0; // uniform in [0, jitter]
+
+  double supply_voltage_v = 12.0;
+  std::uint64_t seed = 1;
+
+  std::string serial_1065 = "300001";
+  int firmware_1065 = 105;
+  std::size_t input_report_bytes_1065 = 25;
+  std::size_t output_report_bytes_1065 = 4;
+  std::string serial_1047 = "300002";
+  int firmware_1047 = 101;
+  std::size_t input_report_bytes_1047 = 40;
+
+  bool record_truth = true;  // keep a TruthRecord per generated report (allocates; off for RT tests)
+};
+
+// What really happened at each report: for tests that check decoded data against the truth.
+struct TruthRecord {
+  RigBoard board = RigBoard::motor_1065;
+  std::int64_t generated_ns = 0;  // board time the report describes
+  std::int64_t report_index = 0;  // per board, counting dropped reports too
+  PendulumState state{};
+  double applied_duty = 0.0;
+  double arm_torque_nm = 0.0;
+  bool delivered = true;          // false when a fault dropped it
+};
+
+class SimulatedRig {
+ public:
+  SimulatedRig(SimulatedRigConfig config, Clock& clock);
+  ~SimulatedRig();
+  SimulatedRig(const SimulatedRig&) = delete;
+  SimulatedRig& operator=(const SimulatedRig&) = delete;
+
+  // A new USB handle onto this rig; open() it with the product id of the board wanted.
+  // The rig must outlive its transports.
+  std::unique_ptr<Transport> make_transport();
+  // What discovery would list: the boards currently connected.
+  std::vector<DeviceInfo> devices() const;
+
+  // --- faults (each applies to reports generated from now on) ---
+  void drop_reports(RigBoard board, int count);
+  void delay_reports(RigBoard board, int count, std::int64_t extra_latency_ns);
+  void truncate_reports(RigBoard board, int count, std::size_t length_bytes);
+  void corrupt_reports(RigBoard board, int count);  // flips seeded random bits
+  // Reports generated during the stall are held and delivered together when it ends.
+  void stall(RigBoard board, std::int64_t duration_ns);
+  // Open handles fail with disconnected; the board resets as on power-up when reconnected
+  // (1065: motor off, position and packet counter restart; 1047: channels disabled).
+  void disconnect(RigBoard board);
+  void reconnect(RigBoard board);
+  void stick_encoder(RigBoard board, bool stuck);
+  void set_supply_voltage(double volts);
+  void set_over_temperature(bool on);
+  void set_under_voltage(bool on);
+  // Hold the arm still (for physics checks of the pendulum alone).
+  void clamp_arm(bool clamped);
+
+  // --- truth ---
+  const SimulatedRigConfig& config() const;
+  const ModelParameters& true_parameters() const;
+  PendulumState true_state() const;  // at the time physics has reached
+  std::int64_t physics_time_ns() const;
+  const std::vector<TruthRecord>& truth() const;
+  // Brings physics up to the clock's time (reads and writes do this themselves).
+  void advance_to_now();
+
+  class Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace furuta::bridge

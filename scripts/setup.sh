@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package furuta needs to build, test and run.
+# Idempotent: installs only what is missing, and runs `apt-get update` at most once.
+# Works as root or through sudo.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git clang-format
+  # messaging
+  liblcm-dev liblcm-bin libglib2.0-dev
+  # USB
+  libusb-1.0-0-dev libhidapi-dev
+  # numerics
+  libeigen3-dev libboost-dev libliquid-dev libmpfr-dev libgmp-dev libtbb-dev
+  # configuration, CLI, service
+  libtomlplusplus-dev libcli11-dev libsystemd-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+if [ "$(id -u)" -eq 0 ]; then
+  as_root=()
+elif command -v sudo >/dev/null 2>&1; then
+  as_root=(sudo)
+else
+  echo "setup: need root or sudo to install packages" >&2
+  exit 1
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+
+echo "setup: installing ${#missing[@]} package(s): ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+"${as_root[@]}" apt-get update -q
+"${as_root[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+echo "setup: done"
