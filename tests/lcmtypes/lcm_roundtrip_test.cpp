@@ -1,5 +1,6 @@
 // The generated message types encode and decode through LCM itself (memq://, no network).
 #include <gtest/gtest.h>
+
 #include <lcm/lcm-cpp.hpp>
 
 #include "furuta/rig_command_t.hpp"

@@ -1,6 +1,7 @@
 #pragma once
-// Time as a dependency: the control loop, the simulated rig and replay all read and sleep on a Clock,
-// so tests run in virtual time (fast, deterministic) and the rig in real time, with the same code.
+// Time as a dependency: the control loop, the simulated rig and replay all read and sleep on a
+// Clock, so tests run in virtual time (fast, deterministic) and the rig in real time, with the same
+// code.
 
 #include <cstdint>
 

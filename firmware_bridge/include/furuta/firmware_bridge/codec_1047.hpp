@@ -27,10 +27,10 @@ inline constexpr std::uint8_t k1047FlagDigitalInputFalse = 0x04;  // set = input
 double tick_seconds_1047(int firmware_version);
 
 struct EncoderChannel1047 {
-  std::int32_t position_delta = 0;       // counts since the previous report
-  std::int32_t index_delta = 0;          // index position = position - index_delta
-  std::uint32_t packet_time_ticks = 0;   // u24: ticks since the previous report
-  std::uint16_t cur_time_ticks = 0;      // ticks from the last edge to the report (inferred)
+  std::int32_t position_delta = 0;      // counts since the previous report
+  std::int32_t index_delta = 0;         // index position = position - index_delta
+  std::uint32_t packet_time_ticks = 0;  // u24: ticks since the previous report
+  std::uint16_t cur_time_ticks = 0;     // ticks from the last edge to the report (inferred)
   std::uint8_t flags = 0;
 
   bool index_seen() const { return flags & k1047FlagIndexSeen; }

@@ -39,7 +39,7 @@ inline constexpr double k1065FullScaleAccelerationPctPerS = 6250.0;
 struct MotorCommand1065 {
   double duty_cycle = 0.0;  // [-1, 1]; sign is the direction
   double acceleration_pct_per_s = k1065FullScaleAccelerationPctPerS;  // [0, 6250]
-  double braking_fraction = 0.0;  // [0, 1]
+  double braking_fraction = 0.0;                                      // [0, 1]
   bool back_emf_sensing = false;
   bool ratiometric = false;
 };
@@ -77,18 +77,18 @@ struct MotorReport1065 {
   std::uint8_t commanded_duty_raw = 0;  // sign from k1065FlagCommandedDirection
   std::uint8_t acceleration_raw = 0;
   std::uint8_t braking_raw = 0;
-  std::uint8_t packet_counter = 0;      // +1 per report, wraps at 256
+  std::uint8_t packet_counter = 0;  // +1 per report, wraps at 256
 
   bool over_temperature() const { return status_flags & k1065FlagOverTemperature; }
   bool under_voltage() const { return status_flags & k1065FlagUnderVoltage; }
   bool back_emf_valid() const { return status_flags & k1065FlagBackEmfValid; }
-  double motor_current_a() const;   // raw * 5 / 4096 / 150 / 0.0024 (formula unchecked upstream)
-  double analog_v(int index) const; // min(round(raw * 1.001), 4095) * 5 / 4095
-  double supply_voltage_v() const;  // raw * 80 / 2048
-  double back_emf_v() const;        // (plus - minus) * 80 / 4096; meaningful when back_emf_valid()
-  double encoder_time_s() const;    // raw / 3000
-  double applied_duty() const;      // signed [-1, 1]
-  double commanded_duty() const;    // signed [-1, 1]
+  double motor_current_a() const;    // raw * 5 / 4096 / 150 / 0.0024 (formula unchecked upstream)
+  double analog_v(int index) const;  // min(round(raw * 1.001), 4095) * 5 / 4095
+  double supply_voltage_v() const;   // raw * 80 / 2048
+  double back_emf_v() const;         // (plus - minus) * 80 / 4096; meaningful when back_emf_valid()
+  double encoder_time_s() const;     // raw / 3000
+  double applied_duty() const;       // signed [-1, 1]
+  double commanded_duty() const;     // signed [-1, 1]
   double acceleration_pct_per_s() const;  // raw * 6250 / 255
   double braking_pct() const;             // raw * 100 / 255
 };

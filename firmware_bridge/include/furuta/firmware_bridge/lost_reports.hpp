@@ -19,14 +19,18 @@ class PacketCounterTracker1065 {
   std::int64_t total_lost_ = 0;
 };
 
-// 1047: no counter, and its counts are deltas, so a lost report loses counts. The board's packetTime
-// says how much board time each report covers; the host's receive time says how much host time passed.
-// Their difference (the lag) rises by one report period for each report lost, while USB latency and the
-// loop reading reports in batches only move it temporarily. The tracker takes the minimum lag over
-// blocks of reports and reports a loss when one block's minimum exceeds the previous block's by more
-// than half a period; clock drift between blocks is far smaller than that. Losses are therefore found
-// up to one block late, and a report delayed on the host for longer than a whole block is
-// indistinguishable from a lost one.
+// 1047: no counter, and its counts are deltas, so a lost report loses counts. The board's
+// packetTime says how much board time each report covers; the host's receive time says how much
+// host time passed. Their difference (the lag) rises by one report period for each report lost,
+// while USB latency and the loop reading reports in batches only move it temporarily. The tracker
+// takes the minimum lag over blocks of reports and reports a loss when one block's minimum exceeds
+// the previous block's by more than half a period; clock drift between blocks is far smaller than
+// that. Losses are therefore found up to one block late, and a report delayed on the host for
+// longer than a whole block is indistinguishable from a lost one.
+//
+// host_time_ns must be each report's arrival time (see UsbReport::host_time_ns). Times taken when a
+// loop drains reports in batches sit on the loop's grid, and then clock drift and latency move the
+// lag in whole report periods, exactly as a loss does: the tracker would count false losses.
 class ReportTimingTracker1047 {
  public:
   ReportTimingTracker1047(double tick_seconds, std::int64_t report_period_ns = 8'000'000,

@@ -1,10 +1,12 @@
 #pragma once
 // Replays a recorded trace as a device: input reports arrive at their recorded times on the given
-// Clock, recorded errors recur, and each output report written is checked against the recording (or,
-// in record mode, appended to a new trace). Also a recorder that wraps any live transport.
+// Clock, recorded errors recur, reads between the last input and the recording's END time out, and
+// each output report written is checked against the recording (or, in record mode, appended to a
+// new trace). Also a recorder that wraps any live transport.
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,8 +18,8 @@ namespace furuta::bridge {
 
 struct ReplayMismatch {
   std::int64_t time_ns = 0;
-  std::size_t output_index = 0;             // which written report (0-based)
-  std::vector<std::uint8_t> expected;       // empty when the recording had no more outputs
+  std::size_t output_index = 0;        // which written report (0-based)
+  std::vector<std::uint8_t> expected;  // empty when the recording had no more outputs
   std::vector<std::uint8_t> actual;
 };
 
@@ -44,13 +46,15 @@ class ReplayTransport final : public Transport {
   Clock& clock_;
   OutputMode mode_;
   bool open_ = false;
-  std::size_t next_event_ = 0;   // next input or error event to play
-  std::size_t next_output_ = 0;  // next recorded output to compare against
+  std::size_t next_event_ = 0;               // next input or error event to play
+  std::size_t next_output_ = 0;              // next recorded output to compare against
+  std::optional<std::int64_t> end_time_ns_;  // when the recording stopped, if it says
   std::vector<ReplayMismatch> mismatches_;
   std::vector<TraceEvent> written_;
 };
 
-// Passes every call through to `inner` and records it, with the clock's time, into a trace.
+// Passes every call through to `inner` and records it, with the clock's time, into a trace;
+// close() records END so a replay knows how long the device was there.
 class RecordingTransport final : public Transport {
  public:
   RecordingTransport(std::unique_ptr<Transport> inner, Clock& clock);

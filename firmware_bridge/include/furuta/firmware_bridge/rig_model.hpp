@@ -6,8 +6,8 @@ namespace furuta::bridge {
 
 struct ModelParameters {
   double mu1 = 0, mu2 = 0, mu3 = 0, mu4 = 0;  // kg m^2
-  double mug = 0;                              // kg m^2 s^-2
-  double fv1 = 0, fv2 = 0;                     // N m s
+  double mug = 0;                             // kg m^2 s^-2
+  double fv1 = 0, fv2 = 0;                    // N m s
 
   // The paper's Table I, acquisition #1: the simulated rig's default truth.
   static ModelParameters paper_run1();
@@ -16,13 +16,13 @@ struct ModelParameters {
 // Maxon motor and gearbox, paper section IV.A.
 struct MotorData {
   double rotor_inertia_kg_m2 = 9.06e-7;
-  double no_load_speed_rpm = 11700.0;               // omega0 at nominal voltage
+  double no_load_speed_rpm = 11700.0;                 // omega0 at nominal voltage
   double speed_torque_gradient_rpm_per_nm = 34000.0;  // Rv
-  double motor_efficiency = 0.906;                  // eta_m
-  double gear_efficiency = 0.90;                    // eta_g
-  double motor_ratio = 5.2;                         // Nm
-  double gear_ratio = 5.0;                          // Ng
-  double nominal_voltage_v = 12.0;                  // supply at which omega0 holds
+  double motor_efficiency = 0.906;                    // eta_m
+  double gear_efficiency = 0.90;                      // eta_g
+  double motor_ratio = 5.2;                           // Nm
+  double gear_ratio = 5.0;                            // Ng
+  double nominal_voltage_v = 12.0;                    // supply at which omega0 holds
 
   double total_ratio() const { return motor_ratio * gear_ratio; }
   // Paper eq. 4: torque at the arm for PWM duty d in [-1, 1] and arm speed dq1 [rad/s].

@@ -3,9 +3,9 @@
 // physics behind them, known true parameters, injectable faults and injectable time.
 //
 // Physics advances lazily to the Clock's time whenever a transport reads or writes, so with a
-// VirtualClock a test runs minutes of rig time in milliseconds, and with a MonotonicClock reads block
-// in real time like the hardware. Everything random comes from the seed: the same seed and the same
-// calls at the same times give the same bytes.
+// VirtualClock a test runs minutes of rig time in milliseconds, and with a MonotonicClock reads
+// block in real time like the hardware. Everything random comes from the seed: the same seed and
+// the same calls at the same times give the same bytes.
 
 #include <cstdint>
 #include <memory>
@@ -33,14 +33,14 @@ struct SimulatedRigConfig {
   std::int64_t report_period_ns = 8'000'000;
   std::int64_t encoder_report_phase_ns = 3'000'000;  // 1047 reports are offset from the 1065's
 
-  double motor_encoder_counts_per_rev = 1024.0;      // motor shaft, before the gears
+  double motor_encoder_counts_per_rev = 1024.0;  // motor shaft, before the gears
   double pendulum_encoder_counts_per_rev = 4096.0;
-  int pendulum_channel = 0;                          // 1047 input wired to the pendulum
+  int pendulum_channel = 0;  // 1047 input wired to the pendulum
 
   double arm_angle_noise_rad = 0.0;       // std dev, added before quantisation
   double pendulum_angle_noise_rad = 0.0;  // std dev, added before quantisation
   std::int64_t usb_latency_ns = 1'000'000;
-  std::int64_t usb_latency_jitter_ns = 0; // uniform in [0, jitter]
+  std::int64_t usb_latency_jitter_ns = 0;  // uniform in [0, jitter]
 
   double supply_voltage_v = 12.0;
   std::uint64_t seed = 1;
@@ -53,7 +53,8 @@ struct SimulatedRigConfig {
   int firmware_1047 = 101;
   std::size_t input_report_bytes_1047 = 40;
 
-  bool record_truth = true;  // keep a TruthRecord per generated report (allocates; off for RT tests)
+  bool record_truth =
+      true;  // keep a TruthRecord per generated report (allocates; off for RT tests)
 };
 
 // What really happened at each report: for tests that check decoded data against the truth.
@@ -64,7 +65,7 @@ struct TruthRecord {
   PendulumState state{};
   double applied_duty = 0.0;
   double arm_torque_nm = 0.0;
-  bool delivered = true;          // false when a fault dropped it
+  bool delivered = true;  // false when a fault dropped it
 };
 
 class SimulatedRig {

@@ -17,12 +17,12 @@ namespace furuta::bridge {
 
 enum class TransportStatus : std::uint8_t {
   ok,
-  timeout,           // no report within the timeout: not an error by itself
-  not_found,         // no device matches
-  access_denied,     // permissions (udev rule missing)
-  busy,              // claimed by another process
-  disconnected,      // the device went away; close and open again
-  short_report,      // fewer bytes than the report length: data lost
+  timeout,        // no report within the timeout: not an error by itself
+  not_found,      // no device matches
+  access_denied,  // permissions (udev rule missing)
+  busy,           // claimed by another process
+  disconnected,   // the device went away; close and open again
+  short_report,   // fewer bytes than the report length: data lost
   io_error,
   not_open,
   invalid_argument,
@@ -42,9 +42,9 @@ struct DeviceInfo {
   std::uint16_t vendor_id = 0;
   std::uint16_t product_id = 0;
   std::string serial;
-  int firmware_version = 0;         // e.g. 105 for bcdDevice 0x0105
+  int firmware_version = 0;  // e.g. 105 for bcdDevice 0x0105
   std::string product_name;
-  std::string path;                 // bus path or hidraw node, for messages
+  std::string path;  // bus path or hidraw node, for messages
   std::size_t input_report_bytes = 0;
   std::size_t output_report_bytes = 0;
   bool vendor_class_interface = false;  // 1047 firmware 2xx: libusb only
@@ -56,7 +56,11 @@ inline constexpr std::size_t kMaxReportBytes = 64;
 struct UsbReport {
   std::array<std::uint8_t, kMaxReportBytes> bytes{};
   std::size_t length = 0;
-  std::int64_t host_time_ns = 0;  // the transport's Clock (or CLOCK_MONOTONIC) when it arrived
+  // When the report arrived, on the transport's Clock (CLOCK_MONOTONIC for hardware). The hardware
+  // backends stamp it when read_report returns, so it is the arrival time only for a reader that is
+  // blocked in read_report when the report comes (a reader thread per board), not for one that
+  // drains a backlog; the 1047 loss detection needs arrival times.
+  std::int64_t host_time_ns = 0;
 
   std::span<const std::uint8_t> view() const { return {bytes.data(), length}; }
 };
@@ -69,8 +73,9 @@ class Transport {
   Transport& operator=(const Transport&) = delete;
 
   virtual TransportStatus open(const DeviceMatch& match) = 0;
-  // Waits up to `timeout` for one input report; zero polls. A report shorter than the device's input
-  // report length is returned with short_report (its bytes in `report`), never padded silently.
+  // Waits up to `timeout` for one input report; zero polls. A report shorter than the device's
+  // input report length is returned with short_report (its bytes in `report`), never padded
+  // silently.
   virtual TransportStatus read_report(UsbReport& report, std::chrono::nanoseconds timeout) = 0;
   // `report` without any HID report-id prefix; the backend adds what its API needs.
   virtual TransportStatus write_report(std::span<const std::uint8_t> report) = 0;

@@ -14,13 +14,17 @@ namespace furuta::bridge {
 // HID boards through hidraw (hidapi). Report lengths come from the HID report descriptor.
 std::unique_ptr<Transport> make_hidapi_transport();
 
-// Any board through libusb: detaches the kernel driver, claims interface 0, reads interrupt IN 0x81,
-// writes interrupt OUT 0x01 when the interface has it, else HID SET_REPORT (or, for the vendor-class
-// 1047 firmware 2xx, the vendor "device write" control transfer).
+// Any board through libusb: detaches the kernel driver, claims interface 0, reads interrupt IN
+// 0x81, writes interrupt OUT 0x01 when the interface has it, else HID SET_REPORT (or, for the
+// vendor-class 1047 firmware 2xx, the vendor "device write" control transfer).
 std::unique_ptr<Transport> make_libusb_transport();
 
-// Report Count of the items preceding the first Input (0x81) and Output (0x91) main items, times
-// Report Size / 8, as the vendor libraries read them. Zero where the descriptor has no such item.
+// Lengths in bytes of the first input and first output report: Report Count * Report Size summed
+// over the Input (0x81) / Output (0x91) main items of that report, rounded up to bytes. For a
+// descriptor with one Input and one Output item (the Phidgets') this is the vendor libraries'
+// reading (the Report Count preceding each item); several items in one report are summed. Zero
+// where the descriptor has no such item. Never reads outside `descriptor`: a truncated item ends
+// the walk.
 struct HidReportLengths {
   std::size_t input_bytes = 0;
   std::size_t output_bytes = 0;

@@ -5,7 +5,8 @@
 //   device 06c2:003e serial=300001 firmware=105 in=25 out=4 name=1065_MotorControl_1-Motor
 //   <time_ns> IN  <hex bytes>          an input report as read
 //   <time_ns> OUT <hex bytes>          an output report as written
-//   <time_ns> ERR <status>             a read or write that failed (e.g. disconnected, short_report)
+//   <time_ns> ERR <status>             a read that failed (e.g. disconnected)
+//   <time_ns> END                      the recording stopped (the transport was closed)
 //
 // Times are the recording Clock's nanoseconds. Parsing errors name the file and line.
 
@@ -19,13 +20,13 @@
 
 namespace furuta::bridge {
 
-enum class TraceEventKind : std::uint8_t { input, output, error };
+enum class TraceEventKind : std::uint8_t { input, output, error, end };
 
 struct TraceEvent {
   std::int64_t time_ns = 0;
   TraceEventKind kind = TraceEventKind::input;
-  std::vector<std::uint8_t> bytes;                 // input, output
-  TransportStatus status = TransportStatus::ok;    // error
+  std::vector<std::uint8_t> bytes;               // input, output
+  TransportStatus status = TransportStatus::ok;  // error
 };
 
 struct UsbTrace {
@@ -44,7 +45,7 @@ class TraceFormatError : public std::runtime_error {
   int line_;
 };
 
-UsbTrace read_usb_trace(const std::filesystem::path& path);      // throws TraceFormatError
+UsbTrace read_usb_trace(const std::filesystem::path& path);  // throws TraceFormatError
 UsbTrace parse_usb_trace(const std::string& text, const std::string& source_name);
 std::string format_usb_trace(const UsbTrace& trace);
 void write_usb_trace(const std::filesystem::path& path, const UsbTrace& trace);  // atomic rename

@@ -1,0 +1,270 @@
+#include "furuta/config/rig_config.hpp"
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+namespace furuta::config {
+
+ConfigError::ConfigError(std::string file, int line, std::string field, const std::string& problem)
+    : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
+                         (field.empty() ? std::string() : field + ": ") + problem),
+      file_(std::move(file)),
+      line_(line),
+      field_(std::move(field)) {}
+
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+// Reads one TOML table, remembering which keys were used so the rest can be reported as unknown.
+class Section {
+ public:
+  Section(const toml::table* table, std::string path, const std::string& file, int line)
+      : table_(table), path_(std::move(path)), file_(file), line_(line) {}
+
+  Section child(const std::string& key) {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (node && !node->is_table()) fail(key, node, "must be a table ([" + field(key) + "])");
+    return Section(node ? node->as_table() : nullptr, field(key), file_,
+                   node ? line_of(node) : line_);
+  }
+  bool present() const { return table_ != nullptr; }
+  bool has(const std::string& key) const { return table_ && table_->contains(key); }
+
+  double number(const std::string& key, double fallback,
+                const std::function<bool(double)>& valid = {}, const char* rule = "") {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (!node) return fallback;
+    double value = 0;
+    if (auto i = node->as_integer()) {
+      value = static_cast<double>(i->get());
+    } else if (auto f = node->as_floating_point()) {
+      value = f->get();
+    } else {
+      fail(key, node, "must be a number");
+    }
+    if (!std::isfinite(value)) fail(key, node, "must be finite");
+    if (valid && !valid(value)) fail(key, node, std::string("must be ") + rule);
+    return value;
+  }
+  std::int64_t integer(const std::string& key, std::int64_t fallback,
+                       const std::function<bool(std::int64_t)>& valid = {}, const char* rule = "") {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (!node) return fallback;
+    auto i = node->as_integer();
+    if (!i) fail(key, node, "must be an integer");
+    if (valid && !valid(i->get())) fail(key, node, std::string("must be ") + rule);
+    return i->get();
+  }
+  std::string text(const std::string& key, const std::string& fallback) {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (!node) return fallback;
+    auto s = node->as_string();
+    if (!s) fail(key, node, "must be a string");
+    return s->get();
+  }
+  std::string choice(const std::string& key, const std::string& fallback,
+                     std::initializer_list<const char*> allowed) {
+    const std::string value = text(key, fallback);
+    std::string list;
+    for (const char* a : allowed) {
+      if (value == a) return value;
+      list += list.empty() ? a : std::string(", ") + a;
+    }
+    fail(key, table_->get(key), "'" + value + "' is not one of: " + list);
+  }
+  // Call after reading every key this section knows.
+  void reject_unknown_keys() const {
+    if (!table_) return;
+    for (auto&& [key, node] : *table_) {
+      const std::string name(key.str());
+      if (!used_.count(name)) fail(name, &node, "unknown key");
+    }
+  }
+
+  [[noreturn]] void fail(const std::string& key, const toml::node* node,
+                         const std::string& problem) const {
+    throw ConfigError(file_, node ? line_of(node) : line_, field(key), problem);
+  }
+
+ private:
+  std::string field(const std::string& key) const {
+    return path_.empty() ? key : path_ + "." + key;
+  }
+  static int line_of(const toml::node* node) { return static_cast<int>(node->source().begin.line); }
+
+  const toml::table* table_;
+  std::string path_;
+  const std::string& file_;
+  int line_;
+  std::set<std::string> used_;
+};
+
+bool positive(double v) {
+  return v > 0;
+}
+bool fraction(double v) {
+  return v > 0 && v <= 1;
+}
+bool non_negative(double v) {
+  return v >= 0;
+}
+bool unit_sign(std::int64_t v) {
+  return v == 1 || v == -1;
+}
+
+bridge::EncoderGeometry read_encoder(Section s, double default_cpr) {
+  bridge::EncoderGeometry g;
+  g.counts_per_rev = s.number("counts_per_rev", default_cpr, positive, "> 0");
+  g.sign = static_cast<int>(s.integer("sign", 1, unit_sign, "1 or -1"));
+  g.zero_offset_rad = s.number("zero_offset_deg", 0.0) * kDegToRad;
+  s.reject_unknown_keys();
+  return g;
+}
+
+bridge::ModelParameters read_parameters(Section s, const bridge::ModelParameters& d) {
+  bridge::ModelParameters p;
+  p.mu1 = s.number("mu1", d.mu1, positive, "> 0");
+  p.mu2 = s.number("mu2", d.mu2);
+  p.mu3 = s.number("mu3", d.mu3);
+  p.mu4 = s.number("mu4", d.mu4, positive, "> 0");
+  p.mug = s.number("mug", d.mug, non_negative, ">= 0");
+  p.fv1 = s.number("fv1", d.fv1, non_negative, ">= 0");
+  p.fv2 = s.number("fv2", d.fv2, non_negative, ">= 0");
+  s.reject_unknown_keys();
+  return p;
+}
+
+}  // namespace
+
+RigConfig parse_rig_config(const std::string& text, const std::string& source_name) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    throw ConfigError(source_name, static_cast<int>(e.source().begin.line), "",
+                      std::string(e.description()));
+  }
+
+  RigConfig c;
+  c.source_text = text;
+  c.source_name = source_name;
+  Section top(&root, "", source_name, 0);
+
+  Section rig = top.child("rig");
+  c.name = rig.text("name", "furuta");
+  const std::string backend = rig.choice("backend", "simulated", {"simulated", "hidapi", "libusb"});
+  c.backend = backend == "hidapi"   ? UsbBackend::hidapi
+              : backend == "libusb" ? UsbBackend::libusb
+                                    : UsbBackend::simulated;
+  rig.reject_unknown_keys();
+
+  Section boards = top.child("boards");
+  auto read_board = [](Section& s) {
+    BoardSelection b;
+    const std::string serial = s.text("serial", "");
+    if (!serial.empty()) b.serial = serial;
+    return b;
+  };
+  {
+    Section motor = boards.child("motor");
+    c.motor_board = read_board(motor);
+    motor.reject_unknown_keys();
+    Section encoder = boards.child("encoder");
+    c.encoder_board = read_board(encoder);
+    c.pendulum_channel = static_cast<int>(encoder.integer(
+        "pendulum_channel", 0, [](std::int64_t v) { return v >= 0 && v < 4; }, "0..3"));
+    encoder.reject_unknown_keys();
+  }
+  boards.reject_unknown_keys();
+
+  Section motor = top.child("motor");
+  const bridge::MotorData dm;
+  c.motor.rotor_inertia_kg_m2 =
+      motor.number("rotor_inertia_kg_m2", dm.rotor_inertia_kg_m2, non_negative, ">= 0");
+  c.motor.no_load_speed_rpm =
+      motor.number("no_load_speed_rpm", dm.no_load_speed_rpm, positive, "> 0");
+  c.motor.speed_torque_gradient_rpm_per_nm = motor.number(
+      "speed_torque_gradient_rpm_per_nm", dm.speed_torque_gradient_rpm_per_nm, positive, "> 0");
+  c.motor.motor_efficiency =
+      motor.number("motor_efficiency", dm.motor_efficiency, fraction, "in (0, 1]");
+  c.motor.gear_efficiency =
+      motor.number("gear_efficiency", dm.gear_efficiency, fraction, "in (0, 1]");
+  c.motor.motor_ratio = motor.number("motor_ratio", dm.motor_ratio, positive, "> 0");
+  c.motor.gear_ratio = motor.number("gear_ratio", dm.gear_ratio, positive, "> 0");
+  c.motor.nominal_voltage_v =
+      motor.number("nominal_voltage_v", dm.nominal_voltage_v, positive, "> 0");
+  motor.reject_unknown_keys();
+
+  Section encoders = top.child("encoders");
+  c.arm_encoder = read_encoder(encoders.child("arm"), 1024.0);
+  c.arm_encoder.gear_ratio = c.motor.total_ratio();
+  c.pendulum_encoder = read_encoder(encoders.child("pendulum"), 4096.0);
+  encoders.reject_unknown_keys();
+
+  Section sim = top.child("simulation");
+  bridge::SimulatedRigConfig& s = c.simulation;
+  s.seed = static_cast<std::uint64_t>(sim.integer(
+      "seed", 1, [](std::int64_t v) { return v >= 0; }, ">= 0"));
+  s.integration_step_s = sim.number(
+      "integration_step_s", s.integration_step_s, [](double v) { return v > 0 && v <= 1e-3; },
+      "in (0, 1e-3]");
+  s.arm_angle_noise_rad = sim.number("arm_angle_noise_rad", 0.0, non_negative, ">= 0");
+  s.pendulum_angle_noise_rad = sim.number("pendulum_angle_noise_rad", 0.0, non_negative, ">= 0");
+  s.usb_latency_ns = sim.integer(
+      "usb_latency_ns", s.usb_latency_ns, [](std::int64_t v) { return v >= 0; }, ">= 0");
+  s.usb_latency_jitter_ns = sim.integer(
+      "usb_latency_jitter_ns", 0, [](std::int64_t v) { return v >= 0; }, ">= 0");
+  s.supply_voltage_v = sim.number("supply_voltage_v", s.supply_voltage_v, positive, "> 0");
+  s.parameters = read_parameters(sim.child("parameters"), bridge::ModelParameters::paper_run1());
+  {
+    Section x0 = sim.child("initial_state");
+    s.initial_state.q1 = x0.number("q1_deg", 0.0) * kDegToRad;
+    s.initial_state.dq1 = x0.number("dq1_deg_per_s", 0.0) * kDegToRad;
+    s.initial_state.q2 = x0.number("q2_deg", 0.0) * kDegToRad;
+    s.initial_state.dq2 = x0.number("dq2_deg_per_s", 0.0) * kDegToRad;
+    x0.reject_unknown_keys();
+  }
+  sim.reject_unknown_keys();
+  // The simulated boards are built like the configured ones.
+  s.motor = c.motor;
+  s.motor_encoder_counts_per_rev = c.arm_encoder.counts_per_rev;
+  s.pendulum_encoder_counts_per_rev = c.pendulum_encoder.counts_per_rev;
+  s.pendulum_channel = c.pendulum_channel;
+  if (c.motor_board.serial) s.serial_1065 = *c.motor_board.serial;
+  if (c.encoder_board.serial) s.serial_1047 = *c.encoder_board.serial;
+
+  Section nominal = top.child("nominal");
+  if (nominal.present()) c.nominal = read_parameters(nominal, bridge::ModelParameters{});
+
+  top.reject_unknown_keys();
+  return c;
+}
+
+RigConfig load_rig_config(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path.string(), 0, "", "cannot open the file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError(path.string(), 0, "", "cannot read the file");
+  return parse_rig_config(text.str(), path.string());
+}
+
+std::filesystem::path default_rig_config_path() {
+  const std::filesystem::path installed = FURUTA_INSTALLED_RIG_CONFIG;
+  const std::filesystem::path source = FURUTA_DEFAULT_RIG_CONFIG;
+  if (std::filesystem::exists(source)) return source;
+  return installed;
+}
+
+}  // namespace furuta::config

@@ -1,0 +1,103 @@
+#include "furuta/config/rig_config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <numbers>
+
+namespace furuta::config {
+namespace {
+
+ConfigError error_of(const std::string& text) {
+  try {
+    parse_rig_config(text, "rig.toml");
+  } catch (const ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no ConfigError for:\n" << text;
+  return ConfigError("", 0, "", "");
+}
+
+TEST(RigConfig, TheShippedFileLoadsWithThePapersValues) {
+  const RigConfig c = load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  EXPECT_EQ(c.name, "furuta-lab-1");
+  EXPECT_EQ(c.backend, UsbBackend::simulated);
+  EXPECT_DOUBLE_EQ(c.arm_encoder.counts_per_rev, 1024.0);
+  EXPECT_DOUBLE_EQ(c.arm_encoder.gear_ratio, 26.0);  // 5.2 * 5
+  EXPECT_DOUBLE_EQ(c.simulation.parameters.fv1, 8.13e-2);
+  EXPECT_DOUBLE_EQ(c.simulation.parameters.mu4, 1.31781e-3);
+  ASSERT_TRUE(c.nominal.has_value());
+  EXPECT_DOUBLE_EQ(c.nominal->mu1, 1.18152e-3);
+  EXPECT_DOUBLE_EQ(c.simulation.motor_encoder_counts_per_rev, 1024.0);
+  EXPECT_FALSE(c.motor_board.serial.has_value());
+}
+
+TEST(RigConfig, AnEmptyFileGivesTheDefaults) {
+  const RigConfig c = parse_rig_config("", "empty.toml");
+  EXPECT_DOUBLE_EQ(c.pendulum_encoder.counts_per_rev, 4096.0);
+  EXPECT_DOUBLE_EQ(c.motor.no_load_speed_rpm, 11700.0);
+  EXPECT_DOUBLE_EQ(c.simulation.parameters.mug, bridge::ModelParameters::paper_run1().mug);
+  EXPECT_FALSE(c.nominal.has_value());
+}
+
+TEST(RigConfig, EncoderGeometryReachesTheSimulationAndConvertsDegrees) {
+  const RigConfig c = parse_rig_config(
+      "[encoders.pendulum]\ncounts_per_rev = 2000\nsign = -1\nzero_offset_deg = 180\n"
+      "[boards.encoder]\nserial = \"123456\"\npendulum_channel = 2\n",
+      "rig.toml");
+  EXPECT_EQ(c.pendulum_encoder.sign, -1);
+  EXPECT_NEAR(c.pendulum_encoder.zero_offset_rad, std::numbers::pi, 1e-15);
+  EXPECT_DOUBLE_EQ(c.simulation.pendulum_encoder_counts_per_rev, 2000.0);
+  EXPECT_EQ(c.simulation.pendulum_channel, 2);
+  EXPECT_EQ(c.simulation.serial_1047, "123456");
+  ASSERT_TRUE(c.encoder_board.serial.has_value());
+}
+
+TEST(RigConfig, ErrorsNameFileLineAndField) {
+  const ConfigError e = error_of("[rig]\nname = \"x\"\n\n[encoders.arm]\ncounts_per_rev = -5\n");
+  EXPECT_EQ(e.file(), "rig.toml");
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_EQ(e.field(), "encoders.arm.counts_per_rev");
+  EXPECT_NE(std::string(e.what()).find("rig.toml:5: encoders.arm.counts_per_rev: must be > 0"),
+            std::string::npos)
+      << e.what();
+}
+
+TEST(RigConfig, UnknownKeysAreRejectedNotIgnored) {
+  const ConfigError e = error_of("[motor]\nmotor_ration = 5.2\n");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.field(), "motor.motor_ration");
+  EXPECT_NE(std::string(e.what()).find("unknown key"), std::string::npos);
+  EXPECT_EQ(error_of("[simulaton]\nseed = 3\n").field(), "simulaton");
+}
+
+TEST(RigConfig, WrongTypesRangesAndChoicesAreErrors) {
+  EXPECT_EQ(error_of("[simulation]\nseed = \"one\"\n").field(), "simulation.seed");
+  EXPECT_EQ(error_of("[encoders.arm]\nsign = 2\n").field(), "encoders.arm.sign");
+  EXPECT_EQ(error_of("[motor]\nmotor_efficiency = 1.5\n").field(), "motor.motor_efficiency");
+  EXPECT_EQ(error_of("[boards.encoder]\npendulum_channel = 4\n").field(),
+            "boards.encoder.pendulum_channel");
+  EXPECT_EQ(error_of("[motor]\nno_load_speed_rpm = nan\n").field(), "motor.no_load_speed_rpm");
+  const ConfigError backend = error_of("[rig]\nbackend = \"serial\"\n");
+  EXPECT_EQ(backend.field(), "rig.backend");
+  EXPECT_NE(std::string(backend.what()).find("simulated, hidapi, libusb"), std::string::npos);
+  EXPECT_EQ(error_of("rig = 3\n").field(), "rig");  // a table expected
+}
+
+TEST(RigConfig, SyntaxErrorsCarryTheirLine) {
+  const ConfigError e = error_of("[rig]\nname = \"unterminated\n");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.file(), "rig.toml");
+}
+
+TEST(RigConfig, AMissingFileIsAnErrorNamingIt) {
+  try {
+    load_rig_config("/nonexistent/rig.toml");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.file(), "/nonexistent/rig.toml");
+    EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace furuta::config
