@@ -462,3 +462,40 @@ TEST(RecordAndReplay, ReplayOfADifferentLoopReportsTheFirstDivergentOutput) {
 
 }  // namespace
 }  // namespace furuta::bridge
+
+namespace furuta::bridge {
+namespace {
+
+// After its last input the recorded device stayed quiet until the recording's END: reads up to then
+// time out as they did live, and only reads reaching past it are exhausted.
+TEST(ReplayTransport, ReadsAfterTheLastInputTimeOutUntilTheRecordingsEnd) {
+  UsbTrace trace;
+  trace.device.vendor_id = kPhidgetsVendorId;
+  trace.device.product_id = kProductEncoder1047;
+  trace.device.input_report_bytes = 2;
+  trace.events.push_back({8'000'000, TraceEventKind::input, {1, 2}, {}});
+  trace.events.push_back({16'000'000, TraceEventKind::end, {}, {}});
+  VirtualClock clock(0);
+  ReplayTransport replay(trace, clock);
+  ASSERT_EQ(replay.open({kPhidgetsVendorId, kProductEncoder1047, {}}), TransportStatus::ok);
+  UsbReport report;
+  EXPECT_EQ(replay.read_report(report, std::chrono::milliseconds(10)), TransportStatus::ok);
+  EXPECT_EQ(replay.read_report(report, std::chrono::milliseconds(8)), TransportStatus::timeout);
+  EXPECT_EQ(clock.now_ns(), 16'000'000);
+  EXPECT_EQ(replay.read_report(report, std::chrono::nanoseconds(0)), TransportStatus::timeout);
+  EXPECT_EQ(replay.read_report(report, std::chrono::nanoseconds(1)),
+            TransportStatus::replay_exhausted);
+  EXPECT_TRUE(replay.finished());
+
+  // Without an END the recording's length is unknown: exhausted straight after the last input.
+  trace.events.pop_back();
+  VirtualClock clock2(0);
+  ReplayTransport unterminated(trace, clock2);
+  ASSERT_EQ(unterminated.open({kPhidgetsVendorId, kProductEncoder1047, {}}), TransportStatus::ok);
+  EXPECT_EQ(unterminated.read_report(report, std::chrono::milliseconds(10)), TransportStatus::ok);
+  EXPECT_EQ(unterminated.read_report(report, std::chrono::nanoseconds(0)),
+            TransportStatus::replay_exhausted);
+}
+
+}  // namespace
+}  // namespace furuta::bridge

@@ -26,6 +26,7 @@ UsbTrace sample_trace() {
   t.events.push_back({16'000'000, TraceEventKind::error, {}, TransportStatus::disconnected});
   t.events.push_back({16'000'500, TraceEventKind::input, {}, {}});
   t.events.push_back({24'000'000, TraceEventKind::error, {}, TransportStatus::short_report});
+  t.events.push_back({32'000'000, TraceEventKind::end, {}, {}});
   return t;
 }
 
@@ -36,7 +37,8 @@ const std::string kSampleText =
     "8000000 IN  0004abcd\n"
     "16000000 ERR disconnected\n"
     "16000500 IN\n"
-    "24000000 ERR short_report\n";
+    "24000000 ERR short_report\n"
+    "32000000 END\n";
 
 std::string kHead() {
   return "# furuta usb trace v1\n"
