@@ -29,4 +29,44 @@ struct SimulateOptions {
 // traces recorded, a summary printed. (The daemon replaces it as the main job.)
 int run_simulate_command(const SimulateOptions& options, std::ostream& out, std::ostream& err);
 
+// --- talking to a running daemon over LCM ---
+struct RemoteOptions {
+  std::string lcm_url;  // empty: the configuration's
+  std::filesystem::path config_path;
+  double reply_timeout_s = 2.0;
+};
+struct StartOptions {
+  std::string profile = "bang_bang";
+  double amplitude_duty = 0.3;
+  double duration_s = 10.0;
+  std::string label;
+  std::int64_t seed = 1;
+};
+enum class RemoteKind { start, stop, estop, status };
+// Sends one command and prints the daemon's reply. 0: accepted; 1: refused (the reason is printed);
+// 2: no daemon answered.
+int run_remote_command(RemoteKind kind, const RemoteOptions& remote, const StartOptions& start,
+                       std::ostream& out, std::ostream& err);
+
+// --- a one-shot session without a daemon ---
+struct RunOptions {
+  std::filesystem::path config_path;
+  bool simulated = false;          // the simulated rig, whatever the configuration says
+  bool virtual_time = false;       // simulated: as fast as the machine goes
+  std::filesystem::path logs_dir;  // empty: the configuration's
+  std::string lcm_url;             // empty: the configuration's; "memq://" publishes nowhere
+  StartOptions session;
+  bool profile_given = false;  // else the configuration's [excitation]
+};
+int run_session_command(const RunOptions& options, std::ostream& out, std::ostream& err);
+
+// --- logs ---
+int run_log_info_command(const std::filesystem::path& log, std::ostream& out, std::ostream& err);
+int run_log_export_csv_command(const std::filesystem::path& log, const std::filesystem::path& csv,
+                               std::ostream& out, std::ostream& err);
+// Replays a log's USB traffic through the daemon (virtual time) and compares the samples with the
+// logged ones: 0 when identical.
+int run_replay_command(const std::filesystem::path& log, const std::filesystem::path& config_path,
+                       std::ostream& out, std::ostream& err);
+
 }  // namespace furuta::app

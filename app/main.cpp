@@ -33,11 +33,96 @@ int main(int argc, char** argv) {
                            "Seed for noise and jitter (default: the configuration's)");
   simulate_cmd->add_flag("--real-time", simulate.real_time, "Pace by the wall clock");
 
+  // A running daemon, over LCM.
+  furuta::app::RemoteOptions remote;
+  remote.config_path = furuta::config::default_rig_config_path();
+  furuta::app::StartOptions start;
+  auto add_remote = [&](CLI::App* cmd) {
+    cmd->add_option("--lcm-url", remote.lcm_url, "LCM URL (default: the configuration's)");
+    cmd->add_option("--config", remote.config_path, "Rig configuration (TOML)")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--timeout", remote.reply_timeout_s, "Seconds to wait for the daemon")
+        ->check(CLI::Range(0.1, 60.0));
+  };
+  auto add_session = [&](CLI::App* cmd, bool* given) {
+    auto* p = cmd->add_option("--profile", start.profile,
+                              "bang_bang, free_decay, step, prbs, chirp, multisine");
+    cmd->add_option("--amplitude", start.amplitude_duty, "Duty amplitude (0, 1]");
+    cmd->add_option("--duration", start.duration_s, "Seconds");
+    cmd->add_option("--label", start.label, "A label for the session's name");
+    cmd->add_option("--seed", start.seed, "Seed of randomised profiles");
+    if (given) p->each([given](const std::string&) { *given = true; });
+  };
+  CLI::App* start_cmd = app.add_subcommand("start", "Start a session on the running daemon");
+  add_remote(start_cmd);
+  add_session(start_cmd, nullptr);
+  CLI::App* stop_cmd = app.add_subcommand("stop", "Stop the running session");
+  add_remote(stop_cmd);
+  CLI::App* estop_cmd = app.add_subcommand("estop", "Emergency stop: motor to zero, braked");
+  add_remote(estop_cmd);
+  CLI::App* status_cmd = app.add_subcommand("status", "The daemon's state");
+  add_remote(status_cmd);
+
+  furuta::app::RunOptions run;
+  run.config_path = furuta::config::default_rig_config_path();
+  CLI::App* run_cmd = app.add_subcommand("run", "Run one session without a daemon");
+  run_cmd->add_option("--config", run.config_path, "Rig configuration (TOML)")
+      ->check(CLI::ExistingFile);
+  run_cmd->add_flag("--sim", run.simulated, "Use the simulated rig");
+  run_cmd->add_flag("--virtual-time", run.virtual_time,
+                    "Simulated rig: run as fast as possible instead of in real time");
+  run_cmd->add_option("--logs-dir", run.logs_dir, "Where the log goes");
+  run_cmd->add_option("--lcm-url", run.lcm_url, "LCM URL for samples (memq:// for none)");
+  add_session(run_cmd, &run.profile_given);
+
+  std::string log_path, csv_path, replay_config;
+  CLI::App* log_cmd = app.add_subcommand("log", "Session logs");
+  log_cmd->require_subcommand(1);
+  CLI::App* info_cmd = log_cmd->add_subcommand("info", "Summarise a session log");
+  info_cmd->add_option("LOG", log_path)->required()->check(CLI::ExistingFile);
+  CLI::App* export_cmd = log_cmd->add_subcommand("export-csv", "Samples of a log as CSV");
+  export_cmd->add_option("LOG", log_path)->required()->check(CLI::ExistingFile);
+  export_cmd->add_option("-o,--output", csv_path, "CSV file")->required();
+  CLI::App* replay_cmd =
+      app.add_subcommand("replay", "Replay a log's USB traffic and check the samples reproduce");
+  replay_cmd->add_option("LOG", log_path)->required()->check(CLI::ExistingFile);
+  replay_cmd->add_option("--config", replay_config, "Override the configuration the log carries");
+
   CLI11_PARSE(app, argc, argv);
 
   try {
+    using furuta::app::RemoteKind;
+    if (*start_cmd) {
+      return furuta::app::run_remote_command(RemoteKind::start, remote, start, std::cout,
+                                             std::cerr);
+    }
+    if (*stop_cmd) {
+      return furuta::app::run_remote_command(RemoteKind::stop, remote, start, std::cout, std::cerr);
+    }
+    if (*estop_cmd) {
+      return furuta::app::run_remote_command(RemoteKind::estop, remote, start, std::cout,
+                                             std::cerr);
+    }
+    if (*status_cmd) {
+      return furuta::app::run_remote_command(RemoteKind::status, remote, start, std::cout,
+                                             std::cerr);
+    }
+    if (*run_cmd) {
+      run.session = start;
+      return furuta::app::run_session_command(run, std::cout, std::cerr);
+    }
+    if (*info_cmd) return furuta::app::run_log_info_command(log_path, std::cout, std::cerr);
+    if (*export_cmd) {
+      return furuta::app::run_log_export_csv_command(log_path, csv_path, std::cout, std::cerr);
+    }
+    if (*replay_cmd) {
+      return furuta::app::run_replay_command(log_path, replay_config, std::cout, std::cerr);
+    }
     if (*devices_cmd) return furuta::app::run_devices_command(devices, std::cout, std::cerr);
     if (*simulate_cmd) return furuta::app::run_simulate_command(simulate, std::cout, std::cerr);
+  } catch (const furuta::config::ConfigError& e) {
+    std::cerr << "furuta: " << e.what() << "\n";
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "furuta: " << e.what() << "\n";
     return 2;

@@ -14,7 +14,7 @@ packages=(
   # numerics
   libeigen3-dev libboost-dev libliquid-dev libmpfr-dev libgmp-dev libtbb-dev
   # configuration, CLI, service
-  libtomlplusplus-dev libcli11-dev libsystemd-dev
+  libtomlplusplus-dev libcli11-dev libsystemd-dev systemd
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -65,6 +65,14 @@ class Section {
     if (valid && !valid(i->get())) fail(key, node, std::string("must be ") + rule);
     return i->get();
   }
+  bool boolean(const std::string& key, bool fallback) {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (!node) return fallback;
+    auto b = node->as_boolean();
+    if (!b) fail(key, node, "must be true or false");
+    return b->get();
+  }
   std::string text(const std::string& key, const std::string& fallback) {
     used_.insert(key);
     const toml::node* node = table_ ? table_->get(key) : nullptr;
@@ -243,6 +251,113 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   s.pendulum_channel = c.pendulum_channel;
   if (c.motor_board.serial) s.serial_1065 = *c.motor_board.serial;
   if (c.encoder_board.serial) s.serial_1047 = *c.encoder_board.serial;
+
+  {
+    Section d = top.child("daemon");
+    DaemonConfig& dc = c.daemon;
+    const double period_ms = d.number(
+        "period_ms", 16.0, [](double v) { return v >= 0.1 && v <= 1000.0; }, "in [0.1, 1000]");
+    dc.period_ns = std::llround(period_ms * 1e6);
+    dc.lcm_url = d.text("lcm_url", dc.lcm_url);
+    dc.logs_dir = d.text("logs_dir", dc.logs_dir);
+    if (dc.logs_dir.empty()) d.fail("logs_dir", nullptr, "must not be empty");
+    dc.flush_interval_ms = d.integer(
+        "flush_interval_ms", dc.flush_interval_ms,
+        [](std::int64_t v) { return v >= 10 && v <= 60'000; }, "in [10, 60000]");
+    dc.rest_check_s = d.number(
+        "rest_check_s", dc.rest_check_s, [](double v) { return v >= 0 && v <= 60; }, "in [0, 60]");
+    dc.queue_capacity = d.integer(
+        "queue_capacity", dc.queue_capacity,
+        [](std::int64_t v) { return v >= 64 && v <= 1'000'000; }, "in [64, 1000000]");
+    Section rt = d.child("realtime");
+    dc.realtime = rt.boolean("enabled", dc.realtime);
+    dc.fifo_priority = static_cast<int>(rt.integer(
+        "fifo_priority", dc.fifo_priority, [](std::int64_t v) { return v >= 1 && v <= 99; },
+        "in [1, 99]"));
+    dc.cpu = static_cast<int>(rt.integer(
+        "cpu", dc.cpu, [](std::int64_t v) { return v >= -1 && v < 1024; }, ">= -1"));
+    dc.lock_memory = rt.boolean("lock_memory", dc.lock_memory);
+    rt.reject_unknown_keys();
+    d.reject_unknown_keys();
+  }
+  {
+    Section s = top.child("safety");
+    SafetyConfig& sc = c.safety;
+    // Safety limits have no silent defaults from a typo: unknown keys are rejected below, and each
+    // value is range-checked.
+    sc.arm_limit_rad = s.number(
+                           "arm_limit_deg", sc.arm_limit_rad / kDegToRad,
+                           [](double v) { return v > 0 && v <= 720; }, "in (0, 720]") *
+                       kDegToRad;
+    sc.max_duty = s.number("max_duty", sc.max_duty, fraction, "in (0, 1]");
+    sc.stale_report_cycles = static_cast<int>(s.integer(
+        "stale_report_cycles", sc.stale_report_cycles,
+        [](std::int64_t v) { return v >= 1 && v <= 1000; }, "in [1, 1000]"));
+    sc.min_supply_v = s.number("min_supply_v", sc.min_supply_v, non_negative, ">= 0");
+    sc.max_supply_v = s.number("max_supply_v", sc.max_supply_v, positive, "> 0");
+    if (sc.max_supply_v <= sc.min_supply_v) {
+      s.fail("max_supply_v", nullptr, "must be above min_supply_v");
+    }
+    sc.stop_braking_fraction = s.number(
+        "stop_braking", sc.stop_braking_fraction, [](double v) { return v >= 0 && v <= 1; },
+        "in [0, 1]");
+    s.reject_unknown_keys();
+  }
+  {
+    Section l = top.child("limits");
+    CommandLimitsConfig& lc = c.limits;
+    lc.max_amplitude_duty =
+        l.number("max_amplitude_duty", lc.max_amplitude_duty, fraction, "in (0, 1]");
+    if (lc.max_amplitude_duty > c.safety.max_duty) {
+      l.fail("max_amplitude_duty", nullptr, "must not exceed safety.max_duty");
+    }
+    lc.max_duration_s = l.number("max_duration_s", lc.max_duration_s, positive, "> 0");
+    lc.max_arm_switch_rad =
+        l.number("max_arm_switch_deg", lc.max_arm_switch_rad / kDegToRad, positive, "> 0") *
+        kDegToRad;
+    if (lc.max_arm_switch_rad >= c.safety.arm_limit_rad) {
+      l.fail("max_arm_switch_deg", nullptr, "must be below safety.arm_limit_deg");
+    }
+    lc.max_commands_per_s = static_cast<int>(l.integer(
+        "max_commands_per_s", lc.max_commands_per_s,
+        [](std::int64_t v) { return v >= 1 && v <= 1000; }, "in [1, 1000]"));
+    l.reject_unknown_keys();
+  }
+  {
+    Section e = top.child("excitation");
+    ExcitationConfig& ec = c.excitation;
+    ec.profile = e.choice("profile", ec.profile,
+                          {"bang_bang", "free_decay", "step", "prbs", "chirp", "multisine"});
+    ec.amplitude_duty = e.number("amplitude_duty", ec.amplitude_duty, fraction, "in (0, 1]");
+    if (ec.amplitude_duty > c.limits.max_amplitude_duty) {
+      e.fail("amplitude_duty", nullptr, "must not exceed limits.max_amplitude_duty");
+    }
+    ec.duration_s = e.number("duration_s", ec.duration_s, positive, "> 0");
+    ec.seed = e.integer(
+        "seed", ec.seed, [](std::int64_t v) { return v >= 0; }, ">= 0");
+    ec.switch_period_s = e.number("switch_period_s", ec.switch_period_s, non_negative, ">= 0");
+    ec.switch_period_jitter = e.number(
+        "switch_period_jitter", ec.switch_period_jitter, [](double v) { return v >= 0 && v < 1; },
+        "in [0, 1)");
+    ec.arm_switch_rad =
+        e.number("arm_switch_deg", ec.arm_switch_rad / kDegToRad, non_negative, ">= 0") * kDegToRad;
+    if (ec.arm_switch_rad > c.limits.max_arm_switch_rad) {
+      e.fail("arm_switch_deg", nullptr, "must not exceed limits.max_arm_switch_deg");
+    }
+    ec.step_time_s = e.number("step_time_s", ec.step_time_s, non_negative, ">= 0");
+    ec.prbs_bit_period_s = e.number("prbs_bit_period_s", ec.prbs_bit_period_s, positive, "> 0");
+    ec.prbs_order = static_cast<int>(e.integer(
+        "prbs_order", ec.prbs_order, [](std::int64_t v) { return v >= 2 && v <= 16; },
+        "in [2, 16]"));
+    ec.chirp_f0_hz = e.number("chirp_f0_hz", ec.chirp_f0_hz, non_negative, ">= 0");
+    ec.chirp_f1_hz = e.number("chirp_f1_hz", ec.chirp_f1_hz, positive, "> 0");
+    ec.multisine_components = static_cast<int>(e.integer(
+        "multisine_components", ec.multisine_components,
+        [](std::int64_t v) { return v >= 1 && v <= 16; }, "in [1, 16]"));
+    ec.multisine_f_min_hz = e.number("multisine_f_min_hz", ec.multisine_f_min_hz, positive, "> 0");
+    ec.multisine_f_max_hz = e.number("multisine_f_max_hz", ec.multisine_f_max_hz, positive, "> 0");
+    e.reject_unknown_keys();
+  }
 
   Section nominal = top.child("nominal");
   if (nominal.present()) c.nominal = read_parameters(nominal, bridge::ModelParameters{});

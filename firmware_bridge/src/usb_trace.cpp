@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string_view>
 #include <system_error>
@@ -101,6 +102,18 @@ class Parser {
     }
     if (!have_device_) fail("missing device line");
     return trace;
+  }
+
+  // A device line alone, as a session log carries it: its own source, so any error is on line 1.
+  DeviceInfo parse_device_line(std::string_view line) {
+    line_ = 1;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.find_first_of("\r\n") != std::string_view::npos) fail("device line with a line break");
+    const std::vector<std::string_view> fields = split_fields(line);
+    if (fields.empty() || fields[0] != "device") fail("not a device line");
+    DeviceInfo device;
+    parse_device(fields, device);
+    return device;
   }
 
  private:
@@ -198,16 +211,10 @@ class Parser {
   }
 
   TransportStatus parse_status(std::string_view name) {
-    // Every value to_string() knows, so a status added to the enum (and, as -Wswitch insists, to
-    // to_string) is readable here without a second list to keep in step.
-    for (int value = 0; value <= 0xFF; ++value) {
-      const auto s = static_cast<TransportStatus>(value);
-      if (to_string(s) == name && name != "unknown") {
-        if (s == TransportStatus::ok) fail("ERR with status ok");
-        return s;
-      }
-    }
-    fail("unknown status name " + quoted(name));
+    const std::optional<TransportStatus> s = transport_status_from_string(name);
+    if (!s) fail("unknown status name " + quoted(name));
+    if (*s == TransportStatus::ok) fail("ERR with status ok");
+    return *s;
   }
 
   const std::string& source_;
@@ -266,19 +273,39 @@ UsbTrace read_usb_trace(const std::filesystem::path& path) {
   return parse_usb_trace(buffer.str(), path.string());
 }
 
-std::string format_usb_trace(const UsbTrace& trace) {
-  const DeviceInfo& d = trace.device;
-  std::string out;
-  out.reserve(128 + trace.events.size() * 80);
-  out += kHeader;
-  out += '\n';
-  out += "device " + hex4(d.vendor_id) + ":" + hex4(d.product_id);
+std::string format_trace_device_line(const DeviceInfo& d) {
+  std::string out = "device " + hex4(d.vendor_id) + ":" + hex4(d.product_id);
   out += " serial=" + d.serial;
   out += " firmware=" + std::to_string(d.firmware_version);
   out += " in=" + std::to_string(d.input_report_bytes);
   out += " out=" + std::to_string(d.output_report_bytes);
   out += " name=" + encode_name(d.product_name);
   if (d.vendor_class_interface) out += " vendor_class=1";
+  return out;
+}
+
+DeviceInfo parse_trace_device_line(const std::string& line) {
+  static const std::string kSource = "device line";
+  return Parser(kSource).parse_device_line(line);
+}
+
+std::optional<TransportStatus> transport_status_from_string(std::string_view name) {
+  // Every value to_string() knows, so a status added to the enum (and, as -Wswitch insists, to
+  // to_string) is readable here without a second list to keep in step.
+  if (name == "unknown") return std::nullopt;
+  for (int value = 0; value <= 0xFF; ++value) {
+    const auto s = static_cast<TransportStatus>(value);
+    if (to_string(s) == name) return s;
+  }
+  return std::nullopt;
+}
+
+std::string format_usb_trace(const UsbTrace& trace) {
+  std::string out;
+  out.reserve(128 + trace.events.size() * 80);
+  out += kHeader;
+  out += '\n';
+  out += format_trace_device_line(trace.device);
   out += '\n';
   for (const TraceEvent& e : trace.events) {
     out += std::to_string(e.time_ns);

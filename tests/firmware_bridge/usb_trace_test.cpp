@@ -226,5 +226,48 @@ TEST(UsbTraceErrors, TrailingTextOversizedReportAndVersion) {
   expect_error("# furuta usb trace v2\n", 1, "unsupported trace version '2'");
 }
 
+TEST(UsbTraceDeviceLine, FormatsTheTraceFileDeviceLineAndParsesItBack) {
+  UsbTrace t = sample_trace();
+  t.device.vendor_class_interface = true;
+  const std::string line = format_trace_device_line(t.device);
+  EXPECT_EQ(line,
+            "device 06c2:003e serial=300001 firmware=105 in=25 out=4 "
+            "name=1065_MotorControl_1-Motor vendor_class=1");
+  // The same line a whole trace carries, so the two cannot drift apart.
+  EXPECT_NE(format_usb_trace(t).find("\n" + line + "\n"), std::string::npos);
+
+  t.events.clear();
+  expect_same(UsbTrace{parse_trace_device_line(line), {}}, t);
+  expect_same(UsbTrace{parse_trace_device_line(line + "\r"), {}}, t);
+}
+
+TEST(UsbTraceDeviceLine, ErrorsAreOnLineOneOfTheDeviceLine) {
+  const auto expect_line_error = [](const std::string& line, const std::string& needle) {
+    try {
+      parse_trace_device_line(line);
+      ADD_FAILURE() << "no error for " << line;
+    } catch (const TraceFormatError& e) {
+      EXPECT_EQ(e.line(), 1) << e.what();
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  expect_line_error("", "not a device line");
+  expect_line_error("10 IN 00", "not a device line");
+  expect_line_error("device 6c2:3e", "bad vendor:product");
+  expect_line_error("device 06c2:003e colour=blue", "unknown device field 'colour'");
+  expect_line_error("device 06c2:003e serial=1\ndevice 06c2:003e", "line break");
+}
+
+TEST(UsbTraceDeviceLine, StatusNamesMapBackToStatuses) {
+  for (int value = 0; value <= static_cast<int>(TransportStatus::replay_exhausted); ++value) {
+    const auto s = static_cast<TransportStatus>(value);
+    EXPECT_EQ(transport_status_from_string(to_string(s)), s) << to_string(s);
+  }
+  EXPECT_EQ(transport_status_from_string("unknown"), std::nullopt);
+  EXPECT_EQ(transport_status_from_string("unplugged"), std::nullopt);
+  EXPECT_EQ(transport_status_from_string(""), std::nullopt);
+  EXPECT_EQ(transport_status_from_string("Timeout"), std::nullopt);
+}
+
 }  // namespace
 }  // namespace furuta::bridge

@@ -34,6 +34,57 @@ struct BoardSelection {
   std::optional<std::string> serial;  // none: the first board of that product
 };
 
+// The daemon's own settings ([daemon], [daemon.realtime]).
+struct DaemonConfig {
+  std::int64_t period_ns = 16'000'000;
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";  // ttl=0: traffic stays on this host
+  std::string logs_dir = "/var/lib/furuta/logs";
+  std::int64_t flush_interval_ms = 1000;
+  double rest_check_s = 1.0;
+  std::int64_t queue_capacity = 4096;
+  bool realtime = false;
+  int fifo_priority = 80;
+  int cpu = -1;
+  bool lock_memory = true;
+};
+
+// [safety]: what stops a session.
+struct SafetyConfig {
+  double arm_limit_rad = 2.6;
+  double max_duty = 0.6;
+  int stale_report_cycles = 4;
+  double min_supply_v = 7.0;
+  double max_supply_v = 34.0;
+  double stop_braking_fraction = 1.0;
+};
+
+// [limits]: what a command may ask for.
+struct CommandLimitsConfig {
+  double max_amplitude_duty = 0.5;
+  double max_duration_s = 600.0;
+  double max_arm_switch_rad = 2.4;
+  int max_commands_per_s = 5;
+};
+
+// [excitation]: defaults for sessions (a command overrides profile, amplitude, duration, seed).
+struct ExcitationConfig {
+  std::string profile = "bang_bang";
+  double amplitude_duty = 0.3;
+  double duration_s = 10.0;
+  std::int64_t seed = 1;
+  double switch_period_s = 0.5;
+  double switch_period_jitter = 0.0;
+  double arm_switch_rad = 86.0 * 3.14159265358979323846 / 180.0;
+  double step_time_s = 0.5;
+  double prbs_bit_period_s = 0.048;
+  int prbs_order = 9;
+  double chirp_f0_hz = 0.2;
+  double chirp_f1_hz = 5.0;
+  int multisine_components = 8;
+  double multisine_f_min_hz = 0.2;
+  double multisine_f_max_hz = 5.0;
+};
+
 struct RigConfig {
   std::string name;
   UsbBackend backend = UsbBackend::simulated;
@@ -45,7 +96,11 @@ struct RigConfig {
   bridge::MotorData motor;
   bridge::SimulatedRigConfig simulation;           // geometry and motor copied in from the above
   std::optional<bridge::ModelParameters> nominal;  // CAD values, for comparison only
-  std::string source_text;                         // the file verbatim, so logs can carry it
+  DaemonConfig daemon;
+  SafetyConfig safety;
+  CommandLimitsConfig limits;
+  ExcitationConfig excitation;
+  std::string source_text;  // the file verbatim, so logs can carry it
   std::string source_name;
 };
 

@@ -12,8 +12,10 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "furuta/firmware_bridge/transport.hpp"
@@ -49,5 +51,14 @@ UsbTrace read_usb_trace(const std::filesystem::path& path);  // throws TraceForm
 UsbTrace parse_usb_trace(const std::string& text, const std::string& source_name);
 std::string format_usb_trace(const UsbTrace& trace);
 void write_usb_trace(const std::filesystem::path& path, const UsbTrace& trace);  // atomic rename
+
+// The "device ..." line alone (without a newline), for logs that carry the device beside the
+// reports.
+std::string format_trace_device_line(const DeviceInfo& device);
+DeviceInfo parse_trace_device_line(const std::string& line);  // throws TraceFormatError (line 1)
+
+// A status by its to_string() name, as ERR lines and logged USB errors carry it; nullopt when no
+// status has that name.
+std::optional<TransportStatus> transport_status_from_string(std::string_view name);
 
 }  // namespace furuta::bridge

@@ -1,0 +1,149 @@
+// furutad: the rig daemon. Thin: configuration in, boards opened, the Daemon run until a signal.
+#include <signal.h>
+#include <systemd/sd-daemon.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <chrono>
+#include <iostream>
+#include <thread>
+
+#include "furuta/config/rig_config.hpp"
+#include "furuta/daemon/daemon.hpp"
+#include "furuta/daemon/rig_connection.hpp"
+#include "furuta/firmware_bridge/usb_trace.hpp"
+#include "furuta/session_log/lcm_log.hpp"
+
+namespace {
+
+using namespace furuta;
+
+// Signals are taken synchronously on one thread (sigwait), so no code runs in signal context and
+// the loop thread never sees them.
+sigset_t termination_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  return set;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"furutad: runs the rotary pendulum rig (excitation, safety, LCM, session logs)"};
+  std::string config_path = config::default_rig_config_path().string();
+  bool simulated = false;
+  std::string replay_log;
+  bool require_rt = false;
+  std::string logs_dir;
+  std::string lcm_url;
+  app.add_option("-c,--config", config_path, "Rig configuration (TOML)")->check(CLI::ExistingFile);
+  app.add_flag("--sim", simulated, "Drive the simulated rig instead of the USB boards");
+  app.add_option("--replay", replay_log, "Replay the USB traffic of a session log")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--require-rt", require_rt, "Fail if the real-time set-up is refused");
+  app.add_option("--logs-dir", logs_dir, "Where session logs go (overrides the configuration)");
+  app.add_option("--lcm-url", lcm_url, "LCM URL (overrides the configuration)");
+  CLI11_PARSE(app, argc, argv);
+
+  // Before any thread exists, so every thread inherits the mask.
+  const sigset_t signals = termination_signals();
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  try {
+    const config::RigConfig rig = config::load_rig_config(config_path);
+    daemon::DaemonSettings settings = daemon::daemon_settings_from_config(rig);
+    if (!logs_dir.empty()) settings.recorder.logs_dir = logs_dir;
+    if (lcm_url.empty()) lcm_url = rig.daemon.lcm_url;
+    if (require_rt) settings.realtime.enabled = true;
+
+    for (const auto& recovered : session_log::recover_partial_logs(settings.recorder.logs_dir)) {
+      std::cerr << "furutad: recovered a session cut short: " << recovered.path.string() << " ("
+                << recovered.stats.events << " events kept, " << recovered.bytes_dropped
+                << " bytes of unfinished tail dropped)\n";
+    }
+
+    daemon::ConnectOptions connect;
+    if (simulated) connect.backend = daemon::BackendChoice::simulated;
+    if (!replay_log.empty()) {
+      connect.backend = daemon::BackendChoice::replay;
+      connect.replay_log = replay_log;
+    }
+    daemon::RigConnection rig_io = daemon::connect_rig(rig, connect);
+    settings.recorder.motor_device = bridge::format_trace_device_line(rig_io.motor->device_info());
+    settings.recorder.encoder_device =
+        bridge::format_trace_device_line(rig_io.encoder->device_info());
+
+    lcm::LCM lcm(lcm_url);
+    if (!lcm.good()) {
+      std::cerr << "furutad: cannot open LCM at " << lcm_url << "\n";
+      return 1;
+    }
+    daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
+    const daemon::RealtimeResult rt = daemon.start();
+    for (const std::string& refusal : rt.refused) {
+      std::cerr << "furutad: real-time set-up refused: " << refusal << "\n";
+    }
+    if (require_rt && !rt.complete(settings.realtime)) {
+      std::cerr << "furutad: --require-rt: stopping\n";
+      daemon.stop(daemon::StopReason::signal);
+      daemon.wait();
+      return 3;
+    }
+    std::cerr << "furutad: running on " << rig_io.description << ", period "
+              << settings.loop.period_ns / 1000 << " us, logs in "
+              << settings.recorder.logs_dir.string() << ", LCM " << lcm_url << "\n";
+
+    // The signal thread: the first SIGINT/SIGTERM stops the daemon (motor to zero, log closed).
+    std::atomic<bool> done{false};
+    std::thread signal_thread([&] {
+      int signal_number = 0;
+      // SIGTERM from ourselves wakes this thread when the daemon ends on its own.
+      sigwait(&signals, &signal_number);
+      if (!done.load()) {
+        std::cerr << "furutad: " << strsignal(signal_number) << ": stopping\n";
+        daemon.stop(daemon::StopReason::signal);
+      }
+    });
+
+    // systemd: READY once the boards answer; the watchdog is fed only while the loop cycles.
+    std::thread notify_thread([&] {
+      bool ready_sent = false;
+      std::int64_t last_heartbeat = -1;
+      std::uint64_t watchdog_usec = 0;
+      const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
+      while (!done.load()) {
+        if (!ready_sent && daemon.ready()) {
+          sd_notify(0, "READY=1\nSTATUS=running");
+          ready_sent = true;
+        }
+        const std::int64_t beat = daemon.heartbeat();
+        if (watchdog && beat != last_heartbeat) sd_notify(0, "WATCHDOG=1");
+        last_heartbeat = beat;
+        std::this_thread::sleep_for(std::chrono::milliseconds(
+            watchdog ? std::max<std::uint64_t>(watchdog_usec / 4000, 10) : 100));
+      }
+    });
+
+    int status = 0;
+    try {
+      daemon.wait();
+    } catch (const std::exception& e) {
+      std::cerr << "furutad: control loop failed: " << e.what() << "\n";
+      status = 1;
+    }
+    sd_notify(0, "STOPPING=1");
+    done.store(true);
+    pthread_kill(signal_thread.native_handle(), SIGTERM);
+    signal_thread.join();
+    notify_thread.join();
+    return status;
+  } catch (const config::ConfigError& e) {
+    std::cerr << "furutad: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "furutad: " << e.what() << "\n";
+    return 1;
+  }
+}

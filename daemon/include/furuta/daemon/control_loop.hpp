@@ -1,0 +1,150 @@
+#pragma once
+// The real-time loop: one cycle every period on absolute deadlines; each cycle drains both boards,
+// builds a sample, runs the safety rules, computes the next command from the excitation and writes
+// it, and hands the sample to the publisher/logger through a lock-free queue. After start-up the
+// loop thread neither allocates nor locks; its only system calls are USB I/O and the sleep.
+//
+// Every way out of a session (its end, a stop or e-stop, a fault, a signal, an exception) writes a
+// zero, braking command as the last thing sent to the motor.
+
+#include <array>
+#include <atomic>
+#include <boost/lockfree/spsc_queue.hpp>
+#include <cstdint>
+
+#include "furuta/daemon/board_link.hpp"
+#include "furuta/daemon/excitation.hpp"
+#include "furuta/daemon/loop_events.hpp"
+#include "furuta/daemon/realtime.hpp"
+#include "furuta/daemon/safety.hpp"
+#include "furuta/firmware_bridge/clock.hpp"
+#include "furuta/firmware_bridge/encoder_geometry.hpp"
+#include "furuta/firmware_bridge/lost_reports.hpp"
+
+namespace furuta::daemon {
+
+using EventQueue = boost::lockfree::spsc_queue<LoopEvent>;
+
+struct LoopSettings {
+  std::int64_t period_ns = 16'000'000;
+  SafetyLimits safety;
+  bridge::EncoderGeometry arm_encoder;  // counts_per_rev of the motor shaft, gear ratio Nm*Ng
+  bridge::EncoderGeometry pendulum_encoder;
+  int pendulum_channel = 0;
+  double stop_braking_fraction = 1.0;  // braking applied with the zero command on every stop
+  double rest_check_s = 1.0;           // the pendulum must not have moved for this long to start
+  // How long a start request waits for the pendulum to come to rest before it is refused
+  // (0: refused at once, as the daemon does; a one-shot run waits).
+  double rest_wait_s = 0.0;
+  std::int64_t rest_tolerance_counts = 2;
+  // Virtual-time runs outpace the logger thread: wait for room in the queue instead of treating a
+  // full queue as a stuck logger (which, in real time, stops the session with log_error).
+  bool wait_when_queue_full = false;
+};
+
+// Built off the loop thread (constructing the Excitation validates and precomputes), copied in.
+struct SessionRequest {
+  std::array<char, kNameChars> session{};  // the log's name
+  std::array<char, kNameChars> label{};
+  Excitation excitation;
+  // Replay: the arm's zero as the original session recorded it (the replayed traffic starts at the
+  // session, after the board's absolute position was already known).
+  bool has_arm_zero = false;
+  std::int64_t arm_zero_counts = 0;
+};
+
+enum class LoopState : std::uint8_t { starting, idle, running, fault };
+
+// Figures other threads may read at any time.
+struct LoopCounters {
+  std::atomic<std::int64_t> cycles{0};
+  std::atomic<std::int64_t> overruns{0};
+  std::atomic<std::int64_t> motor_lost_reports{0};
+  std::atomic<std::int64_t> encoder_lost_reports{0};
+  std::atomic<LoopState> state{LoopState::starting};
+  std::atomic<StopReason> last_stop{StopReason::none};
+  std::atomic<std::int64_t> sessions_completed{0};
+};
+
+class ControlLoop {
+ public:
+  ControlLoop(const LoopSettings& settings, BoardLink& motor, BoardLink& encoder,
+              bridge::Clock& clock, EventQueue& events);
+
+  // --- from other threads, lock-free ---
+  // Queues a session; false when one is already waiting. The loop may still refuse it (pendulum
+  // not at rest, a session running): the refusal comes back as a fault event.
+  bool request_session(const SessionRequest& request) noexcept;
+  void request_stop(StopReason reason) noexcept;  // stop_command, estop_command or signal
+  void request_exit() noexcept;                   // ends any session, then run() returns
+  // After the current session (or at once when idle), run() returns: one-shot runs and tests.
+  void exit_when_idle() noexcept { exit_when_idle_.store(true); }
+
+  // Runs until exit is requested. Throws only what start-up throws; an exception inside a cycle
+  // ends the session (reason exception) and is then rethrown, after the zero command.
+  void run();
+
+  const LoopCounters& counters() const noexcept { return counters_; }
+  LatencyHistogram& wake_latency() noexcept { return wake_latency_; }
+
+ private:
+  struct BoardState;
+  void cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int64_t missed);
+  void drain_boards(RigSample& sample, std::int64_t& newest_arm_counts);
+  void begin_session(const SessionRequest& request, std::int64_t now_ns);
+  void consider_pending_request(std::int64_t now_ns);
+  void end_session(StopReason reason, const char* detail, std::int64_t now_ns);
+  bool write_command(double duty, double braking_fraction, RawReport* record) noexcept;
+  void emit(LoopEvent::Kind kind) noexcept;
+  void emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
+                  std::int64_t now_ns) noexcept;
+  bool queue_has_room(std::size_t events) noexcept;
+
+  LoopSettings settings_;
+  BoardLink& motor_;
+  BoardLink& encoder_;
+  bridge::Clock& clock_;
+  EventQueue& events_;
+
+  boost::lockfree::spsc_queue<SessionRequest, boost::lockfree::capacity<2>> requests_;
+  std::atomic<StopReason> stop_request_{StopReason::none};
+  std::atomic<bool> exit_{false};
+  std::atomic<bool> exit_when_idle_{false};
+  LoopCounters counters_;
+  LatencyHistogram wake_latency_;
+
+  // Loop-thread state (no other thread touches it).
+  LoopEvent event_;  // built in place, then copied into the queue
+  bridge::PacketCounterTracker1065 motor_counter_;
+  bridge::ReportTimingTracker1047 encoder_timing_;
+  bool running_ = false;
+  SessionRequest pending_;  // a start request waiting for the pendulum to rest
+  bool have_pending_ = false;
+  std::int64_t pending_since_ns_ = 0;
+  Excitation excitation_;
+  std::array<char, kNameChars> session_{};
+  std::int64_t session_start_ns_ = 0;
+  std::int64_t seq_ = 0;
+  std::int64_t arm_zero_counts_ = 0;
+  std::int64_t pendulum_zero_counts_ = 0;
+  std::int64_t session_overruns_ = 0;
+  std::int64_t session_motor_lost_ = 0;
+  std::int64_t session_encoder_lost_ = 0;
+  // Board state carried across cycles.
+  std::int64_t arm_counts_ = 0;
+  std::int64_t pendulum_counts_ = 0;  // running sum of 1047 deltas since the channel was enabled
+  double applied_duty_ = 0;
+  double motor_current_a_ = 0;
+  double supply_voltage_v_ = 0;
+  bool have_supply_ = false;
+  std::uint8_t motor_flags_ = 0;
+  std::uint8_t encoder_flags_ = 0;
+  int cycles_without_motor_ = 0;
+  int cycles_without_encoder_ = 0;
+  bridge::TransportStatus usb_failure_ = bridge::TransportStatus::ok;
+  // Rest detection: the pendulum count and when it last moved beyond the tolerance.
+  std::int64_t rest_anchor_counts_ = 0;
+  std::int64_t rest_anchor_ns_ = 0;
+};
+
+}  // namespace furuta::daemon

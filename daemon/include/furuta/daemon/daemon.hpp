@@ -1,0 +1,104 @@
+#pragma once
+// The daemon: the control loop on its own (real-time) thread, the recorder on an I/O thread that
+// drains the loop's queue, and an LCM thread that takes commands and answers with status.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "furuta/daemon/control_loop.hpp"
+#include "furuta/daemon/session_recorder.hpp"
+#include "furuta/rig_command_t.hpp"
+#include "furuta/rig_session_t.hpp"
+#include "furuta/rig_status_t.hpp"
+
+namespace furuta::daemon {
+
+struct DaemonSettings {
+  LoopSettings loop;
+  RecorderSettings recorder;
+  CommandLimits command_limits;
+  ExcitationSpec default_excitation;  // fields a command leaves out
+  RealtimeOptions realtime;
+  std::size_t queue_capacity = 4096;  // loop events: about a minute at 16 ms
+  std::chrono::milliseconds status_interval{1000};
+};
+
+class Daemon {
+ public:
+  // `lcm` must outlive the daemon; the daemon subscribes to RIG_COMMAND on it and handles it on its
+  // own thread.
+  Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, bridge::Clock& clock,
+         lcm::LCM& lcm);
+  ~Daemon();  // stops everything (the motor at zero first)
+
+  // Starts the threads. Returns the real-time set-up outcome (refusals are warnings here; furutad
+  // decides whether they are fatal).
+  RealtimeResult start();
+  // Blocks until the loop has exited (after stop(), or after the current session when
+  // exit_when_idle), then stops the other threads. Rethrows an exception from the loop.
+  void wait();
+  // From any thread, e.g. a signal handler thread: ends any session with `reason`, then exits.
+  void stop(StopReason reason);
+
+  // The same path an LCM command takes (validated, rate-limited, answered with status).
+  furuta::rig_status_t handle_command(const furuta::rig_command_t& command);
+  // Replay: start a session as a log's start record describes it (the same excitation and zeros).
+  bool start_replayed_session(const furuta::rig_session_t& start);
+
+  ControlLoop& loop() { return *loop_; }
+  SessionRecorder& recorder() { return *recorder_; }
+  // Sessions finished so far (by the I/O thread).
+  std::int64_t sessions_logged() const { return sessions_logged_.load(); }
+  void on_session_logged(std::function<void(const std::filesystem::path&)> callback);
+  // True once the loop runs and the first report of each board is in (furutad's READY=1).
+  bool ready() const { return ready_.load(); }
+  // Advances while the loop cycles (furutad pings the watchdog only while it moves).
+  std::int64_t heartbeat() const { return loop_->counters().cycles.load(); }
+
+ private:
+  // What the I/O thread knows that status replies from the LCM thread need.
+  struct StatusSnapshot {
+    std::string session;
+    std::string last_fault;
+    double jitter_mean_us = 0, jitter_p99_us = 0, jitter_max_us = 0;
+  };
+  furuta::rig_status_t status_message();
+  void refresh_snapshot();
+  void io_thread_main();
+  void lcm_thread_main();
+  void on_command(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_command_t* msg);
+
+  DaemonSettings settings_;
+  bridge::Clock& clock_;
+  lcm::LCM& lcm_;
+  EventQueue events_;
+  std::unique_ptr<ControlLoop> loop_;
+  std::unique_ptr<SessionRecorder> recorder_;
+  CommandValidator validator_;
+  std::mutex command_mutex_;  // validator state; commands come from LCM and from handle_command
+  mutable std::mutex snapshot_mutex_;
+  StatusSnapshot snapshot_;
+  std::function<void(const std::filesystem::path&)> on_logged_;
+
+  std::atomic<bool> io_stop_{false};
+  std::atomic<bool> lcm_stop_{false};
+  std::atomic<bool> ready_{false};
+  std::atomic<std::int64_t> sessions_logged_{0};
+  std::exception_ptr loop_error_;
+  std::thread loop_thread_;
+  std::thread io_thread_;
+  std::thread lcm_thread_;
+  lcm::Subscription* subscription_ = nullptr;
+};
+
+// "2026-11-21T10-04-05Z_label": sortable, safe as a file name (label reduced to [A-Za-z0-9_.-]).
+std::string session_name(std::int64_t wall_time_ns, const std::string& label);
+
+}  // namespace furuta::daemon

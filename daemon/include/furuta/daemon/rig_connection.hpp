@@ -1,0 +1,48 @@
+#pragma once
+// From a rig configuration to a running daemon's parts: the boards opened through the configured
+// backend (hidapi, libusb, the simulated rig, or a session log replayed), the clock that goes with
+// them, and the daemon's settings.
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "furuta/config/rig_config.hpp"
+#include "furuta/daemon/board_link.hpp"
+#include "furuta/daemon/daemon.hpp"
+#include "furuta/firmware_bridge/clock.hpp"
+#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/firmware_bridge/transport.hpp"
+
+namespace furuta::daemon {
+
+enum class BackendChoice { from_config, simulated, replay };
+
+struct ConnectOptions {
+  BackendChoice backend = BackendChoice::from_config;
+  std::filesystem::path replay_log;   // for BackendChoice::replay
+  bool virtual_time = false;          // simulated/replay: a VirtualClock instead of real time
+  std::int64_t virtual_start_ns = 0;  // where that clock starts
+};
+
+struct RigConnection {
+  std::unique_ptr<bridge::Clock> clock;
+  std::unique_ptr<bridge::SimulatedRig> simulated_rig;  // when simulated
+  std::unique_ptr<bridge::Transport> motor;
+  std::unique_ptr<bridge::Transport> encoder;
+  std::unique_ptr<BoardLink> motor_link;
+  std::unique_ptr<BoardLink> encoder_link;
+  std::string description;  // "simulated rig", "hidapi: 1065 serial ...", for messages
+};
+
+// Opens both boards. Throws std::runtime_error with a message naming the board and the status (and,
+// for access_denied, the udev rule to install).
+RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions& options);
+
+ExcitationSpec excitation_from_config(const config::ExcitationConfig& config);
+DaemonSettings daemon_settings_from_config(const config::RigConfig& config);
+
+inline constexpr const char* kSoftwareVersion = "furuta 0.1.0";
+
+}  // namespace furuta::daemon

@@ -1,0 +1,94 @@
+#pragma once
+// The safety supervisor's rules (pure, checked every cycle), and the validation of commands that
+// arrive over LCM. Neither allocates on the loop's path.
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "furuta/daemon/excitation.hpp"
+#include "furuta/rig_command_t.hpp"
+
+namespace furuta::daemon {
+
+// Why a session ended (or a command was refused), as the log and status say it.
+enum class StopReason : std::uint8_t {
+  none,
+  duration_reached,
+  stop_command,
+  estop_command,
+  signal,  // SIGINT / SIGTERM
+  arm_angle_limit,
+  duty_limit,
+  stale_motor_reports,  // no fresh 1065 report for N cycles
+  stale_encoder_reports,
+  usb_error,
+  under_voltage,
+  over_temperature,
+  supply_out_of_range,
+  log_error,  // the session log could not be written (disk full, I/O error)
+  exception,  // anything thrown inside the loop
+};
+std::string_view to_string(StopReason reason);  // snake_case, stable: logs and tests match on it
+bool is_fault(StopReason reason);               // everything but duration/stop/none
+
+struct SafetyLimits {
+  double arm_limit_rad = 2.6;   // |q1| beyond this stops the session
+  double max_duty = 0.6;        // |duty| commanded beyond this stops it (a bug upstream)
+  int stale_report_cycles = 4;  // cycles without a fresh report from a board
+  double min_supply_v = 7.0;    // the vendor library's "too low"
+  double max_supply_v = 34.0;   // its "warning" threshold
+};
+
+// What the supervisor looks at, once per cycle.
+struct SafetyInput {
+  double arm_angle_rad = 0.0;
+  double commanded_duty = 0.0;
+  int cycles_without_motor_report = 0;
+  int cycles_without_encoder_report = 0;
+  std::uint8_t motor_status_flags = 0;  // 1065 byte 1
+  double supply_voltage_v = 12.0;
+  bool have_supply_reading = false;  // before the first report the supply is unknown
+};
+
+// The first rule broken, in a fixed order (board flags, supply, staleness, angle, duty), or none.
+StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) noexcept;
+
+struct CommandLimits {
+  double max_amplitude_duty = 0.5;
+  double max_duration_s = 600.0;
+  double max_arm_switch_rad = 2.4;  // bang-bang thresholds must sit inside the safety limit
+  int max_commands_per_s = 5;       // token bucket, burst of the same size
+  int max_label_chars = 64;
+};
+
+struct CommandDecision {
+  bool accepted = false;
+  std::string reason;  // why not, naming the field: "amplitude_duty: 0.9 above the limit 0.5"
+};
+
+// Validates commands and rate-limits them (e-stop is never rate-limited: it must always get
+// through).
+class CommandValidator {
+ public:
+  explicit CommandValidator(const CommandLimits& limits) : limits_(limits) {}
+  CommandDecision validate(const furuta::rig_command_t& command, std::int64_t now_ns);
+
+ private:
+  CommandLimits limits_;
+  double tokens_ = -1.0;  // filled on first use
+  std::int64_t last_refill_ns_ = 0;
+};
+
+// The excitation for an accepted START_SESSION: the command's profile, amplitude, duration and seed
+// over the configured defaults (the profile-specific parameters stay the configured ones).
+// Throws std::invalid_argument for an unknown profile or a negative seed (validate() refuses both).
+ExcitationSpec spec_from_command(const furuta::rig_command_t& command,
+                                 const ExcitationSpec& defaults);
+
+// Where a complete excitation breaks the command limits, naming the field ("" when none): the
+// command's amplitude and duration, and the configured bang-bang threshold, which no command
+// carries but which must still sit inside max_arm_switch_rad.
+std::string check_spec_limits(const ExcitationSpec& spec, const CommandLimits& limits);
+
+}  // namespace furuta::daemon

@@ -1,0 +1,87 @@
+#pragma once
+// The publisher/logger side of the loop, on its own thread: each loop event becomes LCM messages,
+// published (RIG_SAMPLE, RIG_SESSION, RIG_FAULT) and written to the session's log (plus every raw
+// USB report on RIG_USB), synced at the flush interval, renamed into the logs directory at the end.
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "furuta/daemon/loop_events.hpp"
+#include "furuta/daemon/realtime.hpp"
+#include "furuta/firmware_bridge/encoder_geometry.hpp"
+#include "furuta/rig_sample_t.hpp"
+#include "furuta/rig_usb_report_t.hpp"
+#include "furuta/session_log/lcm_log.hpp"
+
+namespace furuta::daemon {
+
+struct RecorderSettings {
+  std::filesystem::path logs_dir;
+  std::chrono::milliseconds flush_interval{1000};
+  std::string rig_config_toml;  // verbatim into the start record
+  std::string software_version;
+  std::string motor_device;  // usb trace device lines, for replay
+  std::string encoder_device;
+  int pendulum_channel = 0;
+};
+
+class SessionRecorder {
+ public:
+  // `lcm` may be null (no publishing). `on_log_failure` is called once per session when the log
+  // cannot be written (the daemon stops the session with log_error).
+  SessionRecorder(RecorderSettings settings, lcm::LCM* lcm,
+                  std::function<void(const std::string&)> on_log_failure = {});
+  ~SessionRecorder();  // a session still open keeps its .part for recovery
+
+  void handle(const LoopEvent& event);
+  void sync_if_due(std::chrono::steady_clock::time_point now);
+
+  // Called with the final path of each log when its session ends.
+  void on_session_logged(std::function<void(const std::filesystem::path&)> callback) {
+    on_logged_ = std::move(callback);
+  }
+
+  const std::optional<std::filesystem::path>& last_log() const { return last_log_; }
+  std::string current_session() const { return session_; }
+  std::int64_t samples_published() const { return samples_published_; }
+  const LatencyHistogram& session_wake_latency() const { return wake_latency_; }
+  const std::string& last_fault() const { return last_fault_; }
+
+ private:
+  void start_session(const SessionStartEvent& start);
+  void end_session(const SessionEndEvent& end);
+  void record_sample(const RigSample& sample);
+  void record_fault(const FaultEvent& fault);
+  void log_raw_report(const RawReport& raw, std::int8_t board, std::int8_t kind);
+  template <typename Message>
+  void publish_and_log(const char* channel, const Message& message, std::int64_t monotonic_ns);
+  void log_bytes(const char* channel, const std::vector<std::uint8_t>& bytes,
+                 std::int64_t monotonic_ns);
+
+  RecorderSettings settings_;
+  lcm::LCM* lcm_;
+  std::function<void(const std::string&)> on_log_failure_;
+  std::function<void(const std::filesystem::path&)> on_logged_;
+  std::unique_ptr<session_log::LcmLogWriter> log_;
+  bool log_failed_ = false;
+  std::string session_;
+  std::optional<std::filesystem::path> last_log_;
+  std::int64_t samples_published_ = 0;
+  LatencyHistogram wake_latency_;
+  std::string last_fault_;
+  std::vector<std::uint8_t> buffer_;
+  furuta::rig_sample_t sample_msg_;
+  furuta::rig_usb_report_t usb_msg_;
+};
+
+// The LCM sample message for a loop sample (decoding its raw reports for the per-report arrays).
+furuta::rig_sample_t to_lcm_sample(const RigSample& sample, const std::string& session,
+                                   int pendulum_channel);
+
+}  // namespace furuta::daemon

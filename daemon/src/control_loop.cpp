@@ -1,0 +1,386 @@
+#include "furuta/daemon/control_loop.hpp"
+
+#include <cmath>
+#include <ctime>
+#include <exception>
+#include <thread>
+
+#include "furuta/firmware_bridge/codec_1047.hpp"
+#include "furuta/firmware_bridge/codec_1065.hpp"
+
+namespace furuta::daemon {
+
+using bridge::TransportStatus;
+
+namespace {
+
+// Capacity kept free for the events that end a session, so a full queue can never swallow them.
+constexpr std::size_t kReservedEvents = 4;
+
+std::int64_t wall_time_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+}  // namespace
+
+ControlLoop::ControlLoop(const LoopSettings& settings, BoardLink& motor, BoardLink& encoder,
+                         bridge::Clock& clock, EventQueue& events)
+    : settings_(settings),
+      motor_(motor),
+      encoder_(encoder),
+      clock_(clock),
+      events_(events),
+      encoder_timing_(bridge::tick_seconds_1047(encoder.device_info().firmware_version)) {
+  if (settings_.period_ns <= 0) throw std::invalid_argument("period_ns must be > 0");
+  if (settings_.pendulum_channel < 0 || settings_.pendulum_channel > 3) {
+    throw std::invalid_argument("pendulum_channel must be 0..3");
+  }
+}
+
+bool ControlLoop::request_session(const SessionRequest& request) noexcept {
+  return requests_.push(request);
+}
+
+void ControlLoop::request_stop(StopReason reason) noexcept {
+  // An e-stop or a signal must not be downgraded by a later plain stop.
+  StopReason current = stop_request_.load();
+  while (current == StopReason::none || current == StopReason::stop_command) {
+    if (stop_request_.compare_exchange_weak(current, reason)) return;
+  }
+}
+
+void ControlLoop::request_exit() noexcept {
+  exit_.store(true);
+}
+
+bool ControlLoop::queue_has_room(std::size_t events) noexcept {
+  while (events_.write_available() < events + kReservedEvents) {
+    if (!settings_.wait_when_queue_full) return false;
+    std::this_thread::yield();
+  }
+  return true;
+}
+
+void ControlLoop::emit(LoopEvent::Kind kind) noexcept {
+  event_.kind = kind;
+  // The reserve guarantees room for session and fault events; samples checked it before.
+  while (!events_.push(event_)) {
+    if (!settings_.wait_when_queue_full) return;
+    std::this_thread::yield();
+  }
+}
+
+void ControlLoop::emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
+                             std::int64_t now_ns) noexcept {
+  FaultEvent& f = event_.fault;
+  f.reason = reason;
+  copy_text(f.what, what);
+  copy_text(f.detail, detail);
+  f.seq = seq_;
+  f.monotonic_ns = now_ns;
+  f.fatal = fatal;
+  emit(LoopEvent::Kind::fault);
+}
+
+bool ControlLoop::write_command(double duty, double braking_fraction, RawReport* record) noexcept {
+  bridge::MotorCommand1065 command;
+  command.duty_cycle = duty;
+  command.braking_fraction = braking_fraction;
+  bridge::MotorOutput1065 output;
+  if (bridge::to_output_1065(command, output) != bridge::CodecStatus::ok) return false;
+  std::array<std::uint8_t, bridge::kMaxReportBytes> bytes{};
+  const std::size_t length = motor_.device_info().output_report_bytes;
+  if (length < bridge::k1065OutputReportMinBytes || length > bytes.size()) return false;
+  if (bridge::encode_output_1065(output, {bytes.data(), length}) != bridge::CodecStatus::ok) {
+    return false;
+  }
+  const TransportStatus status = motor_.write({bytes.data(), length});
+  if (record) {
+    record->time_ns = clock_.now_ns();
+    record->status = status;
+    record->length = static_cast<std::uint8_t>(length);
+    record->bytes = bytes;
+  }
+  if (status != TransportStatus::ok && usb_failure_ == TransportStatus::ok) usb_failure_ = status;
+  return status == TransportStatus::ok;
+}
+
+void ControlLoop::drain_boards(RigSample& sample, std::int64_t& newest_arm_counts) {
+  sample.motor_in.count = 0;
+  sample.encoder_in.count = 0;
+  const TransportStatus motor_status = motor_.drain(sample.motor_in);
+  const TransportStatus encoder_status = encoder_.drain(sample.encoder_in);
+  if (usb_failure_ == TransportStatus::ok) {
+    usb_failure_ = motor_status != TransportStatus::ok ? motor_status : encoder_status;
+  }
+
+  int motor_fresh = 0;
+  int motor_lost = 0;
+  for (std::size_t i = 0; i < sample.motor_in.count; ++i) {
+    const RawReport& raw = sample.motor_in.reports[i];
+    bridge::MotorReport1065 r;
+    if (raw.status != TransportStatus::ok ||
+        bridge::decode_input_1065({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
+      continue;  // kept raw in the sample and the log; not trusted for state
+    }
+    ++motor_fresh;
+    motor_lost += motor_counter_.observe(r.packet_counter);
+    newest_arm_counts = r.encoder_position;
+    applied_duty_ = r.applied_duty();
+    motor_current_a_ = r.motor_current_a();
+    supply_voltage_v_ = r.supply_voltage_v();
+    have_supply_ = true;
+    motor_flags_ = r.status_flags;
+  }
+  int encoder_fresh = 0;
+  int encoder_lost = 0;
+  const auto channel = static_cast<std::size_t>(settings_.pendulum_channel);
+  for (std::size_t i = 0; i < sample.encoder_in.count; ++i) {
+    const RawReport& raw = sample.encoder_in.reports[i];
+    bridge::EncoderReport1047 r;
+    if (raw.status != TransportStatus::ok ||
+        bridge::decode_input_1047({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
+      continue;
+    }
+    ++encoder_fresh;
+    const bridge::EncoderChannel1047& ch = r.channels[channel];
+    encoder_lost += encoder_timing_.observe(ch.packet_time_ticks, raw.time_ns);
+    pendulum_counts_ += ch.position_delta;
+    encoder_flags_ = ch.flags;
+  }
+  cycles_without_motor_ = motor_fresh > 0 ? 0 : cycles_without_motor_ + 1;
+  cycles_without_encoder_ = encoder_fresh > 0 ? 0 : cycles_without_encoder_ + 1;
+  counters_.motor_lost_reports.fetch_add(motor_lost, std::memory_order_relaxed);
+  counters_.encoder_lost_reports.fetch_add(encoder_lost, std::memory_order_relaxed);
+
+  sample.flags = 0;
+  if (motor_fresh == 0) sample.flags |= kSampleMotorStale;
+  if (encoder_fresh == 0) sample.flags |= kSampleEncoderStale;
+  if (motor_lost > 0) sample.flags |= kSampleMotorLost;
+  if (encoder_lost > 0) sample.flags |= kSampleEncoderLost;
+  if (running_) {
+    session_motor_lost_ += motor_lost;
+    session_encoder_lost_ += encoder_lost;
+    if (motor_lost > 0)
+      emit_fault("lost_reports", "1065 packet counter gap", StopReason::none, false,
+                 sample.monotonic_ns);
+    if (encoder_lost > 0)
+      emit_fault("lost_reports", "1047 report timing gap: counts lost", StopReason::none, false,
+                 sample.monotonic_ns);
+  }
+}
+
+void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_ns) {
+  if (running_) {
+    emit_fault("start_refused", "a session is already running", StopReason::none, false, now_ns);
+    return;
+  }
+  if (usb_failure_ != TransportStatus::ok) {
+    emit_fault("start_refused", "the boards are not reachable", StopReason::none, false, now_ns);
+    return;
+  }
+  excitation_ = request.excitation;
+  session_ = request.session;
+  running_ = true;
+  stop_request_.store(StopReason::none);
+  session_start_ns_ = now_ns;
+  seq_ = 0;
+  session_overruns_ = 0;
+  session_motor_lost_ = 0;
+  session_encoder_lost_ = 0;
+  arm_zero_counts_ = request.has_arm_zero ? request.arm_zero_counts : arm_counts_;
+  pendulum_zero_counts_ = pendulum_counts_;
+  counters_.state.store(LoopState::running);
+
+  SessionStartEvent& s = event_.start;
+  s.session = request.session;
+  s.label = request.label;
+  s.excitation = excitation_.spec();
+  s.period_ns = settings_.period_ns;
+  s.monotonic_ns = now_ns;
+  s.wall_time_ns = wall_time_ns();
+  s.arm_zero_counts = arm_zero_counts_;
+  s.pendulum_zero_counts = pendulum_zero_counts_;
+  emit(LoopEvent::Kind::session_start);
+}
+
+void ControlLoop::consider_pending_request(std::int64_t now_ns) {
+  if (!have_pending_) {
+    if (!requests_.pop(pending_)) return;
+    have_pending_ = true;
+    pending_since_ns_ = now_ns;
+  }
+  const auto rest_ns = static_cast<std::int64_t>(settings_.rest_check_s * 1e9);
+  if (!running_ && now_ns - rest_anchor_ns_ < rest_ns) {
+    const auto wait_ns = static_cast<std::int64_t>(settings_.rest_wait_s * 1e9);
+    if (now_ns - pending_since_ns_ < wait_ns) return;  // keep waiting
+    have_pending_ = false;
+    emit_fault("start_refused", "the pendulum is not at rest: wait until it hangs still",
+               StopReason::none, false, now_ns);
+    return;
+  }
+  have_pending_ = false;
+  begin_session(pending_, now_ns);
+}
+
+void ControlLoop::end_session(StopReason reason, const char* detail, std::int64_t now_ns) {
+  if (!running_) return;
+  running_ = false;
+  if (is_fault(reason)) emit_fault(to_string(reason).data(), detail, reason, true, now_ns);
+  SessionEndEvent& e = event_.end;
+  e.session = session_;
+  e.reason = reason;
+  copy_text(e.detail, detail);
+  e.samples = seq_;
+  e.monotonic_ns = now_ns;
+  e.wall_time_ns = wall_time_ns();
+  emit(LoopEvent::Kind::session_end);
+  counters_.last_stop.store(reason);
+  counters_.sessions_completed.fetch_add(1);
+  counters_.state.store(is_fault(reason) ? LoopState::fault : LoopState::idle);
+}
+
+void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int64_t missed) {
+  if (running_) {
+    // Requested ends and the duration end before this cycle's reports are taken: the session's
+    // samples are exactly its cycles, and the zero command goes out at once.
+    const double t_s = static_cast<double>(deadline_ns - session_start_ns_) * 1e-9;
+    StopReason reason = stop_request_.load();
+    if (reason == StopReason::none && excitation_.finished(t_s)) {
+      reason = StopReason::duration_reached;
+    }
+    if (reason != StopReason::none) {
+      write_command(0.0, settings_.stop_braking_fraction, &event_.end.final_command);
+      end_session(reason, "", deadline_ns);
+    }
+  }
+
+  RigSample& sample = event_.sample;
+  sample.monotonic_ns = deadline_ns;
+  sample.wake_latency_ns = wake_ns - deadline_ns;
+  drain_boards(sample, arm_counts_);
+
+  if (std::llabs(pendulum_counts_ - rest_anchor_counts_) > settings_.rest_tolerance_counts) {
+    rest_anchor_counts_ = pendulum_counts_;
+    rest_anchor_ns_ = deadline_ns;
+  }
+
+  consider_pending_request(deadline_ns);
+  if (!running_) {
+    if (usb_failure_ != TransportStatus::ok) counters_.state.store(LoopState::fault);
+    // An e-stop while idle still brakes the motor (something else may have moved it).
+    StopReason expected = StopReason::estop_command;
+    if (stop_request_.compare_exchange_strong(expected, StopReason::none)) {
+      write_command(0.0, settings_.stop_braking_fraction, nullptr);
+    }
+    return;
+  }
+
+  session_overruns_ += missed;
+  if (missed > 0) {
+    sample.flags |= kSampleOverrun;
+    emit_fault("overrun", "missed cycles skipped", StopReason::none, false, deadline_ns);
+  }
+  sample.seq = seq_;
+  sample.wall_time_ns = wall_time_ns();
+  sample.arm_counts = static_cast<std::int32_t>(arm_counts_ - arm_zero_counts_);
+  sample.pendulum_counts = pendulum_counts_ - pendulum_zero_counts_;
+  sample.arm_angle_rad = bridge::counts_to_rad(settings_.arm_encoder, sample.arm_counts);
+  sample.pendulum_angle_rad =
+      bridge::counts_to_rad(settings_.pendulum_encoder, sample.pendulum_counts);
+  sample.applied_duty = applied_duty_;
+  sample.motor_current_a = motor_current_a_;
+  sample.supply_voltage_v = supply_voltage_v_;
+  sample.motor_status_flags = motor_flags_;
+  sample.encoder_flags = encoder_flags_;
+  sample.motor_lost_reports = static_cast<std::int32_t>(session_motor_lost_);
+  sample.encoder_lost_reports = static_cast<std::int32_t>(session_encoder_lost_);
+  sample.overruns = static_cast<std::int32_t>(session_overruns_);
+
+  const double t_s = static_cast<double>(deadline_ns - session_start_ns_) * 1e-9;
+  StopReason reason = StopReason::none;
+  if (usb_failure_ != TransportStatus::ok) reason = StopReason::usb_error;
+  const double duty = excitation_.duty(t_s, sample.arm_angle_rad);
+  if (reason == StopReason::none) {
+    SafetyInput in;
+    in.arm_angle_rad = sample.arm_angle_rad;
+    in.commanded_duty = duty;
+    in.cycles_without_motor_report = cycles_without_motor_;
+    in.cycles_without_encoder_report = cycles_without_encoder_;
+    in.motor_status_flags = motor_flags_;
+    in.supply_voltage_v = supply_voltage_v_;
+    in.have_supply_reading = have_supply_;
+    reason = check_safety(settings_.safety, in);
+  }
+  if (reason == StopReason::none && !queue_has_room(1)) reason = StopReason::log_error;
+
+  if (reason != StopReason::none) {
+    // This cycle's reports are logged with the zero command as its command.
+    sample.commanded_duty = 0.0;
+    write_command(0.0, settings_.stop_braking_fraction, &sample.motor_out);
+    if (reason != StopReason::log_error) {
+      emit(LoopEvent::Kind::sample);
+      ++seq_;
+    }
+    const char* detail =
+        reason == StopReason::usb_error ? bridge::to_string(usb_failure_).data() : "";
+    event_.end.final_command.length = 0;  // the sample above carries it
+    end_session(reason, detail, deadline_ns);
+    return;
+  }
+  sample.commanded_duty = duty;
+  write_command(duty, 0.0, &sample.motor_out);
+  emit(LoopEvent::Kind::sample);
+  ++seq_;
+}
+
+void ControlLoop::run() {
+  // Start-up (may allocate): enable the pendulum channel, make sure the motor is at zero.
+  std::array<std::uint8_t, bridge::k1047OutputReportBytes> enable{};
+  bridge::encode_output_1047(static_cast<std::uint8_t>(1u << settings_.pendulum_channel), enable);
+  if (encoder_.write(enable) != TransportStatus::ok) usb_failure_ = TransportStatus::io_error;
+  write_command(0.0, settings_.stop_braking_fraction, nullptr);
+  counters_.state.store(LoopState::idle);
+
+  std::int64_t deadline = clock_.now_ns() + settings_.period_ns;
+  rest_anchor_ns_ = clock_.now_ns();
+  try {
+    for (;;) {
+      if (exit_.load()) {
+        if (!running_) {
+          write_command(0.0, settings_.stop_braking_fraction, nullptr);
+          break;
+        }
+        // A running session ends in a cycle of its own, so its zero command is logged with it.
+        request_stop(StopReason::signal);
+      }
+      if (exit_when_idle_.load() && !running_ && !have_pending_ &&
+          requests_.read_available() == 0) {
+        write_command(0.0, settings_.stop_braking_fraction, nullptr);
+        break;
+      }
+      clock_.sleep_until_ns(deadline);
+      const std::int64_t wake = clock_.now_ns();
+      // Late by a period or more: those cycles are gone; skip to the newest deadline passed.
+      std::int64_t missed = 0;
+      if (wake - deadline >= settings_.period_ns) {
+        missed = (wake - deadline) / settings_.period_ns;
+        deadline += missed * settings_.period_ns;
+        counters_.overruns.fetch_add(missed, std::memory_order_relaxed);
+      }
+      wake_latency_.record(wake - deadline);
+      cycle(deadline, wake, missed);
+      counters_.cycles.fetch_add(1, std::memory_order_relaxed);
+      deadline += settings_.period_ns;
+    }
+  } catch (...) {
+    // The zero command first: nothing below may delay it.
+    write_command(0.0, settings_.stop_braking_fraction, &event_.end.final_command);
+    end_session(StopReason::exception, "exception in the control loop", clock_.now_ns());
+    throw;
+  }
+}
+
+}  // namespace furuta::daemon

@@ -1,0 +1,250 @@
+#include "furuta/daemon/daemon.hpp"
+
+#include <cctype>
+#include <ctime>
+#include <future>
+
+#include "furuta/session_log/session_log.hpp"
+
+namespace furuta::daemon {
+
+namespace {
+
+void copy_to(std::array<char, kNameChars>& to, const std::string& from) {
+  copy_text(to, from.c_str());
+}
+
+}  // namespace
+
+std::string session_name(std::int64_t wall_time_ns, const std::string& label) {
+  const std::time_t seconds = static_cast<std::time_t>(wall_time_ns / 1'000'000'000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%dT%H-%M-%SZ", &utc);
+  std::string name = stamp;
+  std::string safe;
+  for (char c : label) {
+    const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.';
+    safe += ok ? c : '_';
+  }
+  while (!safe.empty() && safe.front() == '.') safe.erase(safe.begin());
+  if (!safe.empty()) name += "_" + safe.substr(0, 48);
+  return name;
+}
+
+Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, bridge::Clock& clock,
+               lcm::LCM& lcm)
+    : settings_(std::move(settings)),
+      clock_(clock),
+      lcm_(lcm),
+      events_(settings_.queue_capacity),
+      validator_(settings_.command_limits) {
+  loop_ = std::make_unique<ControlLoop>(settings_.loop, motor, encoder, clock_, events_);
+  recorder_ = std::make_unique<SessionRecorder>(
+      settings_.recorder, &lcm_,
+      [this](const std::string&) { loop_->request_stop(StopReason::log_error); });
+  recorder_->on_session_logged([this](const std::filesystem::path& path) {
+    sessions_logged_.fetch_add(1);
+    if (on_logged_) on_logged_(path);
+  });
+  subscription_ = lcm_.subscribe(session_log::kChannelCommand, &Daemon::on_command, this);
+}
+
+Daemon::~Daemon() {
+  stop(StopReason::signal);
+  try {
+    wait();
+  } catch (...) {
+    // The loop already wrote the zero command; a destructor cannot report more.
+  }
+  if (subscription_) lcm_.unsubscribe(subscription_);
+}
+
+void Daemon::on_session_logged(std::function<void(const std::filesystem::path&)> callback) {
+  on_logged_ = std::move(callback);
+}
+
+RealtimeResult Daemon::start() {
+  io_thread_ = std::thread([this] { io_thread_main(); });
+  lcm_thread_ = std::thread([this] { lcm_thread_main(); });
+  std::promise<RealtimeResult> rt_result;
+  auto rt_future = rt_result.get_future();
+  loop_thread_ = std::thread([this, &rt_result] {
+    rt_result.set_value(apply_realtime_to_this_thread(settings_.realtime));
+    try {
+      loop_->run();
+    } catch (...) {
+      loop_error_ = std::current_exception();
+    }
+  });
+  RealtimeResult result = rt_future.get();
+  if (settings_.realtime.enabled && settings_.realtime.lock_memory) {
+    // Every thread exists now, so their stacks are locked too.
+    if (std::string why = lock_process_memory(); !why.empty()) {
+      result.refused.push_back("mlockall: " + why);
+    }
+  }
+  return result;
+}
+
+void Daemon::stop(StopReason reason) {
+  loop_->request_stop(reason);
+  loop_->request_exit();
+}
+
+void Daemon::wait() {
+  if (loop_thread_.joinable()) loop_thread_.join();
+  io_stop_.store(true);
+  if (io_thread_.joinable()) io_thread_.join();
+  lcm_stop_.store(true);
+  if (lcm_thread_.joinable()) lcm_thread_.join();
+  if (loop_error_) std::rethrow_exception(std::exchange(loop_error_, nullptr));
+}
+
+void Daemon::refresh_snapshot() {
+  const LatencyHistogram& h = recorder_->session_wake_latency();
+  std::lock_guard lock(snapshot_mutex_);
+  snapshot_.session = recorder_->current_session();
+  snapshot_.last_fault = recorder_->last_fault();
+  snapshot_.jitter_mean_us = h.mean_us();
+  snapshot_.jitter_p99_us = h.quantile_us(0.99);
+  snapshot_.jitter_max_us = h.max_us();
+}
+
+furuta::rig_status_t Daemon::status_message() {
+  furuta::rig_status_t m{};
+  m.monotonic_ns = clock_.now_ns();
+  const LoopCounters& c = loop_->counters();
+  switch (c.state.load()) {
+    case LoopState::running:
+      m.state = furuta::rig_status_t::STATE_RUNNING;
+      break;
+    case LoopState::fault:
+      m.state = furuta::rig_status_t::STATE_FAULT;
+      break;
+    default:
+      m.state = furuta::rig_status_t::STATE_IDLE;
+      break;
+  }
+  m.cycles = c.cycles.load();
+  m.overruns = c.overruns.load();
+  m.motor_lost_reports = c.motor_lost_reports.load();
+  m.encoder_lost_reports = c.encoder_lost_reports.load();
+  std::lock_guard lock(snapshot_mutex_);
+  m.session = snapshot_.session;
+  m.last_fault = snapshot_.last_fault;
+  m.jitter_mean_us = snapshot_.jitter_mean_us;
+  m.jitter_p99_us = snapshot_.jitter_p99_us;
+  m.jitter_max_us = snapshot_.jitter_max_us;
+  return m;
+}
+
+void Daemon::io_thread_main() {
+  LoopEvent event;
+  auto next_status = std::chrono::steady_clock::now();
+  auto publish_status = [&] {
+    refresh_snapshot();
+    const furuta::rig_status_t status = status_message();
+    lcm_.publish(session_log::kChannelStatus, &status);
+  };
+  for (;;) {
+    bool any = false;
+    while (events_.pop(event)) {
+      recorder_->handle(event);
+      any = true;
+      if (event.kind == LoopEvent::Kind::sample && !ready_.load() &&
+          event.sample.motor_in.count > 0 && event.sample.encoder_in.count > 0) {
+        ready_.store(true);
+      }
+    }
+    const auto now = std::chrono::steady_clock::now();
+    recorder_->sync_if_due(now);
+    if (now >= next_status) {
+      publish_status();
+      next_status = now + settings_.status_interval;
+    }
+    if (!ready_.load() && loop_->counters().cycles.load() > 2 &&
+        loop_->counters().state.load() == LoopState::idle) {
+      ready_.store(true);  // idle and cycling: both boards answered the start-up
+    }
+    if (io_stop_.load() && events_.read_available() == 0) break;
+    if (!any) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  publish_status();
+}
+
+void Daemon::lcm_thread_main() {
+  while (!lcm_stop_.load()) lcm_.handleTimeout(50);
+}
+
+void Daemon::on_command(const lcm::ReceiveBuffer*, const std::string&,
+                        const furuta::rig_command_t* msg) {
+  const furuta::rig_status_t reply = handle_command(*msg);
+  lcm_.publish(session_log::kChannelStatus, &reply);
+}
+
+bool Daemon::start_replayed_session(const furuta::rig_session_t& start) {
+  ExcitationSpec spec = settings_.default_excitation;
+  spec.kind = parse_profile_kind(start.profile).value_or(spec.kind);
+  spec.amplitude_duty = start.amplitude_duty;
+  spec.duration_s = start.duration_s;
+  spec.seed = static_cast<std::uint64_t>(start.seed);
+  SessionRequest request;
+  request.excitation = Excitation(spec);
+  copy_to(request.session, start.session + "_replay");
+  copy_to(request.label, start.label);
+  request.has_arm_zero = true;
+  request.arm_zero_counts = start.arm_zero_counts;
+  return loop_->request_session(request);
+}
+
+furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command) {
+  CommandDecision decision;
+  {
+    std::lock_guard lock(command_mutex_);
+    decision = validator_.validate(command, clock_.now_ns());
+  }
+  if (decision.accepted) {
+    switch (command.kind) {
+      case furuta::rig_command_t::KIND_START_SESSION: {
+        SessionRequest request;
+        try {
+          const ExcitationSpec spec = spec_from_command(command, settings_.default_excitation);
+          if (std::string why = check_spec_limits(spec, settings_.command_limits); !why.empty()) {
+            decision = {false, why};
+            break;
+          }
+          request.excitation = Excitation(spec);
+        } catch (const std::exception& e) {
+          decision = {false, e.what()};
+          break;
+        }
+        const auto wall = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                              std::chrono::system_clock::now().time_since_epoch())
+                              .count();
+        copy_to(request.session, session_name(wall, command.label));
+        copy_to(request.label, command.label);
+        if (!loop_->request_session(request)) {
+          decision = {false, "a start request is already waiting"};
+        }
+        break;
+      }
+      case furuta::rig_command_t::KIND_STOP:
+        loop_->request_stop(StopReason::stop_command);
+        break;
+      case furuta::rig_command_t::KIND_ESTOP:
+        loop_->request_stop(StopReason::estop_command);
+        break;
+      default:
+        break;  // status request: the reply is the answer
+    }
+  }
+  furuta::rig_status_t reply = status_message();
+  reply.reply_to_request_id = command.request_id;
+  reply.request_accepted = decision.accepted;
+  reply.request_reason = decision.reason;
+  return reply;
+}
+
+}  // namespace furuta::daemon

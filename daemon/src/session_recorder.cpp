@@ -1,0 +1,245 @@
+#include "furuta/daemon/session_recorder.hpp"
+
+#include <exception>
+
+#include "furuta/firmware_bridge/codec_1047.hpp"
+#include "furuta/firmware_bridge/codec_1065.hpp"
+#include "furuta/rig_fault_t.hpp"
+#include "furuta/rig_session_t.hpp"
+#include "furuta/session_log/session_log.hpp"
+
+namespace furuta::daemon {
+
+namespace {
+
+template <std::size_t N>
+std::string text_of(const std::array<char, N>& chars) {
+  return std::string(chars.data());
+}
+
+}  // namespace
+
+furuta::rig_sample_t to_lcm_sample(const RigSample& s, const std::string& session,
+                                   int pendulum_channel) {
+  furuta::rig_sample_t m{};
+  m.seq = s.seq;
+  m.monotonic_ns = s.monotonic_ns;
+  m.wall_time_ns = s.wall_time_ns;
+  m.session = session;
+  m.arm_counts = s.arm_counts;
+  m.pendulum_counts = static_cast<std::int32_t>(s.pendulum_counts);
+  m.arm_angle_rad = s.arm_angle_rad;
+  m.pendulum_angle_rad = s.pendulum_angle_rad;
+  m.commanded_duty = s.commanded_duty;
+  m.applied_duty = s.applied_duty;
+  m.motor_current_a = s.motor_current_a;
+  m.supply_voltage_v = s.supply_voltage_v;
+  m.motor_status_flags = s.motor_status_flags;
+  m.encoder_flags = s.encoder_flags;
+  for (std::size_t i = 0; i < s.motor_in.count; ++i) {
+    const RawReport& raw = s.motor_in.reports[i];
+    bridge::MotorReport1065 r;
+    if (bridge::decode_input_1065({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
+      continue;  // the raw bytes are in RIG_USB; the sample lists decodable reports
+    }
+    m.motor_report_host_ns.push_back(raw.time_ns);
+    m.motor_packet_counter.push_back(r.packet_counter);
+    m.motor_encoder_time.push_back(r.encoder_time_raw);
+  }
+  m.n_motor_reports = static_cast<std::int16_t>(m.motor_report_host_ns.size());
+  for (std::size_t i = 0; i < s.encoder_in.count; ++i) {
+    const RawReport& raw = s.encoder_in.reports[i];
+    bridge::EncoderReport1047 r;
+    if (bridge::decode_input_1047({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
+      continue;
+    }
+    const auto& ch = r.channels[static_cast<std::size_t>(pendulum_channel)];
+    m.encoder_report_host_ns.push_back(raw.time_ns);
+    m.encoder_packet_ticks.push_back(static_cast<std::int32_t>(ch.packet_time_ticks));
+    m.encoder_delta_counts.push_back(ch.position_delta);
+  }
+  m.n_encoder_reports = static_cast<std::int16_t>(m.encoder_report_host_ns.size());
+  m.motor_lost_reports = s.motor_lost_reports;
+  m.encoder_lost_reports = s.encoder_lost_reports;
+  m.overruns = s.overruns;
+  m.flags = s.flags;
+  return m;
+}
+
+SessionRecorder::SessionRecorder(RecorderSettings settings, lcm::LCM* lcm,
+                                 std::function<void(const std::string&)> on_log_failure)
+    : settings_(std::move(settings)), lcm_(lcm), on_log_failure_(std::move(on_log_failure)) {}
+
+SessionRecorder::~SessionRecorder() = default;
+
+template <typename Message>
+void SessionRecorder::publish_and_log(const char* channel, const Message& message,
+                                      std::int64_t monotonic_ns) {
+  const int size = message.getEncodedSize();
+  buffer_.resize(static_cast<std::size_t>(size));
+  message.encode(buffer_.data(), 0, size);
+  if (lcm_) lcm_->publish(channel, buffer_.data(), static_cast<unsigned>(size));
+  log_bytes(channel, buffer_, monotonic_ns);
+}
+
+void SessionRecorder::log_bytes(const char* channel, const std::vector<std::uint8_t>& bytes,
+                                std::int64_t monotonic_ns) {
+  if (!log_ || log_failed_) return;
+  // Log times are the loop's monotonic clock in microseconds: replay and virtual time stay exact;
+  // wall time is inside the messages.
+  const auto status = log_->write(channel, monotonic_ns / 1000, bytes);
+  if (status != session_log::LogWriteStatus::ok) {
+    log_failed_ = true;
+    last_fault_ = "session log: " + std::string(session_log::to_string(status));
+    if (on_log_failure_) on_log_failure_(last_fault_);
+  }
+}
+
+void SessionRecorder::start_session(const SessionStartEvent& start) {
+  session_ = text_of(start.session);
+  wake_latency_.reset();
+  log_failed_ = false;
+  log_.reset();
+  if (!settings_.logs_dir.empty()) {
+    try {
+      log_ = std::make_unique<session_log::LcmLogWriter>(
+          session_log::LogWriterOptions{settings_.logs_dir, settings_.flush_interval}, session_);
+    } catch (const std::exception& e) {
+      log_failed_ = true;
+      last_fault_ = std::string("session log: ") + e.what();
+      if (on_log_failure_) on_log_failure_(last_fault_);
+    }
+  }
+  furuta::rig_session_t m{};
+  m.event = furuta::rig_session_t::EVENT_START;
+  m.session = session_;
+  m.label = text_of(start.label);
+  m.profile = std::string(to_string(start.excitation.kind));
+  m.amplitude_duty = start.excitation.amplitude_duty;
+  m.duration_s = start.excitation.duration_s;
+  m.seed = static_cast<std::int64_t>(start.excitation.seed);
+  m.period_ns = start.period_ns;
+  m.monotonic_ns = start.monotonic_ns;
+  m.wall_time_ns = start.wall_time_ns;
+  m.rig_config_toml = settings_.rig_config_toml;
+  m.software_version = settings_.software_version;
+  m.motor_device = settings_.motor_device;
+  m.encoder_device = settings_.encoder_device;
+  m.arm_zero_counts = start.arm_zero_counts;
+  m.pendulum_zero_counts = start.pendulum_zero_counts;
+  publish_and_log(session_log::kChannelSession, m, start.monotonic_ns);
+  if (log_) log_->sync_if_due(std::chrono::steady_clock::now(), /*force=*/true);
+}
+
+void SessionRecorder::record_sample(const RigSample& s) {
+  wake_latency_.record(s.wake_latency_ns);
+  // Raw reports first, in the order they crossed the wire: inputs, then this cycle's command.
+  auto log_raw = [&](const RawReport& raw, std::int8_t board, std::int8_t kind) {
+    log_raw_report(raw, board, kind);
+  };
+  for (std::size_t i = 0; i < s.motor_in.count; ++i) {
+    log_raw(s.motor_in.reports[i], furuta::rig_usb_report_t::BOARD_MOTOR_1065,
+            furuta::rig_usb_report_t::KIND_INPUT);
+  }
+  for (std::size_t i = 0; i < s.encoder_in.count; ++i) {
+    log_raw(s.encoder_in.reports[i], furuta::rig_usb_report_t::BOARD_ENCODER_1047,
+            furuta::rig_usb_report_t::KIND_INPUT);
+  }
+  if (s.motor_out.length > 0) {
+    log_raw(s.motor_out, furuta::rig_usb_report_t::BOARD_MOTOR_1065,
+            s.motor_out.status == bridge::TransportStatus::ok
+                ? furuta::rig_usb_report_t::KIND_OUTPUT
+                : furuta::rig_usb_report_t::KIND_ERROR);
+  }
+  sample_msg_ = to_lcm_sample(s, session_, settings_.pendulum_channel);
+  publish_and_log(session_log::kChannelSample, sample_msg_, s.monotonic_ns);
+  ++samples_published_;
+}
+
+void SessionRecorder::log_raw_report(const RawReport& raw, std::int8_t board, std::int8_t kind) {
+  usb_msg_.time_ns = raw.time_ns;
+  usb_msg_.board = board;
+  usb_msg_.kind = kind;
+  usb_msg_.status = raw.status == bridge::TransportStatus::ok
+                        ? std::string()
+                        : std::string(bridge::to_string(raw.status));
+  usb_msg_.length = raw.length;
+  usb_msg_.bytes.assign(raw.bytes.begin(), raw.bytes.begin() + raw.length);
+  const int size = usb_msg_.getEncodedSize();
+  buffer_.resize(static_cast<std::size_t>(size));
+  usb_msg_.encode(buffer_.data(), 0, size);
+  log_bytes(session_log::kChannelUsb, buffer_, raw.time_ns);
+}
+
+void SessionRecorder::record_fault(const FaultEvent& f) {
+  furuta::rig_fault_t m{};
+  m.monotonic_ns = f.monotonic_ns;
+  m.session = session_;
+  m.seq = f.seq;
+  m.reason = text_of(f.what);
+  m.detail = text_of(f.detail);
+  m.fatal = f.fatal;
+  if (f.fatal) last_fault_ = m.reason + (m.detail.empty() ? "" : ": " + m.detail);
+  publish_and_log(session_log::kChannelFault, m, f.monotonic_ns);
+}
+
+void SessionRecorder::end_session(const SessionEndEvent& e) {
+  if (e.final_command.length > 0) {
+    log_raw_report(e.final_command, furuta::rig_usb_report_t::BOARD_MOTOR_1065,
+                   e.final_command.status == bridge::TransportStatus::ok
+                       ? furuta::rig_usb_report_t::KIND_OUTPUT
+                       : furuta::rig_usb_report_t::KIND_ERROR);
+  }
+  furuta::rig_session_t m{};
+  m.event = furuta::rig_session_t::EVENT_END;
+  m.session = text_of(e.session);
+  m.monotonic_ns = e.monotonic_ns;
+  m.wall_time_ns = e.wall_time_ns;
+  m.samples = e.samples;
+  m.end_reason = std::string(to_string(e.reason));
+  const std::string detail = text_of(e.detail);
+  if (!detail.empty()) m.end_reason += ": " + detail;
+  publish_and_log(session_log::kChannelSession, m, e.monotonic_ns);
+  if (log_ && !log_failed_) {
+    std::filesystem::path final_path;
+    if (log_->finish(&final_path) == session_log::LogWriteStatus::ok) {
+      last_log_ = final_path;
+      if (on_logged_) on_logged_(final_path);
+    } else {
+      last_fault_ = "session log: cannot finish " + log_->partial_path().string();
+      if (on_log_failure_) on_log_failure_(last_fault_);
+    }
+  }
+  // A failed log stays as .part: recovery at the next start keeps its readable prefix.
+  log_.reset();
+  session_.clear();
+}
+
+void SessionRecorder::handle(const LoopEvent& event) {
+  switch (event.kind) {
+    case LoopEvent::Kind::session_start:
+      start_session(event.start);
+      break;
+    case LoopEvent::Kind::sample:
+      record_sample(event.sample);
+      break;
+    case LoopEvent::Kind::fault:
+      record_fault(event.fault);
+      break;
+    case LoopEvent::Kind::session_end:
+      end_session(event.end);
+      break;
+  }
+}
+
+void SessionRecorder::sync_if_due(std::chrono::steady_clock::time_point now) {
+  if (!log_ || log_failed_) return;
+  const auto status = log_->sync_if_due(now);
+  if (status != session_log::LogWriteStatus::ok) {
+    log_failed_ = true;
+    last_fault_ = "session log: " + std::string(session_log::to_string(status));
+    if (on_log_failure_) on_log_failure_(last_fault_);
+  }
+}
+
+}  // namespace furuta::daemon

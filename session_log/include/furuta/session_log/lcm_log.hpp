@@ -1,0 +1,104 @@
+#pragma once
+// LCM event logs (the format lcm-logger writes and lcm-logplayer plays): writing one crash-safely,
+// reading any file without trusting it.
+//
+// Each event on disk: sync word 0xEDA1DA01, event number (u64), timestamp in microseconds (i64),
+// channel length (u32), data length (u32), all big-endian, then the channel and the data.
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace furuta::session_log {
+
+// --- reading ---
+
+struct LogEvent {
+  std::int64_t event_number = 0;
+  std::int64_t utime = 0;
+  std::string channel;
+  std::vector<std::uint8_t> data;
+  std::uint64_t file_offset = 0;  // where its sync word starts
+};
+
+struct LogReadStats {
+  std::uint64_t events = 0;
+  std::uint64_t damaged_regions =
+      0;                            // places where the reader had to search for the next sync word
+  std::uint64_t bytes_skipped = 0;  // bytes in those places, not part of any event returned
+  bool truncated_tail = false;      // the file ends inside an event (a crash while writing)
+  std::uint64_t readable_prefix_bytes = 0;  // end of the last good event before any damage
+};
+
+// Reads events one by one. Every length is checked against the file before use; after damage it
+// resynchronises on the next sync word whose event is plausible and fits. Never throws on content.
+class LcmLogReader {
+ public:
+  // Throws std::runtime_error naming the file when it cannot be opened.
+  explicit LcmLogReader(const std::filesystem::path& path);
+  ~LcmLogReader();
+  LcmLogReader(const LcmLogReader&) = delete;
+  LcmLogReader& operator=(const LcmLogReader&) = delete;
+
+  bool next(LogEvent& event);  // false at the end of the file
+  const LogReadStats& stats() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Checks a buffer instead of a file (fuzzing, tests).
+std::vector<LogEvent> read_lcm_log_bytes(std::span<const std::uint8_t> bytes, LogReadStats& stats);
+
+// --- writing ---
+
+enum class LogWriteStatus : std::uint8_t { ok, disk_full, io_error, closed };
+std::string_view to_string(LogWriteStatus status);
+
+struct LogWriterOptions {
+  std::filesystem::path logs_dir;                  // finished logs land here
+  std::chrono::milliseconds flush_interval{1000};  // at most this much is lost to a crash
+};
+
+// One session's log. Written as <logs_dir>/.partial/<name>.lcmlog.part, flushed and fdatasync'd at
+// least every flush_interval, renamed to <logs_dir>/<name>.lcmlog by finish(). On any write error
+// the writer stops accepting events; what reached the disk before stays readable.
+class LcmLogWriter {
+ public:
+  // Throws std::runtime_error naming the path when the file cannot be created.
+  LcmLogWriter(const LogWriterOptions& options, const std::string& name);
+  ~LcmLogWriter();  // a writer never finished leaves its .part for recovery
+  LcmLogWriter(const LcmLogWriter&) = delete;
+  LcmLogWriter& operator=(const LcmLogWriter&) = delete;
+
+  LogWriteStatus write(std::string_view channel, std::int64_t utime,
+                       std::span<const std::uint8_t> data);
+  // Flushes and fdatasyncs when flush_interval has passed since the last sync (or when forced).
+  LogWriteStatus sync_if_due(std::chrono::steady_clock::time_point now, bool force = false);
+  // Syncs, closes and renames into logs_dir (and fsyncs the directory). Returns the final path.
+  LogWriteStatus finish(std::filesystem::path* final_path = nullptr);
+
+  const std::filesystem::path& partial_path() const;
+  std::uint64_t events_written() const;
+
+ private:
+  class Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct RecoveredLog {
+  std::filesystem::path path;  // <logs_dir>/<name>.incomplete.lcmlog
+  LogReadStats stats;
+  std::uint64_t bytes_dropped = 0;  // the unreadable tail cut off
+};
+// For each .part left by a session cut short: keep the readable prefix, rename it into logs_dir
+// marked incomplete. Safe to run at every start.
+std::vector<RecoveredLog> recover_partial_logs(const std::filesystem::path& logs_dir);
+
+}  // namespace furuta::session_log

@@ -1,0 +1,50 @@
+#pragma once
+// A session log as typed messages: what the daemon writes and the identification reads.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "furuta/firmware_bridge/usb_trace.hpp"
+#include "furuta/rig_fault_t.hpp"
+#include "furuta/rig_sample_t.hpp"
+#include "furuta/rig_session_t.hpp"
+#include "furuta/rig_usb_report_t.hpp"
+#include "furuta/session_log/lcm_log.hpp"
+
+namespace furuta::session_log {
+
+inline constexpr const char* kChannelSample = "RIG_SAMPLE";
+inline constexpr const char* kChannelSession = "RIG_SESSION";
+inline constexpr const char* kChannelStatus = "RIG_STATUS";
+inline constexpr const char* kChannelCommand = "RIG_COMMAND";
+inline constexpr const char* kChannelUsb = "RIG_USB";
+inline constexpr const char* kChannelFault = "RIG_FAULT";
+
+struct SessionLog {
+  std::filesystem::path path;
+  std::optional<furuta::rig_session_t> start;  // the first event
+  std::optional<furuta::rig_session_t> end;    // absent when the session was cut short
+  std::vector<furuta::rig_sample_t> samples;
+  std::vector<furuta::rig_usb_report_t> usb_reports;
+  std::vector<furuta::rig_fault_t> faults;
+  LogReadStats read_stats;
+  std::uint64_t undecodable_events = 0;  // intact on disk but not a message of its channel's type
+  std::uint64_t unknown_channel_events = 0;
+
+  bool complete() const { return start.has_value() && end.has_value(); }
+  // Sample sequence numbers not present between the first and the last (each should be explained by
+  // a fault record).
+  std::vector<std::int64_t> missing_sequence_numbers() const;
+};
+
+// Throws std::runtime_error only when the file cannot be opened; damage is counted, not thrown.
+SessionLog load_session_log(const std::filesystem::path& path);
+
+// The raw USB reports of one board, as a trace the replay backend can play (the device line from
+// the session start record).
+bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board);
+
+}  // namespace furuta::session_log

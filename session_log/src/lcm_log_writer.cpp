@@ -1,0 +1,237 @@
+// The writer lays events out with lcm-cpp's lcm::LogFile, a thin wrapper over the lcm_eventlog code
+// lcm-logger itself writes with, so our logs are LCM logs by construction. Around it we add what a
+// session needs and LogFile lacks: an exclusive .part file, periodic fflush + fdatasync through its
+// FILE*, error classification, refusal after the first error, and an atomic, durable rename when
+// the session ends.
+
+#include <fcntl.h>
+#include <stdio_ext.h>  // __fpurge
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <lcm/lcm-cpp.hpp>
+#include <stdexcept>
+#include <system_error>
+
+#include "furuta/session_log/lcm_log.hpp"
+#include "lcm_log_format.hpp"
+
+namespace furuta::session_log {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using detail::kFinalSuffix;
+using detail::kPartialDir;
+using detail::kPartSuffix;
+
+// NAME_MAX is 255; leave room for the longest suffix a log ever wears (".incomplete.lcmlog" and a
+// collision counter from recovery).
+constexpr std::size_t kMaxNameBytes = 200;
+
+// A name becomes a file name inside logs_dir and nothing else: no path separators, no way up, no
+// hidden files (".partial" is ours), nothing a terminal or a shell line would mangle.
+// The name as a message can show it: control characters (a NUL would end what()) as \xNN.
+std::string printable(const std::string& name) {
+  std::string out;
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7F) {
+      static constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 0x0F];
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+void check_name(const std::string& name) {
+  const auto reject = [&](const char* why) {
+    throw std::invalid_argument("LCM log name '" + printable(name) + "' " + why);
+  };
+  if (name.empty()) reject("is empty");
+  if (name.size() > kMaxNameBytes) reject("is too long");
+  if (name.find('/') != std::string::npos) reject("contains '/'");
+  if (name.find("..") != std::string::npos) reject("contains '..'");
+  if (name.front() == '.') reject("starts with '.'");
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7F) reject("contains a control character");
+  }
+}
+
+LogWriteStatus status_from_errno(int err) {
+  // EFBIG is the file size limit (RLIMIT_FSIZE, or the file system's): as final as a full disk.
+  return (err == ENOSPC || err == EFBIG || err == EDQUOT) ? LogWriteStatus::disk_full
+                                                          : LogWriteStatus::io_error;
+}
+
+}  // namespace
+
+std::string_view to_string(LogWriteStatus status) {
+  switch (status) {
+    case LogWriteStatus::ok:
+      return "ok";
+    case LogWriteStatus::disk_full:
+      return "disk_full";
+    case LogWriteStatus::io_error:
+      return "io_error";
+    case LogWriteStatus::closed:
+      return "closed";
+  }
+  return "unknown";
+}
+
+class LcmLogWriter::Impl {
+ public:
+  Impl(const LogWriterOptions& options, const std::string& name)
+      : options_(options),
+        partial_dir_(options.logs_dir / kPartialDir),
+        partial_path_(partial_dir_ / (name + kPartSuffix)),
+        final_path_(options.logs_dir / (name + kFinalSuffix)) {
+    std::error_code ec;
+    const bool created = fs::create_directories(partial_dir_, ec);
+    if (ec) {
+      throw std::runtime_error("cannot create " + partial_dir_.string() + ": " + ec.message());
+    }
+    if (created) detail::fsync_directory(options.logs_dir);
+    if (fs::exists(final_path_, ec)) {
+      throw std::runtime_error("LCM log " + final_path_.string() + " already exists");
+    }
+    // O_EXCL: a .part left by a crash holds a session nobody has recovered yet; never truncate it.
+    detail::UniqueFd created_fd(
+        ::open(partial_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
+    if (!created_fd.valid()) {
+      const int err = errno;
+      throw std::runtime_error("cannot create LCM log " + partial_path_.string() + ": " +
+                               std::strerror(err) +
+                               (err == EEXIST ? " (left by an earlier session: recover it)" : ""));
+    }
+    created_fd.reset();
+    file_ = std::make_unique<lcm::LogFile>(partial_path_.string(), "w");
+    if (!file_->good()) {
+      const int err = errno;
+      file_.reset();
+      ::unlink(partial_path_.c_str());
+      throw std::runtime_error("cannot open LCM log " + partial_path_.string() + ": " +
+                               std::strerror(err));
+    }
+    // LogFile's fopen does not ask for close-on-exec; whatever the daemon starts must not inherit
+    // the log.
+    const int fd = ::fileno(file_->getFilePtr());
+    ::fcntl(fd, F_SETFD, ::fcntl(fd, F_GETFD) | FD_CLOEXEC);
+    detail::fsync_directory(partial_dir_);
+    last_sync_ = std::chrono::steady_clock::now();
+  }
+
+  LogWriteStatus write(std::string_view channel, std::int64_t utime,
+                       std::span<const std::uint8_t> data) {
+    if (!file_) return LogWriteStatus::closed;
+    // The channel names and message sizes are the program's own: a wrong one is a bug, not I/O.
+    if (channel.empty() || channel.size() > detail::kMaxWriterChannelBytes) {
+      throw std::invalid_argument("LCM channel '" + std::string(channel) + "' must have 1 to " +
+                                  std::to_string(detail::kMaxWriterChannelBytes) + " bytes");
+    }
+    if (data.size() > detail::kMaxDataBytes) {
+      throw std::invalid_argument("LCM message of " + std::to_string(data.size()) +
+                                  " bytes on channel '" + std::string(channel) +
+                                  "', more than LCM carries");
+    }
+    lcm::LogEvent event{};
+    event.timestamp = utime;
+    event.channel.assign(channel);
+    event.datalen = static_cast<std::int32_t>(data.size());
+    // LogFile takes a non-const pointer for reading and writing alike; writing only reads it.
+    event.data = const_cast<std::uint8_t*>(data.data());
+    errno = 0;
+    if (file_->writeEvent(&event) != 0) return fail(errno);
+    ++events_written_;
+    dirty_ = true;
+    return LogWriteStatus::ok;
+  }
+
+  LogWriteStatus sync_if_due(std::chrono::steady_clock::time_point now, bool force) {
+    if (!file_) return LogWriteStatus::closed;
+    if (!force && now - last_sync_ < options_.flush_interval) return LogWriteStatus::ok;
+    if (dirty_) {
+      FILE* f = file_->getFilePtr();
+      errno = 0;
+      if (std::fflush(f) != 0) return fail(errno);
+      if (::fdatasync(::fileno(f)) != 0) return fail(errno);
+      dirty_ = false;
+    }
+    last_sync_ = now;
+    return LogWriteStatus::ok;
+  }
+
+  LogWriteStatus finish(fs::path* final_path) {
+    if (!file_) return LogWriteStatus::closed;
+    const LogWriteStatus synced = sync_if_due(std::chrono::steady_clock::now(), true);
+    if (synced != LogWriteStatus::ok) return synced;
+    // Everything is on disk already, so closing cannot lose data.
+    file_.reset();
+    // On failure the .part stays where recovery will find it.
+    if (detail::rename_no_replace(partial_path_, final_path_) != 0) return LogWriteStatus::io_error;
+    const int dir_err = detail::fsync_directory(options_.logs_dir);
+    detail::fsync_directory(partial_dir_);
+    if (final_path != nullptr) *final_path = final_path_;
+    return dir_err == 0 ? LogWriteStatus::ok : LogWriteStatus::io_error;
+  }
+
+  const fs::path& partial_path() const { return partial_path_; }
+  std::uint64_t events_written() const { return events_written_; }
+
+ private:
+  // After an error the file's tail may hold half an event. What stdio still buffers is dropped
+  // rather than flushed by LogFile's close, so nothing lands after the failure and what was synced
+  // before stays a readable prefix. Closing now also hands the descriptor back.
+  LogWriteStatus fail(int err) {
+    __fpurge(file_->getFilePtr());
+    file_.reset();
+    return status_from_errno(err);
+  }
+
+  LogWriterOptions options_;
+  fs::path partial_dir_;
+  fs::path partial_path_;
+  fs::path final_path_;
+  std::unique_ptr<lcm::LogFile> file_;
+  std::uint64_t events_written_ = 0;
+  bool dirty_ = false;
+  std::chrono::steady_clock::time_point last_sync_;
+};
+
+LcmLogWriter::LcmLogWriter(const LogWriterOptions& options, const std::string& name) {
+  check_name(name);
+  impl_ = std::make_unique<Impl>(options, name);
+}
+
+LcmLogWriter::~LcmLogWriter() = default;
+
+LogWriteStatus LcmLogWriter::write(std::string_view channel, std::int64_t utime,
+                                   std::span<const std::uint8_t> data) {
+  return impl_->write(channel, utime, data);
+}
+
+LogWriteStatus LcmLogWriter::sync_if_due(std::chrono::steady_clock::time_point now, bool force) {
+  return impl_->sync_if_due(now, force);
+}
+
+LogWriteStatus LcmLogWriter::finish(std::filesystem::path* final_path) {
+  return impl_->finish(final_path);
+}
+
+const std::filesystem::path& LcmLogWriter::partial_path() const {
+  return impl_->partial_path();
+}
+
+std::uint64_t LcmLogWriter::events_written() const {
+  return impl_->events_written();
+}
+
+}  // namespace furuta::session_log

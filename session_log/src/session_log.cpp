@@ -1,0 +1,153 @@
+#include "furuta/session_log/session_log.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <exception>
+#include <stdexcept>
+#include <string_view>
+
+namespace furuta::session_log {
+
+namespace {
+
+// lcm-gen's decoders check each field against the buffer, but a negative array count reaches
+// std::vector::resize and throws; either way the event is not a message of its type. Trailing bytes
+// are refused too: an intact message fills its event exactly.
+template <typename Message>
+bool decode_exactly(const std::vector<std::uint8_t>& data, Message& message) {
+  if (data.size() > static_cast<std::size_t>(INT_MAX)) return false;
+  const int size = static_cast<int>(data.size());
+  try {
+    return message.decode(data.data(), 0, size) == size;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+// A gap of more than this is not a run of lost samples but a damaged sequence number; listing it
+// would only exhaust memory.
+constexpr std::size_t kMaxMissingListed = 1'000'000;
+
+}  // namespace
+
+std::vector<std::int64_t> SessionLog::missing_sequence_numbers() const {
+  std::vector<std::int64_t> seen;
+  seen.reserve(samples.size());
+  for (const furuta::rig_sample_t& s : samples) seen.push_back(s.seq);
+  std::sort(seen.begin(), seen.end());
+  seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
+
+  std::vector<std::int64_t> missing;
+  for (std::size_t i = 1; i < seen.size(); ++i) {
+    for (std::int64_t seq = seen[i - 1] + 1; seq < seen[i]; ++seq) {
+      if (missing.size() >= kMaxMissingListed) return missing;
+      missing.push_back(seq);
+    }
+  }
+  return missing;
+}
+
+SessionLog load_session_log(const std::filesystem::path& path) {
+  SessionLog log;
+  log.path = path;
+  LcmLogReader reader(path);
+  LogEvent event;
+  while (reader.next(event)) {
+    const std::string_view channel = event.channel;
+    bool decoded = true;
+    if (channel == kChannelSession) {
+      furuta::rig_session_t session;
+      decoded = decode_exactly(event.data, session);
+      if (decoded) {
+        if (session.event == furuta::rig_session_t::EVENT_START) {
+          if (!log.start) log.start = std::move(session);
+        } else if (session.event == furuta::rig_session_t::EVENT_END) {
+          log.end = std::move(session);
+        } else {
+          decoded = false;  // a session record that is neither start nor end means nothing
+        }
+      }
+    } else if (channel == kChannelSample) {
+      furuta::rig_sample_t sample;
+      decoded = decode_exactly(event.data, sample);
+      if (decoded) log.samples.push_back(std::move(sample));
+    } else if (channel == kChannelUsb) {
+      furuta::rig_usb_report_t report;
+      decoded = decode_exactly(event.data, report);
+      if (decoded) log.usb_reports.push_back(std::move(report));
+    } else if (channel == kChannelFault) {
+      furuta::rig_fault_t fault;
+      decoded = decode_exactly(event.data, fault);
+      if (decoded) log.faults.push_back(std::move(fault));
+    } else {
+      ++log.unknown_channel_events;
+    }
+    if (!decoded) ++log.undecodable_events;
+  }
+  log.read_stats = reader.stats();
+  return log;
+}
+
+bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board) {
+  const std::string where = " in " + log.path.string();
+  if (board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 &&
+      board != furuta::rig_usb_report_t::BOARD_ENCODER_1047) {
+    throw std::invalid_argument("usb_trace_from_log: unknown board " + std::to_string(board));
+  }
+  if (!log.start) {
+    throw std::runtime_error("usb_trace_from_log: no session start record" + where);
+  }
+  const bool motor = board == furuta::rig_usb_report_t::BOARD_MOTOR_1065;
+  const std::string& device_line = motor ? log.start->motor_device : log.start->encoder_device;
+  if (device_line.empty()) {
+    throw std::runtime_error(std::string("usb_trace_from_log: the start record has no ") +
+                             (motor ? "motor" : "encoder") + " device" + where);
+  }
+
+  bridge::UsbTrace trace;
+  trace.device = bridge::parse_trace_device_line(device_line);
+  for (const furuta::rig_usb_report_t& r : log.usb_reports) {
+    if (r.board != board) continue;
+    bridge::TraceEvent e;
+    e.time_ns = r.time_ns;
+    switch (r.kind) {
+      case furuta::rig_usb_report_t::KIND_INPUT:
+        e.kind = bridge::TraceEventKind::input;
+        // The same limit the trace parser applies: the replay buffer holds no more.
+        if (r.bytes.size() > bridge::kMaxReportBytes) {
+          throw std::runtime_error("usb_trace_from_log: input report of " +
+                                   std::to_string(r.bytes.size()) + " bytes at " +
+                                   std::to_string(r.time_ns) + " ns" + where);
+        }
+        e.bytes = r.bytes;
+        break;
+      case furuta::rig_usb_report_t::KIND_OUTPUT:
+        e.kind = bridge::TraceEventKind::output;
+        e.bytes = r.bytes;
+        break;
+      case furuta::rig_usb_report_t::KIND_ERROR: {
+        e.kind = bridge::TraceEventKind::error;
+        const std::optional<bridge::TransportStatus> status =
+            bridge::transport_status_from_string(r.status);
+        if (!status || *status == bridge::TransportStatus::ok) {
+          throw std::runtime_error("usb_trace_from_log: USB error with status '" + r.status +
+                                   "' at " + std::to_string(r.time_ns) + " ns" + where);
+        }
+        e.status = *status;
+        break;
+      }
+      default:
+        throw std::runtime_error("usb_trace_from_log: USB report of unknown kind " +
+                                 std::to_string(r.kind) + " at " + std::to_string(r.time_ns) +
+                                 " ns" + where);
+    }
+    trace.events.push_back(std::move(e));
+  }
+  if (log.end) {
+    trace.events.push_back(
+        bridge::TraceEvent{log.end->monotonic_ns, bridge::TraceEventKind::end, {}, {}});
+  }
+  return trace;
+}
+
+}  // namespace furuta::session_log
