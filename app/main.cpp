@@ -15,24 +15,6 @@ int main(int argc, char** argv) {
   devices_cmd->add_flag("--simulated", devices.simulated,
                         "List the simulated rig's boards instead");
 
-  furuta::app::SimulateOptions simulate;
-  simulate.config_path = furuta::config::default_rig_config_path();
-  simulate.output_dir = "furuta-sim-session";
-  CLI::App* simulate_cmd = app.add_subcommand(
-      "simulate", "Run a bang-bang session on the simulated rig through the bridge");
-  simulate_cmd->add_option("--config", simulate.config_path, "Rig configuration (TOML)")
-      ->check(CLI::ExistingFile);
-  simulate_cmd->add_option("--output", simulate.output_dir, "Directory for the CSV and USB traces");
-  simulate_cmd->add_option("--duration", simulate.duration_s, "Session length [s]")
-      ->check(CLI::Range(0.1, 3600.0));
-  simulate_cmd->add_option("--amplitude", simulate.amplitude_duty, "Bang-bang duty amplitude")
-      ->check(CLI::Range(0.0, 1.0));
-  simulate_cmd->add_option("--switch-period", simulate.switch_period_s, "Bang-bang half period [s]")
-      ->check(CLI::Range(0.016, 60.0));
-  simulate_cmd->add_option("--seed", simulate.seed,
-                           "Seed for noise and jitter (default: the configuration's)");
-  simulate_cmd->add_flag("--real-time", simulate.real_time, "Pace by the wall clock");
-
   // A running daemon, over LCM.
   furuta::app::RemoteOptions remote;
   remote.config_path = furuta::config::default_rig_config_path();
@@ -119,7 +101,6 @@ int main(int argc, char** argv) {
       return furuta::app::run_replay_command(log_path, replay_config, std::cout, std::cerr);
     }
     if (*devices_cmd) return furuta::app::run_devices_command(devices, std::cout, std::cerr);
-    if (*simulate_cmd) return furuta::app::run_simulate_command(simulate, std::cout, std::cerr);
   } catch (const furuta::config::ConfigError& e) {
     std::cerr << "furuta: " << e.what() << "\n";
     return 2;

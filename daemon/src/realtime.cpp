@@ -99,7 +99,8 @@ RealtimeResult apply_realtime_to_this_thread(const RealtimeOptions& options) {
 }
 
 std::string lock_process_memory() {
-  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) return "mlockall: " + errno_text(errno);
+  // Only the reason: callers name the step themselves, as in RealtimeResult::refused.
+  if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0) return errno_text(errno);
   return {};
 }
 

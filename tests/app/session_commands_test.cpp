@@ -1,0 +1,115 @@
+// The `furuta` session and log subcommands, as a user runs them (simulated rig, virtual time).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "commands.hpp"
+
+namespace furuta::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() /
+           ("furuta-cli-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+fs::path only_log_in(const fs::path& dir) {
+  fs::path found;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() == ".lcmlog") found = entry.path();
+  }
+  return found;
+}
+
+fs::path run_simulated_session(const fs::path& logs, double duration_s) {
+  RunOptions options;
+  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  options.simulated = true;
+  options.virtual_time = true;
+  options.logs_dir = logs;
+  options.lcm_url = "memq://";
+  options.profile_given = true;
+  options.session.duration_s = duration_s;
+  options.session.label = "cli";
+  std::ostringstream out, err;
+  EXPECT_EQ(run_session_command(options, out, err), 0) << out.str() << err.str();
+  EXPECT_NE(out.str().find("session ended: duration_reached"), std::string::npos) << out.str();
+  return only_log_in(logs);
+}
+
+TEST(RunCommand, ASimulatedSessionLeavesALogThatInfoExportAndReplayRead) {
+  TempDir dir;
+  const fs::path log = run_simulated_session(dir.path, 4.0);
+  ASSERT_FALSE(log.empty());
+
+  std::ostringstream out, err;
+  EXPECT_EQ(run_log_info_command(log, out, err), 0) << out.str();
+  EXPECT_NE(out.str().find("samples   250"), std::string::npos) << out.str();  // 4 s / 16 ms
+  EXPECT_NE(out.str().find("duration_reached"), std::string::npos);
+
+  const fs::path csv = dir.path / "samples.csv";
+  EXPECT_EQ(run_log_export_csv_command(log, csv, out, err), 0);
+  std::ifstream in(csv);
+  int lines = 0;
+  for (std::string line; std::getline(in, line);) ++lines;
+  EXPECT_EQ(lines, 251);  // header + samples
+
+  std::ostringstream replay_out;
+  EXPECT_EQ(run_replay_command(log, {}, replay_out, err), 0) << replay_out.str() << err.str();
+  EXPECT_NE(replay_out.str().find("replayed 250 of 250 samples: identical"), std::string::npos)
+      << replay_out.str();
+}
+
+TEST(RunCommand, InfoOnALogCutShortSaysSoAndFails) {
+  TempDir dir;
+  const fs::path log = run_simulated_session(dir.path, 2.0);
+  const fs::path cut = dir.path / "cut.lcmlog";
+  fs::copy_file(log, cut);
+  fs::resize_file(cut, fs::file_size(cut) * 2 / 3);  // as if power failed mid-session
+  std::ostringstream out, err;
+  EXPECT_EQ(run_log_info_command(cut, out, err), 1);
+  EXPECT_NE(out.str().find("missing: the session was cut short"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("truncated tail"), std::string::npos) << out.str();
+}
+
+TEST(RemoteCommand, WithNoDaemonListeningItSaysSoAndReturns2) {
+  RemoteOptions remote;
+  remote.lcm_url = "memq://";  // nobody else is in this process's memq
+  remote.reply_timeout_s = 0.2;
+  std::ostringstream out, err;
+  EXPECT_EQ(run_remote_command(RemoteKind::status, remote, {}, out, err), 2);
+  EXPECT_NE(err.str().find("no answer from furutad"), std::string::npos) << err.str();
+}
+
+TEST(RunCommand, ABadConfigurationNamesFileLineAndField) {
+  TempDir dir;
+  const fs::path config = dir.path / "rig.toml";
+  std::ofstream(config) << "[safety]\nmax_duty = 2\n";
+  RunOptions options;
+  options.config_path = config;
+  options.simulated = true;
+  std::ostringstream out, err;
+  try {
+    run_session_command(options, out, err);
+    FAIL() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("rig.toml:2: safety.max_duty: must be in (0, 1]"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace furuta::app
