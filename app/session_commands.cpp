@@ -9,12 +9,14 @@
 #include <lcm/lcm-cpp.hpp>
 #include <ostream>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
+#include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_command_t.hpp"
 #include "furuta/rig_status_t.hpp"
@@ -63,6 +65,29 @@ struct ReplyWaiter {
 std::string lcm_url_for(const RemoteOptions& remote) {
   if (!remote.lcm_url.empty()) return remote.lcm_url;
   return config::load_rig_config(remote.config_path).daemon.lcm_url;
+}
+
+// The last command written to the 1065 as the log recorded it: on every way a session ends it must
+// be the zero command, so this is what to look at after a fault.
+std::string last_motor_command(const session_log::SessionLog& log) {
+  const furuta::rig_usb_report_t* last = nullptr;
+  for (const auto& r : log.usb_reports) {
+    if (r.board == furuta::rig_usb_report_t::BOARD_MOTOR_1065 &&
+        (r.kind == furuta::rig_usb_report_t::KIND_OUTPUT ||
+         r.kind == furuta::rig_usb_report_t::KIND_ERROR)) {
+      last = &r;
+    }
+  }
+  if (!last) return "no command logged";
+  bridge::MotorOutput1065 output;
+  if (bridge::decode_output_1065(last->bytes, output) != bridge::CodecStatus::ok) {
+    return "last command undecodable (" + std::to_string(last->bytes.size()) + " bytes)";
+  }
+  std::ostringstream text;
+  text << "last command duty " << output.duty_cycle() << ", braking " << output.braking_fraction();
+  if (last->kind == furuta::rig_usb_report_t::KIND_ERROR)
+    text << " (write failed: " << last->status << ")";
+  return text.str();
 }
 
 }  // namespace
@@ -197,6 +222,7 @@ int run_log_info_command(const std::filesystem::path& path, std::ostream& out, s
   for (const auto& f : log.faults) {
     if (f.fatal) out << "; fatal: " << f.reason << (f.detail.empty() ? "" : " (" + f.detail + ")");
   }
+  out << "\n  motor     " << last_motor_command(log);
   out << "\n  end       "
       << (log.end ? log.end->end_reason + ", " + std::to_string(log.end->samples) + " samples"
                   : std::string("missing: the session was cut short"))

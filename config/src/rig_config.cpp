@@ -293,6 +293,14 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     sc.stale_report_cycles = static_cast<int>(s.integer(
         "stale_report_cycles", sc.stale_report_cycles,
         [](std::int64_t v) { return v >= 1 && v <= 1000; }, "in [1, 1000]"));
+    // The boards report every 8 ms: fewer than two report periods of silence is not a fault.
+    if (static_cast<double>(sc.stale_report_cycles) * static_cast<double>(c.daemon.period_ns) <
+        16e6) {
+      s.fail("stale_report_cycles", nullptr,
+             std::to_string(sc.stale_report_cycles) + " cycles of " +
+                 std::to_string(c.daemon.period_ns / 1000) +
+                 " us are shorter than two 8 ms report periods");
+    }
     sc.min_supply_v = s.number("min_supply_v", sc.min_supply_v, non_negative, ">= 0");
     sc.max_supply_v = s.number("max_supply_v", sc.max_supply_v, positive, "> 0");
     if (sc.max_supply_v <= sc.min_supply_v) {

@@ -23,7 +23,7 @@ bool is_report(TransportStatus status) {
 
 }  // namespace
 
-TransportStatus DirectBoardLink::drain(BoardReports& out) noexcept {
+TransportStatus DirectBoardLink::drain(BoardReports& out) {
   bridge::UsbReport report;
   while (out.count < out.reports.size()) {
     const TransportStatus status = transport_.read_report(report, std::chrono::nanoseconds(0));
@@ -34,7 +34,7 @@ TransportStatus DirectBoardLink::drain(BoardReports& out) noexcept {
   return TransportStatus::ok;
 }
 
-TransportStatus DirectBoardLink::write(std::span<const std::uint8_t> report) noexcept {
+TransportStatus DirectBoardLink::write(std::span<const std::uint8_t> report) {
   return transport_.write_report(report);
 }
 
@@ -65,7 +65,13 @@ void ThreadedBoardLink::read_forever() {
   constexpr auto kReadTimeout = std::chrono::milliseconds(50);
   ReadResult result;
   while (!stop_.load()) {
-    result.status = transport_.read_report(result.report, kReadTimeout);
+    try {
+      result.status = transport_.read_report(result.report, kReadTimeout);
+    } catch (...) {
+      // Escaping this thread would be std::terminate with the motor still driven; as a failed
+      // read, the loop stops the session with the motor at zero.
+      result.status = TransportStatus::io_error;
+    }
     if (result.status == TransportStatus::timeout) continue;
     if (!is_report(result.status)) {
       failure_.store(result.status);
@@ -85,7 +91,7 @@ TransportStatus ThreadedBoardLink::drain(BoardReports& out) noexcept {
   return failure_.load();
 }
 
-TransportStatus ThreadedBoardLink::write(std::span<const std::uint8_t> report) noexcept {
+TransportStatus ThreadedBoardLink::write(std::span<const std::uint8_t> report) {
   return transport_.write_report(report);
 }
 

@@ -17,6 +17,12 @@ namespace {
 // Capacity kept free for the events that end a session, so a full queue can never swallow them.
 constexpr std::size_t kReservedEvents = 4;
 
+std::int64_t thread_cpu_time_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
 std::int64_t wall_time_ns() noexcept {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
@@ -33,6 +39,7 @@ ControlLoop::ControlLoop(const LoopSettings& settings, BoardLink& motor, BoardLi
       clock_(clock),
       events_(events),
       encoder_timing_(bridge::tick_seconds_1047(encoder.device_info().firmware_version)) {
+  counters_.clock_ns.store(clock_.now_ns());
   if (settings_.period_ns <= 0) throw std::invalid_argument("period_ns must be > 0");
   if (settings_.pendulum_channel < 0 || settings_.pendulum_channel > 3) {
     throw std::invalid_argument("pendulum_channel must be 0..3");
@@ -44,7 +51,13 @@ bool ControlLoop::request_session(const SessionRequest& request) noexcept {
 }
 
 void ControlLoop::request_stop(StopReason reason) noexcept {
-  // An e-stop or a signal must not be downgraded by a later plain stop.
+  // An e-stop overrides whatever stop is pending (a log error, a signal): each ends a session the
+  // same way, but only an e-stop also brakes an idle motor, and it must never be swallowed.
+  if (reason == StopReason::estop_command) {
+    stop_request_.store(reason);
+    return;
+  }
+  // Any other stop or fault must not be downgraded by a later plain stop.
   StopReason current = stop_request_.load();
   while (current == StopReason::none || current == StopReason::stop_command) {
     if (stop_request_.compare_exchange_weak(current, reason)) return;
@@ -84,7 +97,7 @@ void ControlLoop::emit_fault(const char* what, const char* detail, StopReason re
   emit(LoopEvent::Kind::fault);
 }
 
-bool ControlLoop::write_command(double duty, double braking_fraction, RawReport* record) noexcept {
+bool ControlLoop::write_command(double duty, double braking_fraction, RawReport* record) {
   bridge::MotorCommand1065 command;
   command.duty_cycle = duty;
   command.braking_fraction = braking_fraction;
@@ -184,7 +197,6 @@ void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_
   excitation_ = request.excitation;
   session_ = request.session;
   running_ = true;
-  stop_request_.store(StopReason::none);
   session_start_ns_ = now_ns;
   seq_ = 0;
   session_overruns_ = 0;
@@ -247,7 +259,8 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
     // Requested ends and the duration end before this cycle's reports are taken: the session's
     // samples are exactly its cycles, and the zero command goes out at once.
     const double t_s = static_cast<double>(deadline_ns - session_start_ns_) * 1e-9;
-    StopReason reason = stop_request_.load();
+    // Taken, not read: a stop applies to the session it ended, never to a start queued after it.
+    StopReason reason = stop_request_.exchange(StopReason::none);
     if (reason == StopReason::none && excitation_.finished(t_s)) {
       reason = StopReason::duration_reached;
     }
@@ -267,14 +280,28 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
     rest_anchor_ns_ = deadline_ns;
   }
 
+  if (!running_) {
+    // A stop while no session runs cancels every start asked for before it, including one still
+    // waiting for the pendulum to rest: no session asked for before an e-stop may start after it.
+    const StopReason idle_stop = stop_request_.exchange(StopReason::none);
+    if (idle_stop != StopReason::none) {
+      const bool cancelled = have_pending_ || requests_.read_available() > 0;
+      have_pending_ = false;
+      auto discard = [](const SessionRequest&) {};
+      requests_.consume_all(discard);
+      if (cancelled) {
+        emit_fault("start_cancelled", to_string(idle_stop).data(), StopReason::none, false,
+                   deadline_ns);
+      }
+      // An e-stop while idle still brakes the motor (something else may have moved it).
+      if (idle_stop == StopReason::estop_command) {
+        write_command(0.0, settings_.stop_braking_fraction, nullptr);
+      }
+    }
+  }
   consider_pending_request(deadline_ns);
   if (!running_) {
     if (usb_failure_ != TransportStatus::ok) counters_.state.store(LoopState::fault);
-    // An e-stop while idle still brakes the motor (something else may have moved it).
-    StopReason expected = StopReason::estop_command;
-    if (stop_request_.compare_exchange_strong(expected, StopReason::none)) {
-      write_command(0.0, settings_.stop_braking_fraction, nullptr);
-    }
     return;
   }
 
@@ -346,6 +373,12 @@ void ControlLoop::run() {
 
   std::int64_t deadline = clock_.now_ns() + settings_.period_ns;
   rest_anchor_ns_ = clock_.now_ns();
+  const std::int64_t cpu_start_ns = thread_cpu_time_ns();
+  struct CpuTimeOnExit {
+    std::atomic<std::int64_t>& out;
+    std::int64_t start;
+    ~CpuTimeOnExit() { out.store(thread_cpu_time_ns() - start); }
+  } cpu_on_exit{counters_.loop_cpu_time_ns, cpu_start_ns};
   try {
     for (;;) {
       if (exit_.load()) {
@@ -363,6 +396,7 @@ void ControlLoop::run() {
       }
       clock_.sleep_until_ns(deadline);
       const std::int64_t wake = clock_.now_ns();
+      counters_.clock_ns.store(wake, std::memory_order_relaxed);
       // Late by a period or more: those cycles are gone; skip to the newest deadline passed.
       std::int64_t missed = 0;
       if (wake - deadline >= settings_.period_ns) {
@@ -377,7 +411,13 @@ void ControlLoop::run() {
     }
   } catch (...) {
     // The zero command first: nothing below may delay it.
-    write_command(0.0, settings_.stop_braking_fraction, &event_.end.final_command);
+    try {
+      write_command(0.0, settings_.stop_braking_fraction, &event_.end.final_command);
+    } catch (...) {
+      // The board layer threw again: the zero could not be written. The session still ends and
+      // the first exception, the cause, is the one rethrown.
+      event_.end.final_command.length = 0;
+    }
     end_session(StopReason::exception, "exception in the control loop", clock_.now_ns());
     throw;
   }

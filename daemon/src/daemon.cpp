@@ -36,11 +36,10 @@ std::string session_name(std::int64_t wall_time_ns, const std::string& label) {
 Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, bridge::Clock& clock,
                lcm::LCM& lcm)
     : settings_(std::move(settings)),
-      clock_(clock),
       lcm_(lcm),
       events_(settings_.queue_capacity),
       validator_(settings_.command_limits) {
-  loop_ = std::make_unique<ControlLoop>(settings_.loop, motor, encoder, clock_, events_);
+  loop_ = std::make_unique<ControlLoop>(settings_.loop, motor, encoder, clock, events_);
   recorder_ = std::make_unique<SessionRecorder>(
       settings_.recorder, &lcm_,
       [this](const std::string&) { loop_->request_stop(StopReason::log_error); });
@@ -114,7 +113,7 @@ void Daemon::refresh_snapshot() {
 
 furuta::rig_status_t Daemon::status_message() {
   furuta::rig_status_t m{};
-  m.monotonic_ns = clock_.now_ns();
+  m.monotonic_ns = loop_->counters().clock_ns.load();
   const LoopCounters& c = loop_->counters();
   switch (c.state.load()) {
     case LoopState::running:
@@ -153,6 +152,9 @@ void Daemon::io_thread_main() {
     while (events_.pop(event)) {
       recorder_->handle(event);
       any = true;
+      // A status reply names the session and the last fault from the snapshot: bring it up to date
+      // as they change, not only once a second.
+      if (event.kind != LoopEvent::Kind::sample) refresh_snapshot();
       if (event.kind == LoopEvent::Kind::sample && !ready_.load() &&
           event.sample.motor_in.count > 0 && event.sample.encoder_in.count > 0) {
         ready_.store(true);
@@ -169,7 +171,8 @@ void Daemon::io_thread_main() {
       ready_.store(true);  // idle and cycling: both boards answered the start-up
     }
     if (io_stop_.load() && events_.read_available() == 0) break;
-    if (!any) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    // The loop cannot wake this thread (that would be a syscall on its path): poll, briefly.
+    if (!any) std::this_thread::sleep_for(std::chrono::microseconds(500));
   }
   publish_status();
 }
@@ -203,7 +206,9 @@ furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command
   CommandDecision decision;
   {
     std::lock_guard lock(command_mutex_);
-    decision = validator_.validate(command, clock_.now_ns());
+    // The loop's time, not the clock's: this runs on the LCM thread. Rate limiting on the time
+    // of the loop's last wake-up is at most a period behind, and exact in virtual time.
+    decision = validator_.validate(command, loop_->counters().clock_ns.load());
   }
   if (decision.accepted) {
     switch (command.kind) {

@@ -89,25 +89,29 @@ void SessionRecorder::log_bytes(const char* channel, const std::vector<std::uint
   // wall time is inside the messages.
   const auto status = log_->write(channel, monotonic_ns / 1000, bytes);
   if (status != session_log::LogWriteStatus::ok) {
-    log_failed_ = true;
-    last_fault_ = "session log: " + std::string(session_log::to_string(status));
-    if (on_log_failure_) on_log_failure_(last_fault_);
+    fail_log("session log: " + std::string(session_log::to_string(status)));
   }
+}
+
+void SessionRecorder::fail_log(const std::string& why) {
+  log_failed_ = true;
+  log_failure_ = why;
+  last_fault_ = why;
+  if (on_log_failure_) on_log_failure_(last_fault_);
 }
 
 void SessionRecorder::start_session(const SessionStartEvent& start) {
   session_ = text_of(start.session);
   wake_latency_.reset();
   log_failed_ = false;
+  log_failure_.clear();
   log_.reset();
   if (!settings_.logs_dir.empty()) {
     try {
       log_ = std::make_unique<session_log::LcmLogWriter>(
           session_log::LogWriterOptions{settings_.logs_dir, settings_.flush_interval}, session_);
     } catch (const std::exception& e) {
-      log_failed_ = true;
-      last_fault_ = std::string("session log: ") + e.what();
-      if (on_log_failure_) on_log_failure_(last_fault_);
+      fail_log(std::string("session log: ") + e.what());
     }
   }
   furuta::rig_session_t m{};
@@ -148,8 +152,8 @@ void SessionRecorder::record_sample(const RigSample& s) {
   if (s.motor_out.length > 0) {
     log_raw(s.motor_out, furuta::rig_usb_report_t::BOARD_MOTOR_1065,
             s.motor_out.status == bridge::TransportStatus::ok
-                ? furuta::rig_usb_report_t::KIND_OUTPUT
-                : furuta::rig_usb_report_t::KIND_ERROR);
+                ? +furuta::rig_usb_report_t::KIND_OUTPUT
+                : +furuta::rig_usb_report_t::KIND_ERROR);
   }
   sample_msg_ = to_lcm_sample(s, session_, settings_.pendulum_channel);
   publish_and_log(session_log::kChannelSample, sample_msg_, s.monotonic_ns);
@@ -179,6 +183,9 @@ void SessionRecorder::record_fault(const FaultEvent& f) {
   m.reason = text_of(f.what);
   m.detail = text_of(f.detail);
   m.fatal = f.fatal;
+  // The loop stops a session for a log failure without knowing what failed; this thread does, and
+  // the fault must say it (disk full, the directory, ...) rather than a bare log_error.
+  if (f.reason == StopReason::log_error && m.detail.empty()) m.detail = log_failure_;
   if (f.fatal) last_fault_ = m.reason + (m.detail.empty() ? "" : ": " + m.detail);
   publish_and_log(session_log::kChannelFault, m, f.monotonic_ns);
 }
@@ -187,8 +194,8 @@ void SessionRecorder::end_session(const SessionEndEvent& e) {
   if (e.final_command.length > 0) {
     log_raw_report(e.final_command, furuta::rig_usb_report_t::BOARD_MOTOR_1065,
                    e.final_command.status == bridge::TransportStatus::ok
-                       ? furuta::rig_usb_report_t::KIND_OUTPUT
-                       : furuta::rig_usb_report_t::KIND_ERROR);
+                       ? +furuta::rig_usb_report_t::KIND_OUTPUT
+                       : +furuta::rig_usb_report_t::KIND_ERROR);
   }
   furuta::rig_session_t m{};
   m.event = furuta::rig_session_t::EVENT_END;
@@ -206,8 +213,7 @@ void SessionRecorder::end_session(const SessionEndEvent& e) {
       last_log_ = final_path;
       if (on_logged_) on_logged_(final_path);
     } else {
-      last_fault_ = "session log: cannot finish " + log_->partial_path().string();
-      if (on_log_failure_) on_log_failure_(last_fault_);
+      fail_log("session log: cannot finish " + log_->partial_path().string());
     }
   }
   // A failed log stays as .part: recovery at the next start keeps its readable prefix.
@@ -236,9 +242,7 @@ void SessionRecorder::sync_if_due(std::chrono::steady_clock::time_point now) {
   if (!log_ || log_failed_) return;
   const auto status = log_->sync_if_due(now);
   if (status != session_log::LogWriteStatus::ok) {
-    log_failed_ = true;
-    last_fault_ = "session log: " + std::string(session_log::to_string(status));
-    if (on_log_failure_) on_log_failure_(last_fault_);
+    fail_log("session log: " + std::string(session_log::to_string(status)));
   }
 }
 

@@ -58,6 +58,9 @@ TEST(RunCommand, ASimulatedSessionLeavesALogThatInfoExportAndReplayRead) {
   EXPECT_EQ(run_log_info_command(log, out, err), 0) << out.str();
   EXPECT_NE(out.str().find("samples   250"), std::string::npos) << out.str();  // 4 s / 16 ms
   EXPECT_NE(out.str().find("duration_reached"), std::string::npos);
+  // The session ended with the zero, braking command written last.
+  EXPECT_NE(out.str().find("motor     last command duty 0, braking 1\n"), std::string::npos)
+      << out.str();
 
   const fs::path csv = dir.path / "samples.csv";
   EXPECT_EQ(run_log_export_csv_command(log, csv, out, err), 0);

@@ -25,16 +25,19 @@ class BoardLink {
   // Appends every report that has arrived to `out` (until it is full; the rest wait for the next
   // call). Returns ok, or the failure that stopped reading (disconnected, io_error, ...). Short
   // reports are kept, with status short_report.
-  virtual bridge::TransportStatus drain(BoardReports& out) noexcept = 0;
-  virtual bridge::TransportStatus write(std::span<const std::uint8_t> report) noexcept = 0;
+  // Neither is noexcept: whatever a transport throws must reach the loop, which answers it with a
+  // zero command and ends the session (reason exception); noexcept would turn it into
+  // std::terminate with the motor still driven.
+  virtual bridge::TransportStatus drain(BoardReports& out) = 0;
+  virtual bridge::TransportStatus write(std::span<const std::uint8_t> report) = 0;
   virtual const bridge::DeviceInfo& device_info() const noexcept = 0;
 };
 
 class DirectBoardLink final : public BoardLink {
  public:
   explicit DirectBoardLink(bridge::Transport& transport) : transport_(transport) {}
-  bridge::TransportStatus drain(BoardReports& out) noexcept override;
-  bridge::TransportStatus write(std::span<const std::uint8_t> report) noexcept override;
+  bridge::TransportStatus drain(BoardReports& out) override;
+  bridge::TransportStatus write(std::span<const std::uint8_t> report) override;
   const bridge::DeviceInfo& device_info() const noexcept override {
     return transport_.device_info();
   }
@@ -51,8 +54,8 @@ class ThreadedBoardLink final : public BoardLink {
   ThreadedBoardLink(const ThreadedBoardLink&) = delete;
   ThreadedBoardLink& operator=(const ThreadedBoardLink&) = delete;
 
-  bridge::TransportStatus drain(BoardReports& out) noexcept override;
-  bridge::TransportStatus write(std::span<const std::uint8_t> report) noexcept override;
+  bridge::TransportStatus drain(BoardReports& out) noexcept override;  // the queue cannot throw
+  bridge::TransportStatus write(std::span<const std::uint8_t> report) override;
   const bridge::DeviceInfo& device_info() const noexcept override {
     return transport_.device_info();
   }

@@ -64,6 +64,11 @@ struct LoopCounters {
   std::atomic<LoopState> state{LoopState::starting};
   std::atomic<StopReason> last_stop{StopReason::none};
   std::atomic<std::int64_t> sessions_completed{0};
+  // The loop's clock at its latest wake-up (at construction before the first). Other threads read
+  // time here: a VirtualClock is the loop thread's alone, so they must not call it.
+  std::atomic<std::int64_t> clock_ns{0};
+  // The loop thread's CPU time over run(), read once as it returns (a syscall the cycles avoid).
+  std::atomic<std::int64_t> loop_cpu_time_ns{0};
 };
 
 class ControlLoop {
@@ -94,7 +99,8 @@ class ControlLoop {
   void begin_session(const SessionRequest& request, std::int64_t now_ns);
   void consider_pending_request(std::int64_t now_ns);
   void end_session(StopReason reason, const char* detail, std::int64_t now_ns);
-  bool write_command(double duty, double braking_fraction, RawReport* record) noexcept;
+  // May throw what the motor link throws (run() catches it).
+  bool write_command(double duty, double braking_fraction, RawReport* record);
   void emit(LoopEvent::Kind kind) noexcept;
   void emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
                   std::int64_t now_ns) noexcept;

@@ -33,7 +33,8 @@ struct DaemonSettings {
 class Daemon {
  public:
   // `lcm` must outlive the daemon; the daemon subscribes to RIG_COMMAND on it and handles it on its
-  // own thread.
+  // own thread. `clock` is the loop thread's alone (it may be a single-threaded VirtualClock): the
+  // other threads take time from the loop's counters.
   Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, bridge::Clock& clock,
          lcm::LCM& lcm);
   ~Daemon();  // stops everything (the motor at zero first)
@@ -76,7 +77,6 @@ class Daemon {
   void on_command(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_command_t* msg);
 
   DaemonSettings settings_;
-  bridge::Clock& clock_;
   lcm::LCM& lcm_;
   EventQueue events_;
   std::unique_ptr<ControlLoop> loop_;

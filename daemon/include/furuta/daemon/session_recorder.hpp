@@ -63,6 +63,7 @@ class SessionRecorder {
   void publish_and_log(const char* channel, const Message& message, std::int64_t monotonic_ns);
   void log_bytes(const char* channel, const std::vector<std::uint8_t>& bytes,
                  std::int64_t monotonic_ns);
+  void fail_log(const std::string& why);  // once per session: the daemon stops it (log_error)
 
   RecorderSettings settings_;
   lcm::LCM* lcm_;
@@ -70,6 +71,7 @@ class SessionRecorder {
   std::function<void(const std::filesystem::path&)> on_logged_;
   std::unique_ptr<session_log::LcmLogWriter> log_;
   bool log_failed_ = false;
+  std::string log_failure_;  // why, for the log_error fault the loop sends back
   std::string session_;
   std::optional<std::filesystem::path> last_log_;
   std::int64_t samples_published_ = 0;

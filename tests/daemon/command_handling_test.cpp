@@ -1,0 +1,325 @@
+// Commands over LCM (memq://), through the daemon's own LCM thread: a rejected command is answered
+// with a status saying which field is wrong, a flood is rate-limited (and told so), an e-stop
+// always gets through, a status request gets the state and the counts.
+//
+// The loop runs on a clock the test steps one period at a time (safe to read from any thread), so
+// the rate limiter's notion of time, and every count, is exact.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "daemon_test_support.hpp"
+#include "furuta/daemon/daemon.hpp"
+#include "furuta/daemon/rig_connection.hpp"
+#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/firmware_bridge/usb_trace.hpp"
+#include "furuta/rig_status_t.hpp"
+
+namespace furuta::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+using furuta::rig_command_t;
+using furuta::rig_status_t;
+
+// Time that moves when the test says so; a sleeper waits for it. Thread-safe, unlike VirtualClock.
+class SteppedClock final : public bridge::Clock {
+ public:
+  explicit SteppedClock(std::int64_t start_ns) : now_(start_ns) {}
+  std::int64_t now_ns() const override { return now_.load(); }
+  void sleep_until_ns(std::int64_t deadline_ns) override {
+    std::unique_lock lock(mutex_);
+    sleeping_until_ = deadline_ns;
+    changed_.notify_all();
+    changed_.wait(lock, [&] { return free_ || now_.load() >= deadline_ns; });
+    sleeping_until_ = kNobody;
+    if (free_ && now_.load() < deadline_ns) now_.store(deadline_ns);
+  }
+  // Waits until the sleeper is blocked, then moves time to its deadline: it wakes exactly on time.
+  // False if nobody came to sleep (a hang guard).
+  bool wake_sleeper_on_time() {
+    std::unique_lock lock(mutex_);
+    const bool blocked = changed_.wait_for(lock, std::chrono::seconds(20), [&] {
+      return sleeping_until_ != kNobody && sleeping_until_ > now_.load();
+    });
+    if (!blocked) return false;
+    now_.store(sleeping_until_);
+    changed_.notify_all();
+    return true;
+  }
+  // From here on, a sleep returns at once with the time moved to its deadline (for shutdown).
+  void run_free() {
+    {
+      std::lock_guard lock(mutex_);
+      free_ = true;
+    }
+    changed_.notify_all();
+  }
+
+ private:
+  static constexpr std::int64_t kNobody = std::numeric_limits<std::int64_t>::min();
+  std::atomic<std::int64_t> now_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::int64_t sleeping_until_ = kNobody;
+  bool free_ = false;
+};
+
+// Status replies (those answering a request) as the daemon's LCM thread delivers them.
+class Inbox {
+ public:
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const rig_status_t* m) {
+    if (m->reply_to_request_id == 0) return;  // the periodic status, not a reply
+    {
+      std::lock_guard lock(mutex_);
+      replies_.push_back(*m);
+    }
+    arrived_.notify_all();
+  }
+  // The reply to `request_id`; fails the test if none comes within a generous time (a hang guard,
+  // not a timing assertion).
+  rig_status_t reply_to(std::int64_t request_id) {
+    std::unique_lock lock(mutex_);
+    const rig_status_t* found = nullptr;
+    const bool got = arrived_.wait_for(lock, std::chrono::seconds(20), [&] {
+      for (const auto& r : replies_) {
+        if (r.reply_to_request_id == request_id) found = &r;
+      }
+      return found != nullptr;
+    });
+    if (!got) {
+      ADD_FAILURE() << "no reply to request " << request_id;
+      return {};
+    }
+    return *found;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::vector<rig_status_t> replies_;
+};
+
+struct CommandRig {
+  config::RigConfig config = testing::quiet_rig();
+  SteppedClock clock{1'000'000'000};
+  std::unique_ptr<bridge::SimulatedRig> sim;
+  std::unique_ptr<bridge::Transport> motor_usb;
+  std::unique_ptr<bridge::Transport> encoder_usb;
+  std::unique_ptr<DirectBoardLink> motor;
+  std::unique_ptr<DirectBoardLink> encoder;
+  DaemonSettings settings;
+  lcm::LCM lcm{"memq://"};
+  Inbox inbox;
+  lcm::Subscription* subscription = nullptr;
+  std::unique_ptr<Daemon> daemon;
+  std::int64_t next_id = 1000;
+
+  CommandRig() {
+    sim = std::make_unique<bridge::SimulatedRig>(config.simulation, clock);
+    motor_usb = sim->make_transport();
+    encoder_usb = sim->make_transport();
+    const bool opened =
+        motor_usb->open({bridge::kPhidgetsVendorId, bridge::kProductMotorControl1065, {}}) ==
+            bridge::TransportStatus::ok &&
+        encoder_usb->open({bridge::kPhidgetsVendorId, bridge::kProductEncoder1047, {}}) ==
+            bridge::TransportStatus::ok;
+    EXPECT_TRUE(opened);
+    motor = std::make_unique<DirectBoardLink>(*motor_usb);
+    encoder = std::make_unique<DirectBoardLink>(*encoder_usb);
+    settings = daemon_settings_from_config(config);
+    settings.recorder.motor_device = bridge::format_trace_device_line(motor_usb->device_info());
+    settings.recorder.encoder_device = bridge::format_trace_device_line(encoder_usb->device_info());
+    settings.loop.wait_when_queue_full = true;
+    subscription = lcm.subscribe(session_log::kChannelStatus, &Inbox::on_status, &inbox);
+  }
+  ~CommandRig() {
+    clock.run_free();  // the loop may be asleep waiting for time that the test no longer gives
+    daemon.reset();
+    lcm.unsubscribe(subscription);
+  }
+
+  void start(const fs::path& logs_dir) {
+    settings.recorder.logs_dir = logs_dir;
+    daemon = std::make_unique<Daemon>(settings, *motor, *encoder, clock, lcm);
+    daemon->start();
+  }
+
+  // One cycle at a time: time moves to the deadline the loop sleeps for, and the cycle it then
+  // runs is waited for. No cycle is ever late.
+  void step_cycles(int n) {
+    const auto& cycles = daemon->loop().counters().cycles;
+    for (int i = 0; i < n; ++i) {
+      // The count only moves after a wake-up, and the previous one has been counted already.
+      const std::int64_t target = cycles.load() + 1;
+      ASSERT_TRUE(clock.wake_sleeper_on_time()) << "the loop stopped sleeping";
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+      while (cycles.load() < target) {
+        ASSERT_LT(std::chrono::steady_clock::now(), give_up) << "the loop stopped cycling";
+        std::this_thread::yield();
+      }
+    }
+  }
+
+  // Publishes a command on RIG_COMMAND (the daemon's LCM thread takes it); returns its id.
+  std::int64_t send(rig_command_t command) {
+    command.request_id = next_id++;
+    lcm.publish(session_log::kChannelCommand, &command);
+    return command.request_id;
+  }
+  rig_status_t ask(const rig_command_t& command) { return inbox.reply_to(send(command)); }
+};
+
+rig_command_t status_request() {
+  return testing::simple_command(rig_command_t::KIND_STATUS_REQUEST);
+}
+
+TEST(CommandHandling, RejectedCommandsAreAnsweredWithTheFieldAtFault) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_limits.max_commands_per_s = 1000;  // the rate limit is another test
+  rig.start(dir.path);
+
+  struct Case {
+    const char* what;
+    rig_command_t command;
+    const char* field;
+  };
+  std::vector<Case> cases;
+  cases.push_back(
+      {"amplitude too high", testing::start_command("bang_bang", 0.9, 10.0), "amplitude_duty: "});
+  cases.push_back(
+      {"amplitude NaN",
+       testing::start_command("bang_bang", std::numeric_limits<double>::quiet_NaN(), 10.0),
+       "amplitude_duty: "});
+  cases.push_back({"unknown profile", testing::start_command("sawtooth", 0.3, 10.0), "profile: "});
+  cases.push_back(
+      {"NaN duration",
+       testing::start_command("bang_bang", 0.3, std::numeric_limits<double>::quiet_NaN()),
+       "duration_s: "});
+  cases.push_back(
+      {"duration too long", testing::start_command("bang_bang", 0.3, 1e6), "duration_s: "});
+  cases.push_back(
+      {"label with a path", testing::start_command("bang_bang", 0.3, 10.0, "../up"), "label: "});
+  cases.push_back({"label too long",
+                   testing::start_command("bang_bang", 0.3, 10.0, std::string(200, 'a')),
+                   "label: "});
+  rig_command_t negative_seed = testing::start_command("bang_bang", 0.3, 10.0);
+  negative_seed.seed = -1;
+  cases.push_back({"negative seed", negative_seed, "seed: "});
+  cases.push_back({"unknown kind", testing::simple_command(42), "kind: "});
+
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const rig_status_t reply = rig.ask(c.command);
+    EXPECT_FALSE(reply.request_accepted);
+    EXPECT_EQ(reply.request_reason.rfind(c.field, 0), 0u) << reply.request_reason;
+    EXPECT_EQ(reply.state, +rig_status_t::STATE_IDLE);
+  }
+  // None of them started anything; a valid command is accepted (the channel itself works).
+  rig.step_cycles(3);
+  EXPECT_EQ(rig.daemon->loop().counters().sessions_completed.load(), 0);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::idle);
+  const rig_status_t ok = rig.ask(status_request());
+  EXPECT_TRUE(ok.request_accepted) << ok.request_reason;
+  EXPECT_TRUE(ok.request_reason.empty());
+}
+
+TEST(CommandHandling, AFloodIsRateLimitedAndAnEstopAlwaysGetsThrough) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  ASSERT_EQ(rig.settings.command_limits.max_commands_per_s, 5);
+  rig.start(dir.path);
+  // The pendulum has hung still for the rest check (one second): a start is accepted and runs.
+  rig.step_cycles(70);
+  const rig_status_t started = rig.ask(testing::start_command("bang_bang", 0.3, 30.0));
+  ASSERT_TRUE(started.request_accepted) << started.request_reason;
+  rig.step_cycles(2);
+  ASSERT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
+
+  // Time stands still: the bucket (5 commands, one spent on the start) does not refill.
+  std::vector<std::int64_t> flood;
+  for (int i = 0; i < 6; ++i) flood.push_back(rig.send(status_request()));
+  const std::int64_t estop = rig.send(testing::simple_command(rig_command_t::KIND_ESTOP));
+  for (int i = 0; i < 6; ++i) flood.push_back(rig.send(status_request()));
+
+  int accepted = 0;
+  for (const std::int64_t id : flood) {
+    const rig_status_t reply = rig.inbox.reply_to(id);
+    if (reply.request_accepted) {
+      ++accepted;
+      continue;
+    }
+    EXPECT_EQ(reply.request_reason, "rate limit: more than 5 commands per second");
+  }
+  EXPECT_EQ(accepted, 4);
+  const rig_status_t estop_reply = rig.inbox.reply_to(estop);
+  EXPECT_TRUE(estop_reply.request_accepted) << estop_reply.request_reason;
+
+  // The e-stop took effect at the next cycle.
+  rig.step_cycles(1);
+  EXPECT_EQ(rig.daemon->loop().counters().last_stop.load(), StopReason::estop_command);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::fault);
+
+  // A second later the bucket has refilled: commands are taken again.
+  rig.step_cycles(static_cast<int>(1'000'000'000 / rig.settings.loop.period_ns) + 1);
+  const rig_status_t later = rig.ask(status_request());
+  EXPECT_TRUE(later.request_accepted) << later.request_reason;
+}
+
+TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_limits.max_commands_per_s = 1000;
+  rig.start(dir.path);
+  rig.step_cycles(20);
+  const rig_status_t idle = rig.ask(status_request());
+  EXPECT_TRUE(idle.request_accepted);
+  EXPECT_EQ(idle.state, +rig_status_t::STATE_IDLE);
+  EXPECT_EQ(idle.cycles, 20);
+  EXPECT_EQ(idle.overruns, 0);
+  EXPECT_EQ(idle.motor_lost_reports, 0);
+  EXPECT_EQ(idle.encoder_lost_reports, 0);
+  EXPECT_TRUE(idle.session.empty()) << idle.session;
+  EXPECT_EQ(idle.monotonic_ns, 1'000'000'000 + 20 * rig.settings.loop.period_ns);
+
+  rig.step_cycles(50);  // 70 cycles: past the one-second rest check
+  ASSERT_TRUE(rig.ask(testing::start_command("bang_bang", 0.3, 30.0, "status")).request_accepted);
+  rig.step_cycles(5);
+  // The logger thread names the session in the status once it has opened its log; ask until then.
+  rig_status_t running;
+  for (int i = 0; i < 2000 && running.session.empty(); ++i) {
+    running = rig.ask(status_request());
+    if (running.session.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(running.state, +rig_status_t::STATE_RUNNING);
+  EXPECT_EQ(running.cycles, 75);
+  EXPECT_NE(running.session.find("_status"), std::string::npos) << running.session;
+
+  // Lost reports show in the counts: three 1065 reports dropped.
+  rig.step_cycles(1);
+  rig.sim->drop_reports(bridge::RigBoard::motor_1065, 3);
+  rig.step_cycles(4);
+  const rig_status_t lost = rig.ask(status_request());
+  EXPECT_EQ(lost.motor_lost_reports, 3);
+  EXPECT_EQ(lost.state, +rig_status_t::STATE_RUNNING);
+
+  // After a stop the state is idle again.
+  ASSERT_TRUE(rig.ask(testing::simple_command(rig_command_t::KIND_STOP)).request_accepted);
+  rig.step_cycles(1);
+  const rig_status_t stopped = rig.ask(status_request());
+  EXPECT_EQ(stopped.state, +rig_status_t::STATE_IDLE);
+  EXPECT_EQ(stopped.cycles, 81);
+}
+
+}  // namespace
+}  // namespace furuta::daemon

@@ -1,0 +1,166 @@
+#!/usr/bin/env bash
+# furutad and the furuta CLI as separate processes talking LCM over real UDP multicast: start,
+# status and stop a session, start another and send furutad SIGTERM in the middle of it. furutad
+# must exit 0 and leave complete logs whose last motor command is the zero, and lcm-logplayer must
+# play them.
+#
+# Runs in a network namespace of its own (unshare -rn: no privilege needed), with only loopback up
+# and multicast routed to it, so nothing leaves the machine and parallel runs cannot hear each
+# other. Exit 77 (skipped) where such a namespace is not permitted.
+#
+# usage: udp_multicast_test.sh FURUTAD FURUTA RIG_TOML
+set -u
+
+FURUTAD=$1
+FURUTA=$2
+RIG_TOML=$3
+SKIP=77
+
+if [ -z "${FURUTA_UDP_TEST_IN_NETNS:-}" ]; then
+  for tool in unshare ip lcm-logplayer; do
+    if ! command -v "$tool" >/dev/null 2>&1; then
+      echo "SKIP: needs $tool"
+      exit $SKIP
+    fi
+  done
+  if ! unshare -rn true >/dev/null 2>&1; then
+    echo "SKIP: unshare -rn is not permitted here (no user/network namespace for an isolated multicast test)"
+    exit $SKIP
+  fi
+  FURUTA_UDP_TEST_IN_NETNS=1 exec unshare -rn bash "$0" "$@"
+fi
+
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/furuta-udp.XXXXXX")
+DAEMON_PID=""
+cleanup() {
+  if [ -n "$DAEMON_PID" ] && kill -0 "$DAEMON_PID" 2>/dev/null; then
+    kill -KILL "$DAEMON_PID" 2>/dev/null
+    wait "$DAEMON_PID" 2>/dev/null
+  fi
+  rm -rf "$TMP"
+}
+trap cleanup EXIT
+
+fail() {
+  echo "FAIL: $*"
+  if [ -f "$TMP/furutad.log" ]; then
+    echo "--- furutad output:"
+    cat "$TMP/furutad.log"
+  fi
+  exit 1
+}
+
+ip link set lo up || fail "cannot bring lo up in the namespace"
+ip route add 224.0.0.0/4 dev lo || fail "cannot route multicast to lo"
+
+# A group and port of this run's own (the namespace isolates it already; this keeps the logs apart
+# from anything else that might be listening on the default).
+GROUP="239.255.$((RANDOM % 250 + 1)).$((RANDOM % 250 + 1))"
+PORT=$((20000 + RANDOM % 20000))
+URL="udpm://$GROUP:$PORT?ttl=0"
+PLAY_URL="udpm://$GROUP:$((PORT + 1))?ttl=0"
+
+CONFIG="$TMP/rig.toml"
+LOGS="$TMP/logs"
+sed -e "s|^lcm_url = .*|lcm_url = \"$URL\"|" \
+    -e "s|^logs_dir = .*|logs_dir = \"$LOGS\"|" "$RIG_TOML" > "$CONFIG"
+grep -q "^lcm_url = \"$URL\"" "$CONFIG" || fail "could not set lcm_url in the [daemon] table"
+grep -q "^logs_dir = \"$LOGS\"" "$CONFIG" || fail "could not set logs_dir in the [daemon] table"
+
+cli() { "$FURUTA" "$@" --config "$CONFIG" --timeout 5; }
+status_line() { cli status 2>/dev/null; }
+cycles_of() { sed -n 's/.*cycles \([0-9]*\),.*/\1/p'; }
+
+# Waits (up to a minute: a hang guard, not a timing check) until `status` matches a pattern
+# and shows at least `min_cycles` cycles; prints that status line. Says why on stderr if not.
+wait_for_status() {
+  local pattern=$1 min_cycles=${2:-0} line="" cycles
+  for _ in $(seq 1 120); do
+    line=$(status_line)
+    if [[ "$line" == *"$pattern"* ]]; then
+      cycles=$(echo "$line" | cycles_of)
+      if [ "${cycles:-0}" -ge "$min_cycles" ]; then
+        echo "$line"
+        return 0
+      fi
+    fi
+    if ! kill -0 "$DAEMON_PID" 2>/dev/null; then
+      echo "furutad died while waiting for '$pattern'" >&2
+      return 1
+    fi
+    # Slower than the daemon's rate limit (5 commands a second, status requests included), so
+    # the starts and stops in between are never refused for it.
+    sleep 0.5
+  done
+  echo "status never showed '$pattern' with at least $min_cycles cycles (last: $line)" >&2
+  return 1
+}
+
+"$FURUTAD" --sim -c "$CONFIG" > "$TMP/furutad.log" 2>&1 &
+DAEMON_PID=$!
+
+# The loop needs a second of the pendulum hanging still before it takes a session: 80 cycles.
+line=$(wait_for_status "state idle" 80) || fail "furutad did not come up"
+echo "furutad up: $line"
+
+# Session 1: a free decay (zero duty, so the pendulum stays still for the next one), stopped by
+# `furuta stop`.
+cli start --profile free_decay --amplitude 0.1 --duration 60 --label udp_stop \
+  || fail "furuta start (session 1) refused"
+line=$(wait_for_status "state running") || fail "session 1 did not start"
+line=$(wait_for_status "_udp_stop") || fail "the status does not name session 1"
+echo "session 1: $line"
+cli stop || fail "furuta stop refused"
+line=$(wait_for_status "state idle") || fail "session 1 did not stop"
+echo "after stop: $line"
+
+# Session 2: a bang-bang, under way for about a second, then SIGTERM to furutad.
+before=$(echo "$line" | cycles_of)
+cli start --profile bang_bang --amplitude 0.3 --duration 60 --label udp_signal \
+  || fail "furuta start (session 2) refused"
+wait_for_status "state running" $((before + 100)) > /dev/null || fail "session 2 did not run"
+echo "session 2 under way; SIGTERM"
+kill -TERM "$DAEMON_PID"
+for _ in $(seq 1 300); do
+  kill -0 "$DAEMON_PID" 2>/dev/null || break
+  sleep 0.2
+done
+kill -0 "$DAEMON_PID" 2>/dev/null && fail "furutad still running a minute after SIGTERM"
+wait "$DAEMON_PID"
+rc=$?
+DAEMON_PID=""
+[ "$rc" -eq 0 ] || fail "furutad exited with $rc after SIGTERM"
+
+# Both logs finished (none left as .part), complete, and ending with the zero command.
+shopt -s nullglob
+parts=("$LOGS"/.partial/*)
+[ "${#parts[@]}" -eq 0 ] || fail "unfinished logs left: ${parts[*]}"
+stop_logs=("$LOGS"/*_udp_stop.lcmlog)
+signal_logs=("$LOGS"/*_udp_signal.lcmlog)
+[ "${#stop_logs[@]}" -eq 1 ] || fail "expected one log of session 1, found: $(ls -A "$LOGS")"
+[ "${#signal_logs[@]}" -eq 1 ] || fail "expected one log of session 2, found: $(ls -A "$LOGS")"
+
+check_log() {
+  local log=$1 reason=$2 info samples
+  info=$("$FURUTA" log info "$log") || fail "furuta log info failed on $log: $info"
+  echo "$info"
+  grep -q "^  end       $reason, " <<< "$info" || fail "$log does not end with $reason"
+  grep -q "^  motor     last command duty 0, braking 1$" <<< "$info" \
+    || fail "the last motor command in $log is not the zero"
+  grep -q "sequence numbers missing" <<< "$info" && fail "$log misses samples"
+  samples=$(sed -n 's/^  samples   \([0-9]*\).*/\1/p' <<< "$info")
+  [ "${samples:-0}" -gt 0 ] || fail "$log has no samples"
+  # lcm-logplayer reads every event (-v lists each) and publishes it.
+  lcm-logplayer -v -s 20 --lcm-url="$PLAY_URL" "$log" > "$TMP/played.txt" 2>&1 \
+    || fail "lcm-logplayer failed on $log: $(cat "$TMP/played.txt")"
+  played=$(grep -c " Channel RIG_SAMPLE " "$TMP/played.txt")
+  [ "$played" -eq "$samples" ] || fail "lcm-logplayer played $played samples of $samples"
+}
+
+check_log "${stop_logs[0]}" "stop_command"
+check_log "${signal_logs[0]}" "signal"
+# Session 2 drove the motor before the signal.
+info=$("$FURUTA" log info "${signal_logs[0]}")
+samples=$(sed -n 's/^  samples   \([0-9]*\).*/\1/p' <<< "$info")
+[ "$samples" -ge 50 ] || fail "session 2 was not under way when the signal came ($samples samples)"
+echo "PASS"
