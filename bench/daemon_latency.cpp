@@ -112,6 +112,7 @@ int main(int argc, char** argv) {
   std::thread subscriber_thread;
   if (separate_subscriber) {
     subscriber_thread = std::thread([&] {
+      if (fifo) daemon::keep_off_cpu(cpu);
       while (!stop_subscriber.load()) sub_lcm.handleTimeout(50);
     });
   }

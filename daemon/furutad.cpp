@@ -13,6 +13,7 @@
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/session_log/lcm_log.hpp"
+#include "furuta/session_log/session_log.hpp"
 
 namespace {
 
@@ -40,7 +41,9 @@ int main(int argc, char** argv) {
   std::string lcm_url;
   app.add_option("-c,--config", config_path, "Rig configuration (TOML)")->check(CLI::ExistingFile);
   app.add_flag("--sim", simulated, "Drive the simulated rig instead of the USB boards");
-  app.add_option("--replay", replay_log, "Replay the USB traffic of a session log")
+  app.add_option("--replay", replay_log,
+                 "Run a logged session again against its recorded USB traffic, in real time, then "
+                 "exit")
       ->check(CLI::ExistingFile);
   app.add_flag("--require-rt", require_rt, "Fail if the real-time set-up is refused");
   app.add_option("--logs-dir", logs_dir, "Where session logs go (overrides the configuration)");
@@ -66,9 +69,15 @@ int main(int argc, char** argv) {
 
     daemon::ConnectOptions connect;
     if (simulated) connect.backend = daemon::BackendChoice::simulated;
+    std::optional<session_log::SessionLog> replayed;
     if (!replay_log.empty()) {
+      replayed = session_log::load_session_log(replay_log);
+      if (!replayed->start) throw std::runtime_error(replay_log + ": no session start record");
       connect.backend = daemon::BackendChoice::replay;
       connect.replay_log = replay_log;
+      // The loop's first cycle is the recorded session's first: the rest check passed back then.
+      connect.virtual_start_ns = replayed->start->monotonic_ns - replayed->start->period_ns;
+      settings.loop.rest_check_s = 0.0;
     }
     daemon::RigConnection rig_io = daemon::connect_rig(rig, connect);
     settings.recorder.motor_device = bridge::format_trace_device_line(rig_io.motor->device_info());
@@ -81,6 +90,10 @@ int main(int argc, char** argv) {
       return 1;
     }
     daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
+    if (replayed) {
+      daemon.start_replayed_session(*replayed->start);
+      daemon.loop().exit_when_idle();
+    }
     const daemon::RealtimeResult rt = daemon.start();
     for (const std::string& refusal : rt.refused) {
       std::cerr << "furutad: real-time set-up refused: " << refusal << "\n";

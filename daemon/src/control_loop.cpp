@@ -163,6 +163,8 @@ void ControlLoop::drain_boards(RigSample& sample, std::int64_t& newest_arm_count
     pendulum_counts_ += ch.position_delta;
     encoder_flags_ = ch.flags;
   }
+  if (motor_fresh > 0) counters_.motor_reports_seen.store(true, std::memory_order_relaxed);
+  if (encoder_fresh > 0) counters_.encoder_reports_seen.store(true, std::memory_order_relaxed);
   cycles_without_motor_ = motor_fresh > 0 ? 0 : cycles_without_motor_ + 1;
   cycles_without_encoder_ = encoder_fresh > 0 ? 0 : cycles_without_encoder_ + 1;
   counters_.motor_lost_reports.fetch_add(motor_lost, std::memory_order_relaxed);
@@ -397,6 +399,8 @@ void ControlLoop::run() {
       clock_.sleep_until_ns(deadline);
       const std::int64_t wake = clock_.now_ns();
       counters_.clock_ns.store(wake, std::memory_order_relaxed);
+      // The whole lateness, before any skipping: an overrun shows in the latency figures too.
+      wake_latency_.record(wake - deadline);
       // Late by a period or more: those cycles are gone; skip to the newest deadline passed.
       std::int64_t missed = 0;
       if (wake - deadline >= settings_.period_ns) {
@@ -404,7 +408,6 @@ void ControlLoop::run() {
         deadline += missed * settings_.period_ns;
         counters_.overruns.fetch_add(missed, std::memory_order_relaxed);
       }
-      wake_latency_.record(wake - deadline);
       cycle(deadline, wake, missed);
       counters_.cycles.fetch_add(1, std::memory_order_relaxed);
       deadline += settings_.period_ns;

@@ -140,6 +140,7 @@ furuta::rig_status_t Daemon::status_message() {
 }
 
 void Daemon::io_thread_main() {
+  if (settings_.realtime.enabled) keep_off_cpu(settings_.realtime.cpu);
   LoopEvent event;
   auto next_status = std::chrono::steady_clock::now();
   auto publish_status = [&] {
@@ -155,10 +156,6 @@ void Daemon::io_thread_main() {
       // A status reply names the session and the last fault from the snapshot: bring it up to date
       // as they change, not only once a second.
       if (event.kind != LoopEvent::Kind::sample) refresh_snapshot();
-      if (event.kind == LoopEvent::Kind::sample && !ready_.load() &&
-          event.sample.motor_in.count > 0 && event.sample.encoder_in.count > 0) {
-        ready_.store(true);
-      }
     }
     const auto now = std::chrono::steady_clock::now();
     recorder_->sync_if_due(now);
@@ -166,9 +163,11 @@ void Daemon::io_thread_main() {
       publish_status();
       next_status = now + settings_.status_interval;
     }
-    if (!ready_.load() && loop_->counters().cycles.load() > 2 &&
-        loop_->counters().state.load() == LoopState::idle) {
-      ready_.store(true);  // idle and cycling: both boards answered the start-up
+    // Ready once the loop cycles and a decodable report from each board has come in.
+    if (!ready_.load() && loop_->counters().cycles.load() > 0 &&
+        loop_->counters().motor_reports_seen.load() &&
+        loop_->counters().encoder_reports_seen.load()) {
+      ready_.store(true);
     }
     if (io_stop_.load() && events_.read_available() == 0) break;
     // The loop cannot wake this thread (that would be a syscall on its path): poll, briefly.
@@ -178,6 +177,7 @@ void Daemon::io_thread_main() {
 }
 
 void Daemon::lcm_thread_main() {
+  if (settings_.realtime.enabled) keep_off_cpu(settings_.realtime.cpu);
   while (!lcm_stop_.load()) lcm_.handleTimeout(50);
 }
 

@@ -39,6 +39,20 @@ bool pin_to_cpu(int cpu, std::vector<std::string>& refused) {
   return true;
 }
 
+}  // namespace
+
+void keep_off_cpu(int cpu) {
+  if (cpu < 0 || cpu >= CPU_SETSIZE) return;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (pthread_getaffinity_np(pthread_self(), sizeof(set), &set) != 0) return;
+  CPU_CLR(cpu, &set);
+  if (CPU_COUNT(&set) == 0) return;  // nowhere else to go: stay where we are
+  pthread_setaffinity_np(pthread_self(), sizeof(set), &set);
+}
+
+namespace {
+
 bool make_fifo(int priority, std::vector<std::string>& refused) {
   sched_param param{};
   param.sched_priority = priority;

@@ -37,6 +37,11 @@ RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions&
   const bool virtual_time = options.virtual_time && options.backend != BackendChoice::from_config;
   if (virtual_time) {
     c.clock = std::make_unique<bridge::VirtualClock>(options.virtual_start_ns);
+  } else if (options.backend == BackendChoice::replay) {
+    // The recorded reports carry the recording's times: play them at the pace they came.
+    c.base_clock = std::make_unique<bridge::MonotonicClock>();
+    c.clock = std::make_unique<bridge::OffsetClock>(
+        *c.base_clock, options.virtual_start_ns - c.base_clock->now_ns());
   } else {
     c.clock = std::make_unique<bridge::MonotonicClock>();
   }

@@ -64,6 +64,9 @@ struct LoopCounters {
   std::atomic<LoopState> state{LoopState::starting};
   std::atomic<StopReason> last_stop{StopReason::none};
   std::atomic<std::int64_t> sessions_completed{0};
+  // Set once the first decodable report of each board has come in (systemd's READY waits for it).
+  std::atomic<bool> motor_reports_seen{false};
+  std::atomic<bool> encoder_reports_seen{false};
   // The loop's clock at its latest wake-up (at construction before the first). Other threads read
   // time here: a VirtualClock is the loop thread's alone, so they must not call it.
   std::atomic<std::int64_t> clock_ns{0};

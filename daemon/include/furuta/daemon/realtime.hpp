@@ -29,6 +29,10 @@ RealtimeResult apply_realtime_to_this_thread(const RealtimeOptions& options);
 // mlockall; call after every thread has started (their stacks are then locked too). Empty on
 // success, else why not.
 std::string lock_process_memory();
+// Keeps the calling (non-real-time) thread off `cpu`, so its system calls never hold up the loop
+// pinned there: on a kernel without full preemption a SCHED_FIFO thread still waits for another
+// thread's kernel work on its CPU. No effect when cpu < 0 or no other CPU is allowed.
+void keep_off_cpu(int cpu);
 
 // Wake-up latency (actual wake - deadline) histogram: fixed buckets, so recording never allocates.
 // Buckets are 1 us wide up to 1 ms, then 100 us wide up to 100 ms; beyond that, one overflow bucket

@@ -21,12 +21,14 @@ enum class BackendChoice { from_config, simulated, replay };
 
 struct ConnectOptions {
   BackendChoice backend = BackendChoice::from_config;
-  std::filesystem::path replay_log;   // for BackendChoice::replay
-  bool virtual_time = false;          // simulated/replay: a VirtualClock instead of real time
-  std::int64_t virtual_start_ns = 0;  // where that clock starts
+  std::filesystem::path replay_log;  // for BackendChoice::replay
+  bool virtual_time = false;         // simulated/replay: a VirtualClock instead of real time
+  // Where that clock starts. A replay in real time shifts the monotonic clock so that this is now.
+  std::int64_t virtual_start_ns = 0;
 };
 
 struct RigConnection {
+  std::unique_ptr<bridge::Clock> base_clock;  // what `clock` is built on, when it is shifted
   std::unique_ptr<bridge::Clock> clock;
   std::unique_ptr<bridge::SimulatedRig> simulated_rig;  // when simulated
   std::unique_ptr<bridge::Transport> motor;

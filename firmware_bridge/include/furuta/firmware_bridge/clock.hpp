@@ -39,4 +39,19 @@ class VirtualClock final : public Clock {
   std::int64_t now_ns_;
 };
 
+// Another clock shifted by a fixed offset: replays a recording in real time on the recording's own
+// time base.
+class OffsetClock final : public Clock {
+ public:
+  OffsetClock(Clock& base, std::int64_t offset_ns) : base_(base), offset_ns_(offset_ns) {}
+  std::int64_t now_ns() const override { return base_.now_ns() + offset_ns_; }
+  void sleep_until_ns(std::int64_t deadline_ns) override {
+    base_.sleep_until_ns(deadline_ns - offset_ns_);
+  }
+
+ private:
+  Clock& base_;
+  std::int64_t offset_ns_;
+};
+
 }  // namespace furuta::bridge
