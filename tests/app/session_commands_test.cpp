@@ -7,23 +7,13 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "temp_dir.hpp"
 
 namespace furuta::app {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() /
-           ("furuta-cli-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
+using furuta::testing::TempDir;
 
 fs::path only_log_in(const fs::path& dir) {
   fs::path found;
@@ -51,7 +41,7 @@ fs::path run_simulated_session(const fs::path& logs, double duration_s) {
 
 TEST(RunCommand, ASimulatedSessionLeavesALogThatInfoExportAndReplayRead) {
   TempDir dir;
-  const fs::path log = run_simulated_session(dir.path, 4.0);
+  const fs::path log = run_simulated_session(dir.path(), 4.0);
   ASSERT_FALSE(log.empty());
 
   std::ostringstream out, err;
@@ -62,7 +52,7 @@ TEST(RunCommand, ASimulatedSessionLeavesALogThatInfoExportAndReplayRead) {
   EXPECT_NE(out.str().find("motor     last command duty 0, braking 1\n"), std::string::npos)
       << out.str();
 
-  const fs::path csv = dir.path / "samples.csv";
+  const fs::path csv = dir.path() / "samples.csv";
   EXPECT_EQ(run_log_export_csv_command(log, csv, out, err), 0);
   std::ifstream in(csv);
   int lines = 0;
@@ -77,8 +67,8 @@ TEST(RunCommand, ASimulatedSessionLeavesALogThatInfoExportAndReplayRead) {
 
 TEST(RunCommand, InfoOnALogCutShortSaysSoAndFails) {
   TempDir dir;
-  const fs::path log = run_simulated_session(dir.path, 2.0);
-  const fs::path cut = dir.path / "cut.lcmlog";
+  const fs::path log = run_simulated_session(dir.path(), 2.0);
+  const fs::path cut = dir.path() / "cut.lcmlog";
   fs::copy_file(log, cut);
   fs::resize_file(cut, fs::file_size(cut) * 2 / 3);  // as if power failed mid-session
   std::ostringstream out, err;
@@ -98,7 +88,7 @@ TEST(RemoteCommand, WithNoDaemonListeningItSaysSoAndReturns2) {
 
 TEST(RunCommand, ABadConfigurationNamesFileLineAndField) {
   TempDir dir;
-  const fs::path config = dir.path / "rig.toml";
+  const fs::path config = dir.path() / "rig.toml";
   std::ofstream(config) << "[safety]\nmax_duty = 2\n";
   RunOptions options;
   options.config_path = config;

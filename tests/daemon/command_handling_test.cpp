@@ -187,7 +187,7 @@ TEST(CommandHandling, RejectedCommandsAreAnsweredWithTheFieldAtFault) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;
   rig.settings.command_limits.max_commands_per_s = 1000;  // the rate limit is another test
-  rig.start(dir.path);
+  rig.start(dir.path());
 
   struct Case {
     const char* what;
@@ -238,7 +238,7 @@ TEST(CommandHandling, AFloodIsRateLimitedAndAnEstopAlwaysGetsThrough) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;
   ASSERT_EQ(rig.settings.command_limits.max_commands_per_s, 5);
-  rig.start(dir.path);
+  rig.start(dir.path());
   // The pendulum has hung still for the rest check (one second): a start is accepted and runs.
   rig.step_cycles(70);
   const rig_status_t started = rig.ask(testing::start_command("bang_bang", 0.3, 30.0));
@@ -280,7 +280,7 @@ TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;
   rig.settings.command_limits.max_commands_per_s = 1000;
-  rig.start(dir.path);
+  rig.start(dir.path());
   rig.step_cycles(20);
   const rig_status_t idle = rig.ask(status_request());
   EXPECT_TRUE(idle.request_accepted);

@@ -11,23 +11,13 @@
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/session_log/session_log.hpp"
+#include "temp_dir.hpp"
 
 namespace furuta::daemon {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() /
-           ("furuta-e2e-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
+using furuta::testing::TempDir;
 
 struct SampleCounter {
   std::vector<std::int64_t> seqs;
@@ -118,7 +108,7 @@ TEST(DaemonEndToEnd, TenSecondBangBangSessionIsPublishedLoggedAndReplayedExactly
   TempDir dir;
   const config::RigConfig rig = shipped_rig();
   RigConnection live = connect_rig(rig, {BackendChoice::simulated, {}, /*virtual_time=*/true});
-  const RunResult run = run_session(rig, live, dir.path / "logs", start_command(10.0));
+  const RunResult run = run_session(rig, live, dir.path() / "logs", start_command(10.0));
 
   EXPECT_EQ(run.stop, StopReason::duration_reached);
   // 10 s at 16 ms: 625 samples, consecutive, every one published.
@@ -152,7 +142,7 @@ TEST(DaemonEndToEnd, TenSecondBangBangSessionIsPublishedLoggedAndReplayedExactly
   config::RigConfig replay_rig = rig;
   replay_rig.daemon.rest_check_s = 0.0;
   const RunResult again =
-      run_session(replay_rig, replay, dir.path / "replay-logs", start_command(10.0));
+      run_session(replay_rig, replay, dir.path() / "replay-logs", start_command(10.0));
   ASSERT_TRUE(again.log.has_value());
   const session_log::SessionLog replayed = session_log::load_session_log(*again.log);
   ASSERT_EQ(replayed.samples.size(), log.samples.size()) << replayed.end->end_reason;
@@ -178,7 +168,7 @@ TEST(DaemonEndToEnd, AStopRequestMidSessionEndsItWithZeroLastAndAReadableLog) {
   TempDir dir;
   const config::RigConfig rig = shipped_rig();
   RigConnection live = connect_rig(rig, {BackendChoice::simulated, {}, true});
-  const RunResult run = run_session(rig, live, dir.path, start_command(60.0), [](Daemon& daemon) {
+  const RunResult run = run_session(rig, live, dir.path(), start_command(60.0), [](Daemon& daemon) {
     // Wait (in real time) until the session is under way, then stop as SIGTERM does.
     while (daemon.loop().counters().state.load() != LoopState::running) {
       std::this_thread::sleep_for(std::chrono::milliseconds(1));

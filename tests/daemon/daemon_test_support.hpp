@@ -24,27 +24,13 @@
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/rig_command_t.hpp"
 #include "furuta/session_log/session_log.hpp"
+#include "temp_dir.hpp"
 
 namespace furuta::daemon::testing {
 
-namespace fs = std::filesystem;
+using furuta::testing::TempDir;
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& prefix = "furuta-daemon") {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path = fs::temp_directory_path() / (prefix + "-" + std::to_string(::getpid()) + "-" +
-                                        info->test_suite_name() + "-" + info->name());
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-};
+namespace fs = std::filesystem;
 
 // The shipped configuration. Its simulated rig has no noise: the pendulum hangs exactly still, so
 // the rest check passes after its one second and every session starts on the same cycle.

@@ -58,7 +58,7 @@ TEST(MissedCycles, AreSkippedAndCountedNeverReplayedInABurst) {
   const config::RigConfig config = testing::quiet_rig();
   RigConnection io = connect_rig(config, {BackendChoice::simulated, {}, /*virtual_time=*/true});
   DaemonSettings settings = daemon_settings_from_config(config);
-  settings.recorder.logs_dir = dir.path;
+  settings.recorder.logs_dir = dir.path();
   settings.recorder.motor_device = bridge::format_trace_device_line(io.motor->device_info());
   settings.recorder.encoder_device = bridge::format_trace_device_line(io.encoder->device_info());
   settings.loop.wait_when_queue_full = true;

@@ -46,7 +46,7 @@ struct Rig {
     motor = std::make_unique<HookedLink>(*io.motor_link);
     encoder = std::make_unique<HookedLink>(*io.encoder_link);
     settings = daemon_settings_from_config(config);
-    settings.recorder.logs_dir = dir.path / "logs";
+    settings.recorder.logs_dir = dir.path() / "logs";
     settings.recorder.motor_device = bridge::format_trace_device_line(io.motor->device_info());
     settings.recorder.encoder_device = bridge::format_trace_device_line(io.encoder->device_info());
     settings.loop.wait_when_queue_full = true;  // virtual time outruns the logger thread
@@ -331,7 +331,7 @@ TEST(SafetyPaths, ExceptionInTheLoopWritesTheZeroAfterItAndIsRethrown) {
 TEST(SafetyPaths, LogThatCannotBeCreatedStopsTheSessionWithTheMotorAtZero) {
   Rig rig;
   // A logs directory under a regular file can never be created.
-  const fs::path blocker = rig.dir.path / "not-a-directory";
+  const fs::path blocker = rig.dir.path() / "not-a-directory";
   std::ofstream(blocker) << "x";
   rig.settings.recorder.logs_dir = blocker / "logs";
   // A short queue keeps the loop within a few cycles of the logger, so the failure reaches it
@@ -361,7 +361,7 @@ struct DiskFullReport {
 
 TEST(SafetyPaths, DiskFullMidSessionStopsTheSessionKeepsWhatWasWrittenAndZeroesTheMotor) {
   TempDir dir("furuta-diskfull");
-  const fs::path logs = dir.path / "logs";
+  const fs::path logs = dir.path() / "logs";
   session_log::testing::Pipe pipe;
   // A file size limit makes the log's writes fail with EFBIG, which the writer takes as a full
   // disk; it must apply to this session only, hence the child process.

@@ -7,8 +7,12 @@
 #include <fstream>
 #include <string>
 
+#include "temp_dir.hpp"
+
 namespace furuta::bridge {
 namespace {
+
+using furuta::testing::TempDir;
 
 namespace fs = std::filesystem;
 
@@ -65,23 +69,6 @@ void expect_same(const UsbTrace& a, const UsbTrace& b) {
     }
   }
 }
-
-// A fresh directory per test, removed afterwards.
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (fs::temp_directory_path() / "furuta_trace_XXXXXX").string();
-    path_ = ::mkdtemp(tmpl.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 TEST(UsbTrace, FormatsTheDocumentedText) {
   EXPECT_EQ(format_usb_trace(sample_trace()), kSampleText);
