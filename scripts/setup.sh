@@ -15,6 +15,8 @@ packages=(
   libeigen3-dev libboost-dev libliquid-dev libmpfr-dev libgmp-dev libtbb-dev
   # configuration, CLI, service
   libtomlplusplus-dev libcli11-dev libsystemd-dev systemd
+  # tests: network namespaces for LCM over UDP multicast
+  iproute2
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
 )
