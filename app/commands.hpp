@@ -6,6 +6,7 @@
 #include <iosfwd>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace furuta::app {
 
@@ -55,5 +56,17 @@ int run_log_export_csv_command(const std::filesystem::path& log, const std::file
 // logged ones: 0 when identical.
 int run_replay_command(const std::filesystem::path& log, const std::filesystem::path& config_path,
                        std::ostream& out, std::ostream& err);
+
+// --- identification ---
+struct IdentifyCommandOptions {
+  std::vector<std::filesystem::path> logs;  // session logs to fit
+  std::filesystem::path validate;           // optional held-out session log
+  std::filesystem::path config_path;        // empty: the configuration carried by the first log
+  std::filesystem::path output_dir = "identification";
+  double cutoff_hz = 5.0;
+};
+// Prints Table I (and the held-out RMSE), writes results.json, table.txt and SVG figures.
+int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
+                         std::ostream& err);
 
 }  // namespace furuta::app

@@ -70,6 +70,22 @@ int main(int argc, char** argv) {
   replay_cmd->add_option("LOG", log_path)->required()->check(CLI::ExistingFile);
   replay_cmd->add_option("--config", replay_config, "Override the configuration the log carries");
 
+  furuta::app::IdentifyCommandOptions identify;
+  CLI::App* identify_cmd =
+      app.add_subcommand("identify", "Least-squares identification (Table I) of session logs");
+  identify_cmd->add_option("LOG", identify.logs, "Session logs to fit")
+      ->required()
+      ->check(CLI::ExistingFile);
+  identify_cmd->add_option("--validate", identify.validate, "A held-out session log")
+      ->check(CLI::ExistingFile);
+  identify_cmd
+      ->add_option("--config", identify.config_path,
+                   "Rig configuration (default: the one the first log carries)")
+      ->check(CLI::ExistingFile);
+  identify_cmd->add_option("-o,--output", identify.output_dir, "Directory for results and figures");
+  identify_cmd->add_option("--cutoff", identify.cutoff_hz, "Low-pass cut-off [Hz]")
+      ->check(CLI::Range(0.1, 30.0));
+
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -101,6 +117,7 @@ int main(int argc, char** argv) {
       return furuta::app::run_replay_command(log_path, replay_config, std::cout, std::cerr);
     }
     if (*devices_cmd) return furuta::app::run_devices_command(devices, std::cout, std::cerr);
+    if (*identify_cmd) return furuta::app::run_identify_command(identify, std::cout, std::cerr);
   } catch (const furuta::config::ConfigError& e) {
     std::cerr << "furuta: " << e.what() << "\n";
     return 2;

@@ -129,34 +129,44 @@ StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) no
   return StopReason::none;
 }
 
+bool CommandValidator::Bucket::take(double per_second, std::int64_t now_ns) {
+  if (tokens < 0.0) {
+    tokens = per_second;
+    last_refill_ns = now_ns;
+  } else if (now_ns > last_refill_ns) {
+    // Unsigned difference: the subtraction cannot overflow whatever the two stamps are.
+    const auto elapsed_ns =
+        static_cast<std::uint64_t>(now_ns) - static_cast<std::uint64_t>(last_refill_ns);
+    tokens = std::min(per_second, tokens + static_cast<double>(elapsed_ns) * per_second / 1e9);
+    last_refill_ns = now_ns;
+  }
+  // The slack absorbs rounding in refills summed over many small intervals.
+  constexpr double kSlack = 1e-9;
+  if (tokens + kSlack < 1.0) return false;
+  tokens = std::max(0.0, tokens - 1.0);
+  return true;
+}
+
 CommandDecision CommandValidator::validate(const rig_command_t& command, std::int64_t now_ns) {
   // An e-stop must get through whatever else is flooding the channel, so it neither needs nor
   // spends a token.
   if (command.kind == rig_command_t::KIND_ESTOP) return {true, {}};
 
-  // Everything else spends a token before being looked at, so a flood of garbage is throttled too.
-  const double capacity = std::max(0, limits_.max_commands_per_s);
-  if (tokens_ < 0.0) {
-    tokens_ = capacity;
-    last_refill_ns_ = now_ns;
-  } else if (now_ns > last_refill_ns_) {
-    // Unsigned difference: the subtraction cannot overflow whatever the two stamps are.
-    const auto elapsed_ns =
-        static_cast<std::uint64_t>(now_ns) - static_cast<std::uint64_t>(last_refill_ns_);
-    tokens_ = std::min(capacity, tokens_ + static_cast<double>(elapsed_ns) * capacity / 1e9);
-    last_refill_ns_ = now_ns;
+  if (command.kind == rig_command_t::KIND_STATUS_REQUEST) {
+    if (!status_requests_.take(std::max(0, limits_.max_status_requests_per_s), now_ns)) {
+      return {false, "rate limit: more than " + std::to_string(limits_.max_status_requests_per_s) +
+                         " status requests per second"};
+    }
+    return {true, {}};
   }
-  // The slack absorbs rounding in refills summed over many small intervals.
-  constexpr double kSlack = 1e-9;
-  if (tokens_ + kSlack < 1.0) {
+  // Everything else spends a token before being looked at, so a flood of garbage is throttled too.
+  if (!commands_.take(std::max(0, limits_.max_commands_per_s), now_ns)) {
     return {false, "rate limit: more than " + std::to_string(limits_.max_commands_per_s) +
                        " commands per second"};
   }
-  tokens_ = std::max(0.0, tokens_ - 1.0);
 
   switch (command.kind) {
     case rig_command_t::KIND_STOP:
-    case rig_command_t::KIND_STATUS_REQUEST:
       return {true, {}};
     case rig_command_t::KIND_START_SESSION: {
       auto problem = check_start_session(command, limits_);

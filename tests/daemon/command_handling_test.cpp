@@ -246,22 +246,27 @@ TEST(CommandHandling, AFloodIsRateLimitedAndAnEstopAlwaysGetsThrough) {
   rig.step_cycles(2);
   ASSERT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
 
-  // Time stands still: the bucket (5 commands, one spent on the start) does not refill.
+  // Time stands still: the bucket (5 commands, one spent on the start) does not refill. The flood
+  // is of bad start commands: the first four are looked at (and refused for their profile), the
+  // rest are refused unread.
+  furuta::rig_command_t bad_start = testing::start_command("bang_bang", 0.3, 30.0);
+  bad_start.profile = "square";
   std::vector<std::int64_t> flood;
-  for (int i = 0; i < 6; ++i) flood.push_back(rig.send(status_request()));
+  for (int i = 0; i < 6; ++i) flood.push_back(rig.send(bad_start));
   const std::int64_t estop = rig.send(testing::simple_command(rig_command_t::KIND_ESTOP));
-  for (int i = 0; i < 6; ++i) flood.push_back(rig.send(status_request()));
+  for (int i = 0; i < 6; ++i) flood.push_back(rig.send(bad_start));
 
-  int accepted = 0;
+  int looked_at = 0;
   for (const std::int64_t id : flood) {
     const rig_status_t reply = rig.inbox.reply_to(id);
-    if (reply.request_accepted) {
-      ++accepted;
+    EXPECT_FALSE(reply.request_accepted);
+    if (reply.request_reason.rfind("profile", 0) == 0) {
+      ++looked_at;
       continue;
     }
     EXPECT_EQ(reply.request_reason, "rate limit: more than 5 commands per second");
   }
-  EXPECT_EQ(accepted, 4);
+  EXPECT_EQ(looked_at, 4);
   const rig_status_t estop_reply = rig.inbox.reply_to(estop);
   EXPECT_TRUE(estop_reply.request_accepted) << estop_reply.request_reason;
 

@@ -101,7 +101,7 @@ TEST(CommandValidator, TheBucketStartsFullAndRefillsAtTheConfiguredRate) {
 
 TEST(CommandValidator, ASteadyStreamGetsTheConfiguredRate) {
   CommandValidator validator{CommandLimits{}};
-  const auto status = command_of(rig_command_t::KIND_STATUS_REQUEST);
+  const auto status = command_of(rig_command_t::KIND_STOP);
   int accepted = 0;
   for (std::int64_t t = 0; t <= 10 * kSecond; t += 100'000'000) {  // 10 per second for 10 s
     accepted += validator.validate(status, kStart + t).accepted ? 1 : 0;
@@ -113,6 +113,18 @@ TEST(CommandValidator, ASteadyStreamGetsTheConfiguredRate) {
     steady += at_rate.validate(status, kStart + t).accepted ? 1 : 0;
   }
   EXPECT_EQ(steady, 500);
+}
+
+TEST(CommandValidator, StatusRequestsHaveTheirOwnBucketAndCannotLockOutAStop) {
+  CommandValidator validator{CommandLimits{}};
+  const auto status = command_of(rig_command_t::KIND_STATUS_REQUEST);
+  const auto stop = command_of(rig_command_t::KIND_STOP);
+  int accepted = 0;
+  for (int i = 0; i < 30; ++i) accepted += validator.validate(status, kStart).accepted ? 1 : 0;
+  EXPECT_EQ(accepted, 20);  // the status bucket's burst
+  const CommandDecision refused = validator.validate(status, kStart);
+  EXPECT_EQ(refused.reason, "rate limit: more than 20 status requests per second");
+  EXPECT_TRUE(validator.validate(stop, kStart).accepted);  // untouched by the polling
 }
 
 TEST(CommandValidator, EstopIsNeverRateLimitedAndSpendsNoToken) {

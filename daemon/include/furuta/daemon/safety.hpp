@@ -57,8 +57,9 @@ StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) no
 struct CommandLimits {
   double max_amplitude_duty = 0.5;
   double max_duration_s = 600.0;
-  double max_arm_switch_rad = 2.4;  // bang-bang thresholds must sit inside the safety limit
-  int max_commands_per_s = 5;       // token bucket, burst of the same size
+  double max_arm_switch_rad = 2.4;     // bang-bang thresholds must sit inside the safety limit
+  int max_commands_per_s = 5;          // token bucket, burst of the same size
+  int max_status_requests_per_s = 20;  // a bucket of their own
   int max_label_chars = 64;
 };
 
@@ -75,9 +76,17 @@ class CommandValidator {
   CommandDecision validate(const furuta::rig_command_t& command, std::int64_t now_ns);
 
  private:
+  // A token bucket: `per_second` tokens a second, bursts of that size, full at first use.
+  struct Bucket {
+    double tokens = -1.0;
+    std::int64_t last_refill_ns = 0;
+    bool take(double per_second, std::int64_t now_ns);
+  };
   CommandLimits limits_;
-  double tokens_ = -1.0;  // filled on first use
-  std::int64_t last_refill_ns_ = 0;
+  Bucket commands_;
+  // Status requests change nothing, so polling them has its own, larger bucket and cannot lock out
+  // start and stop.
+  Bucket status_requests_;
 };
 
 // The excitation for an accepted START_SESSION: the command's profile, amplitude, duration and seed

@@ -1,0 +1,74 @@
+#pragma once
+// Data from other rigs and loggers (MATLAB exports, other programs) as CSV, mapped by a small
+// import spec (TOML) onto the quantities identification needs.
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace furuta::identification {
+
+enum class AngleUnit { rad, deg, counts };
+enum class InputKind { duty, voltage, torque };
+enum class PendulumZero { down, up };
+
+struct CsvColumn {
+  std::string name;    // header name (or 1-based index as text when the file has no header)
+  double scale = 1.0;  // multiplied after unit conversion (e.g. -1 for a flipped encoder)
+};
+
+// [csv] section of an import spec, e.g.
+//   [csv]
+//   delimiter = ","          time = "t"        time_unit = "s" | "ms" | "us"
+//   arm_angle = "theta"      pendulum_angle = "alpha"     angle_unit = "deg" | "rad" | "counts"
+//   arm_counts_per_rev = 4096   pendulum_counts_per_rev = 4096     (angle_unit = "counts")
+//   pendulum_zero = "up" | "down"
+//   input = "u"   input_kind = "voltage" | "duty" | "torque"
+struct CsvImportSpec {
+  char delimiter = ',';
+  bool has_header = true;
+  CsvColumn time, arm_angle, pendulum_angle, input;
+  double time_scale_s = 1.0;  // 1 s, 1e-3 ms, 1e-6 us
+  AngleUnit angle_unit = AngleUnit::rad;
+  double arm_counts_per_rev = 0, pendulum_counts_per_rev = 0;
+  PendulumZero pendulum_zero = PendulumZero::down;
+  InputKind input_kind = InputKind::duty;
+};
+
+// Parses the [csv] table of an import spec file; errors name file, line and field (ConfigError).
+CsvImportSpec load_csv_import_spec(const std::filesystem::path& path);
+CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& source_name);
+
+// A recording in the project's conventions: seconds, radians, pendulum zero hanging down, on a
+// uniform time grid.
+struct ImportedSeries {
+  double sample_period_s = 0;
+  std::vector<double> t_s, q1_rad, q2_rad;
+  std::vector<double> input;  // duty [-1, 1], volts, or N m at the arm, per input_kind
+  InputKind input_kind = InputKind::duty;
+  std::vector<std::string>
+      warnings;  // e.g. "irregular time stamps (max gap 23 ms): resampled to 10 ms"
+};
+
+class CsvImportError : public std::runtime_error {
+ public:
+  CsvImportError(const std::string& file, int line, const std::string& field,
+                 const std::string& problem);
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+  const std::string& field() const { return field_; }
+
+ private:
+  std::string file_;
+  int line_;
+  std::string field_;
+};
+
+// Reads a CSV per the spec. Sample period = median time step; when time steps vary by more than 1 %
+// of it, the series is resampled (linear interpolation) onto the uniform grid and a warning says
+// so. Errors (missing column, non-numeric cell, non-increasing time, too few rows) name file, line
+// and column.
+ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec& spec);
+
+}  // namespace furuta::identification

@@ -1,0 +1,62 @@
+#pragma once
+// The whole LSMI identification of one or more experiments, plus held-out validation: what
+// `furuta identify` prints and writes (Table I, results.json, figures).
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "furuta/identification/lsmi.hpp"
+#include "furuta/identification/preprocessing.hpp"
+
+namespace furuta::identification {
+
+struct IdentifyOptions {
+  PreprocessOptions preprocess;
+  LsmiOptions lsmi;  // trim_samples 0 here means: the filters' edge length
+};
+
+struct ValidationResult {
+  std::string name;
+  TorqueFit fit;  // with the combined LSMI estimate
+  JointSeries series;
+};
+
+struct Identification {
+  std::vector<RawExperiment> raw;
+  std::vector<JointSeries> processed;
+  std::vector<LsmiResult> per_experiment;  // Table I: one column each
+  LsmiResult combined;                     // and all together
+  std::optional<ParameterVector> nominal;  // CAD values, from the configuration
+  std::optional<ParameterVector> truth;    // simulated sessions: the simulated rig's parameters
+  std::optional<ValidationResult> validation;
+  std::vector<std::string> warnings;
+};
+
+Identification identify(const std::vector<RawExperiment>& experiments,
+                        const std::optional<RawExperiment>& validation,
+                        const IdentifyOptions& options, const bridge::MotorData& motor,
+                        const VoltageMotor& voltage_motor = {});
+
+// Table I as text: parameter, unit, one column per experiment, all, (CAD), (truth); with standard
+// deviations.
+std::string format_table_one(const Identification& id);
+
+struct InputFile {
+  std::string path;
+  std::string sha256;
+};
+// Every figure above as JSON, with the software version and the inputs' checksums.
+std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
+                         const std::string& software_version);
+
+// SVG figures: measured signals with their uncertainty bands (Fig. 2/3), measured vs predicted
+// torque on the held-out session (Fig. 5).
+std::string svg_signals(const RawExperiment& raw, const JointSeries& processed,
+                        double angle_resolution_rad);
+std::string svg_torque_validation(const ValidationResult& validation);
+
+// Hex SHA-256 of a file (inputs are identified by content in results.json).
+std::string sha256_file(const std::string& path);
+
+}  // namespace furuta::identification

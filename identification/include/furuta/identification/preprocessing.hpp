@@ -1,0 +1,55 @@
+#pragma once
+// From a recording to the joint series the LSMI needs (paper section III.A): zero-phase low-pass of
+// the angles, velocities and accelerations by the FIR differentiator, torque by eq. 4 (duty) or the
+// DC-motor equation (voltage), filtered like the rest.
+
+#include <string>
+#include <vector>
+
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/identification/csv_import.hpp"
+#include "furuta/identification/lsmi.hpp"
+#include "furuta/session_log/session_log.hpp"
+
+namespace furuta::identification {
+
+// One experiment as recorded: uniform samples of the angles and the input.
+struct RawExperiment {
+  std::string name;
+  double sample_period_s = 0;
+  std::vector<double> t_s, q1, q2, input;
+  InputKind input_kind = InputKind::duty;
+  std::vector<std::string> warnings;
+};
+
+// The samples of a session log: q1, q2 as the daemon computed them, the duty the board applied
+// (its echo, not the command). Warns about lost reports and overruns in the session.
+RawExperiment experiment_from_log(const session_log::SessionLog& log);
+RawExperiment experiment_from_csv(const ImportedSeries& series, const std::string& name);
+
+// A voltage-driven motor (other rigs): tau = ratio * efficiency * k_t (V - k_e omega_motor) / R.
+struct VoltageMotor {
+  double torque_constant_nm_per_a = 0;
+  double back_emf_v_s_per_rad = 0;
+  double resistance_ohm = 0;
+  double gear_ratio = 1;
+  double efficiency = 1;
+};
+
+struct PreprocessOptions {
+  int butterworth_order = 8;
+  double cutoff_hz = 5.0;
+  int differentiator_taps = 31;  // odd
+  double differentiator_passband_hz = 5.0;
+  double differentiator_stopband_hz = 10.0;
+};
+
+// Filters and differentiates; `motor` gives eq. 4 for duty input, `voltage_motor` the DC-motor
+// form.
+JointSeries preprocess(const RawExperiment& experiment, const PreprocessOptions& options,
+                       const bridge::MotorData& motor, const VoltageMotor& voltage_motor = {});
+
+// How many samples at each end the filters disturb (to trim before fitting).
+std::size_t edge_samples(const PreprocessOptions& options);
+
+}  // namespace furuta::identification

@@ -1,0 +1,598 @@
+#include "furuta/identification/csv_import.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <fstream>
+#include <iomanip>
+#include <numbers>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string_view>
+
+#include "furuta/config/rig_config.hpp"
+
+namespace furuta::identification {
+
+namespace {
+
+using config::ConfigError;
+
+// Same shape as ConfigError's message, so a user sees one style for every located problem.
+std::string located(const std::string& file, int line, const std::string& field,
+                    const std::string& problem) {
+  return file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
+         (field.empty() ? std::string() : field + ": ") + problem;
+}
+
+// Shortest text that reads back as the same double: two close time stamps must not print alike.
+std::string exact(double v) {
+  std::array<char, 32> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), v);
+  return std::string(buffer.data(), result.ptr);
+}
+
+std::string milliseconds(double seconds) {
+  std::ostringstream out;
+  out << std::setprecision(4) << seconds * 1e3 << " ms";
+  return out.str();
+}
+
+// A 1-based column index written as text ("3"); nullopt when the text is anything else.
+std::optional<std::size_t> column_index(const std::string& text) {
+  std::size_t index = 0;
+  const char* end = text.data() + text.size();
+  const auto result = std::from_chars(text.data(), end, index);
+  if (text.empty() || result.ec != std::errc() || result.ptr != end || index < 1 ||
+      index > 100'000) {
+    return std::nullopt;
+  }
+  return index;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The import spec (TOML)
+
+// Reads the [csv] table, remembering which keys were used so the rest can be reported as unknown
+// (the rig configuration's rule: a mistyped key must never become a silent default).
+class SpecTable {
+ public:
+  SpecTable(const toml::table& table, const std::string& file)
+      : table_(table), file_(file), line_(line_of(&table)) {}
+
+  const toml::node* get(const std::string& key) {
+    used_.insert(key);
+    return table_.get(key);
+  }
+  bool has(const std::string& key) const { return table_.contains(key); }
+
+  std::string required_text(const std::string& key, const std::string& what) {
+    const toml::node* node = get(key);
+    if (!node) fail(key, nullptr, "missing: " + what);
+    auto s = node->as_string();
+    if (!s) fail(key, node, "must be a string");
+    if (s->get().empty()) fail(key, node, "must not be empty");
+    return s->get();
+  }
+  std::string text(const std::string& key, const std::string& fallback) {
+    const toml::node* node = get(key);
+    if (!node) return fallback;
+    auto s = node->as_string();
+    if (!s) fail(key, node, "must be a string");
+    return s->get();
+  }
+  // Every choice is required: units, the pendulum's zero and the input's kind change every number,
+  // so none of them is guessed.
+  std::string choice(const std::string& key, std::initializer_list<const char*> allowed) {
+    std::string list;
+    for (const char* a : allowed) list += list.empty() ? a : std::string(", ") + a;
+    const std::string value = required_text(key, "one of " + list);
+    for (const char* a : allowed) {
+      if (value == a) return value;
+    }
+    fail(key, table_.get(key), "'" + value + "' is not one of: " + list);
+  }
+  std::optional<double> number(const std::string& key) {
+    const toml::node* node = get(key);
+    if (!node) return std::nullopt;
+    double value = 0;
+    if (auto i = node->as_integer()) {
+      value = static_cast<double>(i->get());
+    } else if (auto f = node->as_floating_point()) {
+      value = f->get();
+    } else {
+      fail(key, node, "must be a number");
+    }
+    if (!std::isfinite(value)) fail(key, node, "must be finite");
+    return value;
+  }
+  bool boolean(const std::string& key, bool fallback) {
+    const toml::node* node = get(key);
+    if (!node) return fallback;
+    auto b = node->as_boolean();
+    if (!b) fail(key, node, "must be true or false");
+    return b->get();
+  }
+  void reject_unknown_keys() const {
+    for (auto&& [key, node] : table_) {
+      const std::string name(key.str());
+      if (!used_.count(name)) fail(name, &node, "unknown key");
+    }
+  }
+
+  // A missing key is reported at the [csv] line: the place to add it.
+  [[noreturn]] void fail(const std::string& key, const toml::node* node,
+                         const std::string& problem) const {
+    throw ConfigError(file_, node ? line_of(node) : line_, "csv." + key, problem);
+  }
+  const toml::node* node(const std::string& key) const { return table_.get(key); }
+
+ private:
+  static int line_of(const toml::node* node) { return static_cast<int>(node->source().begin.line); }
+
+  const toml::table& table_;
+  const std::string& file_;
+  int line_;
+  std::set<std::string> used_;
+};
+
+CsvColumn read_column(SpecTable& s, const std::string& key, bool has_header, bool has_scale,
+                      const char* what) {
+  CsvColumn c;
+  c.name = s.required_text(key, what);
+  if (!has_header) {
+    const auto index = column_index(c.name);
+    if (!index) {
+      s.fail(
+          key, s.node(key),
+          "'" + c.name + "' is not a 1-based column index (has_header = false): write e.g. \"2\"");
+    }
+    c.name = std::to_string(*index);  // "02" and "2" are the same column
+  }
+  if (has_scale) {
+    const std::string scale_key = key + "_scale";
+    c.scale = s.number(scale_key).value_or(1.0);
+    if (c.scale == 0) s.fail(scale_key, s.node(scale_key), "must not be 0");
+  }
+  return c;
+}
+
+}  // namespace
+
+CsvImportError::CsvImportError(const std::string& file, int line, const std::string& field,
+                               const std::string& problem)
+    : std::runtime_error(located(file, line, field, problem)),
+      file_(file),
+      line_(line),
+      field_(field) {}
+
+CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& source_name) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    throw ConfigError(source_name, static_cast<int>(e.source().begin.line), "",
+                      std::string(e.description()));
+  }
+  const toml::node* csv_node = root.get("csv");
+  if (csv_node && !csv_node->is_table()) {
+    throw ConfigError(source_name, static_cast<int>(csv_node->source().begin.line), "csv",
+                      "must be a table ([csv])");
+  }
+  // Other tables may hold other readers' settings (a motor model for the rig, say); a bare key at
+  // the top belongs to nobody and is most likely a [csv] key written above the table.
+  for (auto&& [key, node] : root) {
+    if (!node.is_table()) {
+      throw ConfigError(source_name, static_cast<int>(node.source().begin.line),
+                        std::string(key.str()), "unknown key (the import keys belong in [csv])");
+    }
+  }
+  if (!csv_node) throw ConfigError(source_name, 0, "csv", "missing table [csv]");
+
+  SpecTable s(*csv_node->as_table(), source_name);
+  CsvImportSpec spec;
+
+  const std::string delimiter = s.text("delimiter", ",");
+  if (delimiter.size() != 1) {
+    s.fail("delimiter", s.node("delimiter"),
+           "must be a single ASCII character, e.g. \",\", \";\" or \"\\t\"");
+  }
+  spec.delimiter = delimiter[0];
+  const auto d = static_cast<unsigned char>(spec.delimiter);
+  // Characters that occur inside numbers or quoted fields would split them.
+  if (d >= 0x80 || std::isalnum(d) ||
+      std::string_view("\".+-\r\n").find(spec.delimiter) != std::string_view::npos) {
+    s.fail("delimiter", s.node("delimiter"),
+           "'" + delimiter + "' cannot separate fields (it occurs in numbers or quoting)");
+  }
+  spec.has_header = s.boolean("has_header", true);
+
+  const bool h = spec.has_header;
+  spec.time = read_column(s, "time", h, false, "the time column");
+  spec.arm_angle = read_column(s, "arm_angle", h, true, "the arm angle column");
+  spec.pendulum_angle = read_column(s, "pendulum_angle", h, true, "the pendulum angle column");
+  spec.input = read_column(s, "input", h, true, "the input column (duty, voltage or torque)");
+  {
+    const std::array<std::pair<const char*, const CsvColumn*>, 4> columns = {{
+        {"time", &spec.time},
+        {"arm_angle", &spec.arm_angle},
+        {"pendulum_angle", &spec.pendulum_angle},
+        {"input", &spec.input},
+    }};
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      for (std::size_t j = 0; j < i; ++j) {
+        if (columns[i].second->name == columns[j].second->name) {
+          s.fail(columns[i].first, s.node(columns[i].first),
+                 "same column as " + std::string(columns[j].first) + " ('" +
+                     columns[i].second->name + "')");
+        }
+      }
+    }
+  }
+
+  const std::string time_unit = s.choice("time_unit", {"s", "ms", "us"});
+  spec.time_scale_s = time_unit == "ms" ? 1e-3 : time_unit == "us" ? 1e-6 : 1.0;
+
+  const std::string angle_unit = s.choice("angle_unit", {"rad", "deg", "counts"});
+  spec.angle_unit = angle_unit == "deg"      ? AngleUnit::deg
+                    : angle_unit == "counts" ? AngleUnit::counts
+                                             : AngleUnit::rad;
+  for (const char* key : {"arm_counts_per_rev", "pendulum_counts_per_rev"}) {
+    const std::optional<double> cpr = s.number(key);
+    if (spec.angle_unit != AngleUnit::counts) {
+      // A resolution that does nothing hints the unit is not what the writer meant.
+      if (cpr) s.fail(key, s.node(key), "only applies when angle_unit = \"counts\"");
+      continue;
+    }
+    if (!cpr) s.fail(key, nullptr, "missing: required when angle_unit = \"counts\"");
+    if (*cpr <= 0) s.fail(key, s.node(key), "must be > 0");
+    (std::string_view(key) == "arm_counts_per_rev" ? spec.arm_counts_per_rev
+                                                   : spec.pendulum_counts_per_rev) = *cpr;
+  }
+
+  spec.pendulum_zero =
+      s.choice("pendulum_zero", {"down", "up"}) == "up" ? PendulumZero::up : PendulumZero::down;
+  const std::string kind = s.choice("input_kind", {"duty", "voltage", "torque"});
+  spec.input_kind = kind == "voltage"  ? InputKind::voltage
+                    : kind == "torque" ? InputKind::torque
+                                       : InputKind::duty;
+  s.reject_unknown_keys();
+  return spec;
+}
+
+CsvImportSpec load_csv_import_spec(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path.string(), 0, "", "cannot open the file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError(path.string(), 0, "", "cannot read the file");
+  return parse_csv_import_spec(text.str(), path.string());
+}
+
+// ---------------------------------------------------------------------------------------------
+// The CSV file
+
+namespace {
+
+constexpr std::size_t kMinRows = 16;
+constexpr double kIrregularTolerance = 0.01;  // of the median step
+// A grid much denser than the recording means a gap of many periods (files joined, logger paused):
+// interpolating across it would invent data.
+constexpr std::size_t kMaxResampleGrowth = 4;
+
+bool blank(std::string_view line) {
+  return line.find_first_not_of(" \t") == std::string_view::npos;
+}
+
+// Splits one line into fields. Quoted fields ("a,b", "" for a quote) lose their quotes; blanks
+// around a field are dropped unless the delimiter is itself a blank. False on an open quote.
+bool split_fields(std::string_view line, char delimiter, std::vector<std::string>& fields) {
+  fields.clear();
+  std::string field;
+  bool in_quotes = false, quoted = false;
+  auto is_blank = [delimiter](char c) { return (c == ' ' || c == '\t') && c != delimiter; };
+  auto finish = [&] {
+    if (!quoted) {
+      const auto first = std::find_if_not(field.begin(), field.end(), is_blank);
+      const auto last = std::find_if_not(field.rbegin(), field.rend(), is_blank).base();
+      field = first < last ? std::string(first, last) : std::string();
+    }
+    fields.push_back(std::move(field));
+    field.clear();
+    quoted = false;
+  };
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (in_quotes) {
+      if (c != '"') {
+        field += c;
+      } else if (i + 1 < line.size() && line[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else {
+        in_quotes = false;
+      }
+    } else if (c == delimiter) {
+      finish();
+    } else if (c == '"' && !quoted && std::all_of(field.begin(), field.end(), is_blank)) {
+      field.clear();
+      in_quotes = quoted = true;
+    } else if (!(quoted && is_blank(c))) {
+      field += c;
+    }
+  }
+  if (in_quotes) return false;
+  finish();
+  return true;
+}
+
+// Strict: the whole cell is one finite number ("1e-3", "-2", "+0.5"); nothing else is guessed.
+std::optional<double> parse_number(std::string_view cell) {
+  if (cell.starts_with('+')) {
+    cell.remove_prefix(1);  // from_chars takes no '+', but loggers write one
+    if (cell.starts_with('+') || cell.starts_with('-')) return std::nullopt;
+  }
+  double value = 0;
+  const char* end = cell.data() + cell.size();
+  const auto result = std::from_chars(cell.data(), end, value);
+  if (result.ec != std::errc() || result.ptr != end || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+double angle_factor(AngleUnit unit, double counts_per_rev) {
+  switch (unit) {
+    case AngleUnit::deg:
+      return std::numbers::pi / 180.0;
+    case AngleUnit::counts:
+      return 2.0 * std::numbers::pi / counts_per_rev;
+    case AngleUnit::rad:
+      break;
+  }
+  return 1.0;
+}
+
+// A spec built in code skips the TOML checks; the import still refuses one it cannot honour.
+void check_spec(const CsvImportSpec& spec) {
+  auto bad = [](const std::string& what) {
+    throw std::invalid_argument("CSV import spec: " + what);
+  };
+  for (const CsvColumn* c : {&spec.time, &spec.arm_angle, &spec.pendulum_angle, &spec.input}) {
+    if (c->name.empty()) bad("a column has no name");
+    if (!spec.has_header && !column_index(c->name)) {
+      bad("column '" + c->name + "' is not a 1-based index (has_header = false)");
+    }
+    if (!std::isfinite(c->scale) || c->scale == 0) bad("column '" + c->name + "' has scale 0");
+  }
+  if (!(spec.time_scale_s > 0) || !std::isfinite(spec.time_scale_s))
+    bad("time_scale_s must be > 0");
+  if (spec.angle_unit == AngleUnit::counts &&
+      !(spec.arm_counts_per_rev > 0 && spec.pendulum_counts_per_rev > 0)) {
+    bad("counts per revolution must be > 0 when angle_unit = counts");
+  }
+}
+
+struct Channel {
+  const char* role;
+  const CsvColumn* column;
+  std::size_t index = 0;  // 0-based field
+  std::string label;      // what an error calls the column
+};
+
+double median(std::vector<double> v) {
+  const std::size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+  const double upper = v[mid];
+  if (v.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid));
+  return 0.5 * (lower + upper);
+}
+
+// Linear interpolation of (t, x) at the increasing times `grid`, all within [t.front(), t.back()].
+std::vector<double> interpolate(const std::vector<double>& t, const std::vector<double>& x,
+                                const std::vector<double>& grid) {
+  std::vector<double> out;
+  out.reserve(grid.size());
+  std::size_t j = 0;
+  for (const double tk : grid) {
+    while (j + 2 < t.size() && t[j + 1] <= tk) ++j;
+    const double w = (tk - t[j]) / (t[j + 1] - t[j]);
+    out.push_back(x[j] + w * (x[j + 1] - x[j]));
+  }
+  return out;
+}
+
+}  // namespace
+
+ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec& spec) {
+  check_spec(spec);
+  const std::string file = csv.string();
+  std::string text;
+  {
+    std::ifstream in(csv, std::ios::binary);
+    if (!in) throw CsvImportError(file, 0, "", "cannot open the file");
+    std::ostringstream buffer;
+    buffer << in.rdbuf();
+    if (in.bad()) throw CsvImportError(file, 0, "", "cannot read the file");
+    text = buffer.str();
+  }
+  std::string_view rest(text);
+  if (rest.starts_with("\xEF\xBB\xBF")) rest.remove_prefix(3);  // UTF-8 BOM (Excel, MATLAB)
+
+  std::vector<std::string_view> lines;  // lines[i] is line i + 1
+  while (!rest.empty()) {
+    const std::size_t end = rest.find('\n');
+    std::string_view line = rest.substr(0, end);
+    if (line.ends_with('\r')) line.remove_suffix(1);
+    lines.push_back(line);
+    rest = end == std::string_view::npos ? std::string_view() : rest.substr(end + 1);
+  }
+  while (!lines.empty() && blank(lines.back())) lines.pop_back();
+  std::size_t next = 0;
+  while (next < lines.size() && blank(lines[next])) ++next;
+
+  std::array<Channel, 4> channels = {{
+      {"time", &spec.time, 0, {}},
+      {"arm_angle", &spec.arm_angle, 0, {}},
+      {"pendulum_angle", &spec.pendulum_angle, 0, {}},
+      {"input", &spec.input, 0, {}},
+  }};
+  std::vector<std::string> fields;
+  if (spec.has_header) {
+    if (next == lines.size()) throw CsvImportError(file, 0, "", "the file is empty (no header)");
+    const int line_no = static_cast<int>(next + 1);
+    if (!split_fields(lines[next], spec.delimiter, fields)) {
+      throw CsvImportError(file, line_no, "", "unterminated quote in the header");
+    }
+    ++next;
+    for (Channel& ch : channels) {
+      const std::string& name = ch.column->name;
+      std::vector<std::size_t> found;
+      for (std::size_t i = 0; i < fields.size(); ++i) {
+        if (fields[i] == name) found.push_back(i);
+      }
+      if (found.empty()) {
+        std::string available;
+        for (const std::string& f : fields)
+          available += (available.empty() ? "\"" : ", \"") + f + "\"";
+        throw CsvImportError(
+            file, line_no, name,
+            std::string("no such column for ") + ch.role + "; the header has: " + available);
+      }
+      if (found.size() > 1) {
+        throw CsvImportError(file, line_no, name,
+                             "ambiguous: columns " + std::to_string(found[0] + 1) + " and " +
+                                 std::to_string(found[1] + 1) + " both have this name");
+      }
+      ch.index = found.front();
+      ch.label = name;
+    }
+  } else {
+    for (Channel& ch : channels) {
+      ch.index = *column_index(ch.column->name) - 1;
+      ch.label = "column " + ch.column->name;
+    }
+  }
+
+  std::array<std::vector<double>, 4> raw;
+  std::vector<int> row_line;
+  for (; next < lines.size(); ++next) {
+    const int line_no = static_cast<int>(next + 1);
+    if (blank(lines[next])) {
+      throw CsvImportError(file, line_no, "", "blank line inside the data");
+    }
+    if (!split_fields(lines[next], spec.delimiter, fields)) {
+      throw CsvImportError(file, line_no, "", "unterminated quote");
+    }
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      const Channel& ch = channels[c];
+      if (ch.index >= fields.size()) {
+        throw CsvImportError(
+            file, line_no, ch.label,
+            "missing: the row has only " + std::to_string(fields.size()) + " fields");
+      }
+      const std::optional<double> v = parse_number(fields[ch.index]);
+      if (!v) {
+        throw CsvImportError(file, line_no, ch.label,
+                             fields[ch.index].empty()
+                                 ? std::string("empty cell")
+                                 : "'" + fields[ch.index] + "' is not a finite number");
+      }
+      raw[c].push_back(*v);
+    }
+    const std::vector<double>& t = raw[0];
+    if (t.size() > 1 && !(t.back() > t[t.size() - 2])) {
+      throw CsvImportError(
+          file, line_no, channels[0].label,
+          "time does not increase (" + exact(t.back()) + " after " + exact(t[t.size() - 2]) + ")");
+    }
+    row_line.push_back(line_no);
+  }
+  const std::size_t n = row_line.size();
+  if (n < kMinRows) {
+    throw CsvImportError(
+        file, 0, "",
+        std::to_string(n) + " data rows; at least " + std::to_string(kMinRows) + " are needed");
+  }
+
+  ImportedSeries out;
+  out.input_kind = spec.input_kind;
+  out.t_s.reserve(n);
+  out.q1_rad.reserve(n);
+  out.q2_rad.reserve(n);
+  out.input.reserve(n);
+  const double arm_factor =
+      angle_factor(spec.angle_unit, spec.arm_counts_per_rev) * spec.arm_angle.scale;
+  const double pendulum_factor =
+      angle_factor(spec.angle_unit, spec.pendulum_counts_per_rev) * spec.pendulum_angle.scale;
+  // Upright-zero rigs report the angle from the top; the project's q2 is from hanging down. Not
+  // wrapped: a pendulum that swings over keeps a continuous angle, which differentiation needs.
+  const double pendulum_offset = spec.pendulum_zero == PendulumZero::up ? std::numbers::pi : 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    out.t_s.push_back(raw[0][i] * spec.time_scale_s);
+    out.q1_rad.push_back(raw[1][i] * arm_factor);
+    out.q2_rad.push_back(raw[2][i] * pendulum_factor + pendulum_offset);
+    out.input.push_back(raw[3][i] * spec.input.scale);
+  }
+
+  std::vector<double> steps(n - 1);
+  for (std::size_t i = 0; i + 1 < n; ++i) steps[i] = out.t_s[i + 1] - out.t_s[i];
+  const double period = median(steps);
+  std::size_t worst = 0;
+  for (std::size_t i = 1; i < steps.size(); ++i) {
+    if (std::abs(steps[i] - period) > std::abs(steps[worst] - period)) worst = i;
+  }
+  out.sample_period_s = period;
+
+  if (std::abs(steps[worst] - period) > kIrregularTolerance * period) {
+    const double span = out.t_s.back() - out.t_s.front();
+    // The small allowance keeps the last time stamp on the grid despite rounding in span / period.
+    const double intervals = std::floor(span / period + 1e-9);
+    const std::string where = "a step of " + milliseconds(steps[worst]) + " at line " +
+                              std::to_string(row_line[worst + 1]) + " against the median " +
+                              milliseconds(period);
+    if (intervals + 1 > static_cast<double>(kMaxResampleGrowth * n)) {
+      std::ostringstream count;
+      count << std::fixed << std::setprecision(0) << intervals + 1;
+      throw CsvImportError(file, row_line[worst + 1], channels[0].label,
+                           "time stamps too irregular to resample (" + where +
+                               "): a uniform grid would need " + count.str() + " samples for " +
+                               std::to_string(n) + " rows");
+    }
+    std::vector<double> grid(static_cast<std::size_t>(intervals) + 1);
+    for (std::size_t k = 0; k < grid.size(); ++k) {
+      grid[k] = std::min(out.t_s.front() + static_cast<double>(k) * period, out.t_s.back());
+    }
+    out.q1_rad = interpolate(out.t_s, out.q1_rad, grid);
+    out.q2_rad = interpolate(out.t_s, out.q2_rad, grid);
+    out.input = interpolate(out.t_s, out.input, grid);
+    out.t_s = std::move(grid);
+    std::ostringstream deviation;
+    deviation << std::setprecision(3) << 100.0 * std::abs(steps[worst] - period) / period;
+    out.warnings.push_back("irregular time stamps (largest deviation: " + where + ", " +
+                           deviation.str() + " % off): resampled by linear interpolation to " +
+                           milliseconds(period) + " (" + std::to_string(out.t_s.size()) +
+                           " samples from " + std::to_string(n) + " rows)");
+  }
+
+  if (period > 0.5 || period < 1e-5) {
+    out.warnings.push_back("sample period " + milliseconds(period) +
+                           " is unusual for a pendulum: is time_unit right?");
+  }
+  if (spec.input_kind == InputKind::duty) {
+    double peak = 0;
+    for (const double u : out.input) peak = std::max(peak, std::abs(u));
+    if (peak > 1.0) {
+      out.warnings.push_back("input_kind = duty but |input| reaches " + exact(peak) +
+                             " (duty is in [-1, 1]; a percentage needs input_scale = 0.01)");
+    }
+  }
+  return out;
+}
+
+}  // namespace furuta::identification

@@ -1,0 +1,314 @@
+#include "furuta/identification/identify.hpp"
+
+#include <glib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+namespace furuta::identification {
+
+Identification identify(const std::vector<RawExperiment>& experiments,
+                        const std::optional<RawExperiment>& validation,
+                        const IdentifyOptions& options, const bridge::MotorData& motor,
+                        const VoltageMotor& voltage_motor) {
+  if (experiments.empty()) throw std::invalid_argument("identify: no experiment given");
+  Identification id;
+  id.raw = experiments;
+  LsmiOptions lsmi = options.lsmi;
+  if (lsmi.trim_samples == 0) lsmi.trim_samples = edge_samples(options.preprocess);
+  for (const RawExperiment& e : experiments) {
+    for (const auto& w : e.warnings) id.warnings.push_back(w);
+    id.processed.push_back(preprocess(e, options.preprocess, motor, voltage_motor));
+  }
+  std::vector<const JointSeries*> all;
+  for (const JointSeries& s : id.processed) {
+    id.per_experiment.push_back(solve_lsmi({&s}, lsmi));
+    all.push_back(&s);
+  }
+  id.combined = solve_lsmi(all, lsmi);
+  for (std::size_t i = 0; i < id.per_experiment.size(); ++i) {
+    for (const auto& w : id.per_experiment[i].warnings) {
+      id.warnings.push_back(id.processed[i].name + ": " + w);
+    }
+  }
+  for (const auto& w : id.combined.warnings) id.warnings.push_back("all experiments: " + w);
+  if (validation) {
+    for (const auto& w : validation->warnings) id.warnings.push_back(w);
+    ValidationResult v;
+    v.name = validation->name;
+    v.series = preprocess(*validation, options.preprocess, motor, voltage_motor);
+    v.fit = torque_fit(v.series, id.combined.estimate, lsmi.trim_samples);
+    id.validation = std::move(v);
+  }
+  return id;
+}
+
+namespace {
+
+std::string sci(double v, int precision = 5) {
+  std::ostringstream s;
+  s << std::scientific << std::setprecision(precision) << v;
+  return s.str();
+}
+
+std::string json_number(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+std::string json_string(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    switch (c) {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string json_vector(const ParameterVector& v) {
+  std::string out = "{";
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    out += (k ? ", " : "") + json_string(kParameterNames[k]) + ": " + json_number(v[k]);
+  }
+  return out + "}";
+}
+
+std::string json_lsmi(const LsmiResult& r) {
+  std::string warnings = "[";
+  for (std::size_t i = 0; i < r.warnings.size(); ++i) {
+    warnings += (i ? ", " : "") + json_string(r.warnings[i]);
+  }
+  warnings += "]";
+  return "{\"estimate\": " + json_vector(r.estimate) + ", \"std_dev\": " + json_vector(r.std_dev) +
+         ", \"relative_sd\": " + json_vector(r.relative_sd) +
+         ", \"sigma_nm\": " + json_number(r.sigma) +
+         ", \"condition_number\": " + json_number(r.condition_number) +
+         ", \"rank\": " + std::to_string(r.rank) + ", \"rows\": " + std::to_string(r.rows) +
+         ", \"warnings\": " + warnings + "}";
+}
+
+}  // namespace
+
+std::string format_table_one(const Identification& id) {
+  std::ostringstream out;
+  const int w = 26;
+  out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
+  for (const JointSeries& s : id.processed) {
+    std::string name = s.name.size() > 24 ? s.name.substr(s.name.size() - 24) : s.name;
+    out << std::setw(w) << name;
+  }
+  out << std::setw(w) << "all experiments";
+  if (id.nominal) out << std::setw(13) << "CAD";
+  if (id.truth) out << std::setw(13) << "truth";
+  out << "\n";
+  for (std::size_t k = 0; k < kParameterCount; ++k) {
+    out << std::left << std::setw(6) << kParameterNames[k] << std::setw(13) << kParameterUnits[k];
+    auto cell = [&](const LsmiResult& r) {
+      return sci(r.estimate[k], 4) + " +-" + sci(r.std_dev[k], 1);
+    };
+    for (const LsmiResult& r : id.per_experiment) out << std::setw(w) << cell(r);
+    out << std::setw(w) << cell(id.combined);
+    if (id.nominal)
+      out << std::setw(13) << ((*id.nominal)[k] != 0 ? sci((*id.nominal)[k], 4) : "-");
+    if (id.truth) out << std::setw(13) << sci((*id.truth)[k], 4);
+    out << "\n";
+  }
+  out << std::left << std::setw(19) << "condition number";
+  for (const LsmiResult& r : id.per_experiment) out << std::setw(w) << sci(r.condition_number, 2);
+  out << std::setw(w) << sci(id.combined.condition_number, 2) << "\n";
+  out << std::left << std::setw(19) << "residual sigma N m";
+  for (const LsmiResult& r : id.per_experiment) out << std::setw(w) << sci(r.sigma, 2);
+  out << std::setw(w) << sci(id.combined.sigma, 2) << "\n";
+  if (id.validation) {
+    out << "\nheld-out torque on " << id.validation->name << ": RMSE "
+        << sci(id.validation->fit.rmse_nm, 3) << " N m = " << std::fixed << std::setprecision(2)
+        << id.validation->fit.rmse_percent_of_range
+        << " % of the torque range (the paper: 6.4 % with LSMI)\n";
+  }
+  for (const auto& warning : id.warnings) out << "warning: " << warning << "\n";
+  return out.str();
+}
+
+std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
+                         const std::string& software_version) {
+  std::ostringstream out;
+  out << "{\n  \"software_version\": " << json_string(software_version) << ",\n  \"inputs\": [";
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    out << (i ? ", " : "") << "{\"path\": " << json_string(inputs[i].path)
+        << ", \"sha256\": " << json_string(inputs[i].sha256) << "}";
+  }
+  out << "],\n  \"experiments\": [";
+  for (std::size_t i = 0; i < id.processed.size(); ++i) {
+    out << (i ? ",\n    " : "\n    ") << "{\"name\": " << json_string(id.processed[i].name)
+        << ", \"samples\": " << id.processed[i].size()
+        << ", \"sample_period_s\": " << json_number(id.processed[i].sample_period_s)
+        << ", \"lsmi\": " << json_lsmi(id.per_experiment[i]) << "}";
+  }
+  out << "],\n  \"combined\": " << json_lsmi(id.combined);
+  if (id.nominal) out << ",\n  \"nominal\": " << json_vector(*id.nominal);
+  if (id.truth) out << ",\n  \"truth\": " << json_vector(*id.truth);
+  if (id.validation) {
+    out << ",\n  \"validation\": {\"name\": " << json_string(id.validation->name)
+        << ", \"rmse_nm\": " << json_number(id.validation->fit.rmse_nm)
+        << ", \"rmse_percent_of_range\": " << json_number(id.validation->fit.rmse_percent_of_range)
+        << "}";
+  }
+  out << ",\n  \"warnings\": [";
+  for (std::size_t i = 0; i < id.warnings.size(); ++i) {
+    out << (i ? ", " : "") << json_string(id.warnings[i]);
+  }
+  out << "]\n}\n";
+  return out.str();
+}
+
+namespace {
+
+// A small line plot: each series a polyline; optional band (lower, upper) drawn under it.
+struct Trace {
+  const std::vector<double>* y;
+  const char* colour;
+  const char* label;
+};
+
+std::string svg_panel(double x0, double y0, double width, double height, const std::string& title,
+                      const std::vector<double>& t, const std::vector<Trace>& traces,
+                      const std::vector<double>* band_lo = nullptr,
+                      const std::vector<double>* band_hi = nullptr) {
+  double lo = 0, hi = 0;
+  bool first = true;
+  for (const Trace& tr : traces) {
+    for (double v : *tr.y) {
+      if (!std::isfinite(v)) continue;
+      lo = first ? v : std::min(lo, v);
+      hi = first ? v : std::max(hi, v);
+      first = false;
+    }
+  }
+  if (band_lo && band_hi) {
+    for (double v : *band_lo) lo = std::min(lo, v);
+    for (double v : *band_hi) hi = std::max(hi, v);
+  }
+  if (hi <= lo) hi = lo + 1;
+  const double t0 = t.empty() ? 0 : t.front();
+  const double t1 = t.size() > 1 ? t.back() : t0 + 1;
+  auto X = [&](double tt) { return x0 + (tt - t0) / (t1 - t0) * width; };
+  auto Y = [&](double v) { return y0 + height - (v - lo) / (hi - lo) * height; };
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1);
+  s << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << width << "\" height=\"" << height
+    << "\" fill=\"none\" stroke=\"#999\"/>\n";
+  s << "<text x=\"" << x0 << "\" y=\"" << y0 - 6 << "\" font-size=\"13\">" << title << "</text>\n";
+  s << "<text x=\"" << x0 - 4 << "\" y=\"" << y0 + 10 << "\" font-size=\"10\" text-anchor=\"end\">"
+    << std::setprecision(3) << hi << "</text>\n";
+  s << "<text x=\"" << x0 - 4 << "\" y=\"" << y0 + height << "\" font-size=\"10\" "
+    << "text-anchor=\"end\">" << lo << "</text>\n"
+    << std::setprecision(1);
+  if (band_lo && band_hi && !t.empty()) {
+    s << "<polygon fill=\"#f4c7a1\" stroke=\"none\" points=\"";
+    for (std::size_t i = 0; i < t.size(); ++i) s << X(t[i]) << "," << Y((*band_hi)[i]) << " ";
+    for (std::size_t i = t.size(); i-- > 0;) s << X(t[i]) << "," << Y((*band_lo)[i]) << " ";
+    s << "\"/>\n";
+  }
+  double legend_x = x0 + width - 160;
+  for (const Trace& tr : traces) {
+    s << "<polyline fill=\"none\" stroke=\"" << tr.colour << "\" stroke-width=\"1\" points=\"";
+    for (std::size_t i = 0; i < t.size() && i < tr.y->size(); ++i) {
+      s << X(t[i]) << "," << Y((*tr.y)[i]) << " ";
+    }
+    s << "\"/>\n";
+    s << "<text x=\"" << legend_x << "\" y=\"" << y0 + 14 << "\" font-size=\"11\" fill=\""
+      << tr.colour << "\">" << tr.label << "</text>\n";
+    legend_x += 80;
+  }
+  return s.str();
+}
+
+std::string svg_document(double width, double height, const std::string& body) {
+  std::ostringstream s;
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" viewBox=\"0 0 " << width << " " << height << "\" font-family=\"sans-serif\">\n"
+    << body << "</svg>\n";
+  return s.str();
+}
+
+}  // namespace
+
+std::string svg_signals(const RawExperiment& raw, const JointSeries& p,
+                        double angle_resolution_rad) {
+  // Bands: the encoders' quantisation on the angles; the torque's from the duty's 1/255 steps.
+  std::vector<double> q2_lo(raw.q2.size()), q2_hi(raw.q2.size());
+  for (std::size_t i = 0; i < raw.q2.size(); ++i) {
+    q2_lo[i] = raw.q2[i] - angle_resolution_rad;
+    q2_hi[i] = raw.q2[i] + angle_resolution_rad;
+  }
+  const double W = 900, H = 170, left = 70;
+  std::string body;
+  double y = 30;
+  body +=
+      svg_panel(left, y, W - left - 20, H - 40, p.name + ": angles [rad] (band: quantisation)",
+                p.t_s, {{&raw.q1, "#1f4e9c", "q1"}, {&raw.q2, "#b03a2e", "q2"}}, &q2_lo, &q2_hi);
+  y += H;
+  body += svg_panel(left, y, W - left - 20, H - 40, "velocities [rad/s]", p.t_s,
+                    {{&p.dq1, "#1f4e9c", "dq1"}, {&p.dq2, "#b03a2e", "dq2"}});
+  y += H;
+  body += svg_panel(left, y, W - left - 20, H - 40, "accelerations [rad/s^2]", p.t_s,
+                    {{&p.ddq1, "#1f4e9c", "ddq1"}, {&p.ddq2, "#b03a2e", "ddq2"}});
+  y += H;
+  body += svg_panel(left, y, W - left - 20, H - 40, "motor torque at the arm [N m]", p.t_s,
+                    {{&p.tau, "#222", "tau"}});
+  return svg_document(W, y + H - 20, body);
+}
+
+std::string svg_torque_validation(const ValidationResult& v) {
+  const double W = 900, H = 320, left = 70;
+  std::ostringstream title;
+  title << "held-out " << v.name << ": measured vs LSMI-predicted torque [N m], RMSE " << std::fixed
+        << std::setprecision(2) << v.fit.rmse_percent_of_range << " %";
+  const std::string body =
+      svg_panel(left, 30, W - left - 20, H - 60, title.str(), v.series.t_s,
+                {{&v.series.tau, "#222", "measured"}, {&v.fit.predicted, "#b03a2e", "LSMI"}});
+  return svg_document(W, H, body);
+}
+
+std::string sha256_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  // GLib (already linked through LCM) provides the checksum: no hand-written SHA-256.
+  std::unique_ptr<GChecksum, decltype(&g_checksum_free)> sum(g_checksum_new(G_CHECKSUM_SHA256),
+                                                             &g_checksum_free);
+  char buffer[65536];
+  while (in.read(buffer, sizeof buffer) || in.gcount() > 0) {
+    g_checksum_update(sum.get(), reinterpret_cast<const guchar*>(buffer),
+                      static_cast<gssize>(in.gcount()));
+  }
+  return g_checksum_get_string(sum.get());
+}
+
+}  // namespace furuta::identification

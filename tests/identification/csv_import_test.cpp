@@ -1,0 +1,439 @@
+#include "furuta/identification/csv_import.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include "furuta/config/rig_config.hpp"
+#include "temp_dir.hpp"
+
+namespace furuta::identification {
+namespace {
+
+using config::ConfigError;
+using ::testing::HasSubstr;
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::filesystem::path write_file(const testing::TempDir& dir, const std::string& name,
+                                 const std::string& text) {
+  const std::filesystem::path path = dir.path() / name;
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  return path;
+}
+
+// The smallest spec that names every column and convention; tests add or change keys.
+std::string spec_text(const std::string& extra = "") {
+  return "[csv]\n"
+         "time = \"t\"\n"
+         "arm_angle = \"theta\"\n"
+         "pendulum_angle = \"alpha\"\n"
+         "input = \"u\"\n"
+         "time_unit = \"s\"\n"
+         "angle_unit = \"rad\"\n"
+         "pendulum_zero = \"down\"\n"
+         "input_kind = \"duty\"\n" +
+         extra;
+}
+
+ConfigError spec_error(const std::string& text) {
+  try {
+    parse_csv_import_spec(text, "spec.toml");
+  } catch (const ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no ConfigError for:\n" << text;
+  return ConfigError("", 0, "", "");
+}
+
+CsvImportError import_error(const std::filesystem::path& csv, const CsvImportSpec& spec) {
+  try {
+    import_csv(csv, spec);
+  } catch (const CsvImportError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no CsvImportError for " << csv;
+  return CsvImportError("", 0, "", "");
+}
+
+// `rows` rows of t, theta, alpha, u at 10 ms, every value distinct, plus a header line.
+std::string simple_csv(int rows) {
+  std::ostringstream out;
+  out << "t,theta,alpha,u\n";
+  for (int k = 0; k < rows; ++k) out << k * 0.01 << "," << 0.1 * k << "," << -0.2 * k << ",0.5\n";
+  return out.str();
+}
+
+TEST(CsvImport, MatlabStyleExportInDegreesWithUprightZeroMillisecondsAndVolts) {
+  testing::TempDir dir;
+  // What a MATLAB writetable on Windows looks like after a spreadsheet round trip: BOM, CRLF,
+  // quoted names, columns in its own order, columns nobody asked for, blank lines at the end.
+  std::ostringstream csv;
+  csv << "\xEF\xBB\xBF\"current_A\",\"alpha_deg\",\"u_V\",\"time_ms\",\"theta_deg\",\"note\"\r\n";
+  for (int k = 0; k < 20; ++k) {
+    csv << 0.1 * k << "," << -10 + k << "," << 0.5 * k - 2 << "," << 16 * k << "," << 2 * k
+        << ",\"a, b\"\r\n";
+  }
+  csv << "\r\n\r\n";
+  const auto path = write_file(dir, "matlab.csv", csv.str());
+  const CsvImportSpec spec = parse_csv_import_spec(
+      "[csv]\n"
+      "time = \"time_ms\"\ntime_unit = \"ms\"\n"
+      "arm_angle = \"theta_deg\"\npendulum_angle = \"alpha_deg\"\nangle_unit = \"deg\"\n"
+      "pendulum_zero = \"up\"\n"
+      "input = \"u_V\"\ninput_kind = \"voltage\"\n",
+      "spec.toml");
+
+  const ImportedSeries s = import_csv(path, spec);
+  ASSERT_EQ(s.t_s.size(), 20u);
+  ASSERT_EQ(s.q1_rad.size(), 20u);
+  ASSERT_EQ(s.q2_rad.size(), 20u);
+  ASSERT_EQ(s.input.size(), 20u);
+  EXPECT_EQ(s.input_kind, InputKind::voltage);
+  EXPECT_TRUE(s.warnings.empty());
+  EXPECT_NEAR(s.sample_period_s, 0.016, 1e-15);
+  for (int k = 0; k < 20; ++k) {
+    SCOPED_TRACE(k);
+    EXPECT_DOUBLE_EQ(s.t_s[k], 16 * k * 1e-3);  // kept as recorded, not shifted to zero
+    EXPECT_DOUBLE_EQ(s.q1_rad[k], 2 * k * kDeg);
+    EXPECT_DOUBLE_EQ(s.q2_rad[k], (-10 + k) * kDeg + kPi);
+    EXPECT_DOUBLE_EQ(s.input[k], 0.5 * k - 2);
+  }
+  EXPECT_DOUBLE_EQ(s.q2_rad[10], kPi);  // alpha = 0 there: upright is q2 = pi
+}
+
+TEST(CsvImport, CountsWithPerColumnScalesSemicolonsAndMicroseconds) {
+  testing::TempDir dir;
+  std::ostringstream csv;
+  csv << "time_us;arm;pend;duty_pct\n";
+  for (int k = 0; k < 16; ++k) {
+    csv << 1'000'000 + 8000 * k << ";" << 100 * k << ";" << 2000 - 50 * k << ";" << 30 - 4 * k
+        << "\n";
+  }
+  const auto path = write_file(dir, "counts.csv", csv.str());
+  const CsvImportSpec spec = parse_csv_import_spec(
+      "[csv]\ndelimiter = \";\"\n"
+      "time = \"time_us\"\ntime_unit = \"us\"\n"
+      "arm_angle = \"arm\"\narm_angle_scale = -1\n"
+      "pendulum_angle = \"pend\"\nangle_unit = \"counts\"\n"
+      "arm_counts_per_rev = 4096\npendulum_counts_per_rev = 2000\n"
+      "pendulum_zero = \"down\"\n"
+      "input = \"duty_pct\"\ninput_scale = 0.01\ninput_kind = \"duty\"\n",
+      "spec.toml");
+  EXPECT_EQ(spec.delimiter, ';');
+  EXPECT_DOUBLE_EQ(spec.arm_angle.scale, -1.0);
+
+  const ImportedSeries s = import_csv(path, spec);
+  ASSERT_EQ(s.t_s.size(), 16u);
+  EXPECT_NEAR(s.sample_period_s, 0.008, 1e-12);
+  EXPECT_TRUE(s.warnings.empty());
+  EXPECT_DOUBLE_EQ(s.t_s[0], 1.0);  // absolute time kept
+  for (int k = 0; k < 16; ++k) {
+    SCOPED_TRACE(k);
+    EXPECT_DOUBLE_EQ(s.q1_rad[k], -2 * kPi * 100 * k / 4096.0);
+    EXPECT_DOUBLE_EQ(s.q2_rad[k], 2 * kPi * (2000 - 50 * k) / 2000.0);
+    EXPECT_DOUBLE_EQ(s.input[k], (30 - 4 * k) * 0.01);
+  }
+  EXPECT_DOUBLE_EQ(s.q2_rad[0], 2 * kPi);  // one full turn stays one full turn: not wrapped
+}
+
+TEST(CsvImport, FileWithoutHeaderUsesOneBasedIndices) {
+  testing::TempDir dir;
+  std::ostringstream csv;
+  for (int k = 0; k < 16; ++k)
+    csv << 0.5 * k << "\t" << k << "\t" << 0.01 * k << "\t" << -k << "\n";
+  const auto path = write_file(dir, "plain.tsv", csv.str());
+  const CsvImportSpec spec = parse_csv_import_spec(
+      "[csv]\ndelimiter = \"\\t\"\nhas_header = false\n"
+      "time = \"3\"\narm_angle = \"4\"\npendulum_angle = \"02\"\ninput = \"1\"\n"
+      "time_unit = \"s\"\nangle_unit = \"rad\"\npendulum_zero = \"down\"\ninput_kind = "
+      "\"torque\"\n",
+      "spec.toml");
+  EXPECT_EQ(spec.pendulum_angle.name, "2");
+
+  const ImportedSeries s = import_csv(path, spec);
+  ASSERT_EQ(s.t_s.size(), 16u);
+  EXPECT_EQ(s.input_kind, InputKind::torque);
+  for (int k = 0; k < 16; ++k) {
+    SCOPED_TRACE(k);
+    EXPECT_DOUBLE_EQ(s.t_s[k], 0.01 * k);
+    EXPECT_DOUBLE_EQ(s.q1_rad[k], -k);
+    EXPECT_DOUBLE_EQ(s.q2_rad[k], k);
+    EXPECT_DOUBLE_EQ(s.input[k], 0.5 * k);
+  }
+}
+
+TEST(CsvImport, IrregularTimeStampsAreResampledWithAWarning) {
+  testing::TempDir dir;
+  // 10 ms steps, but the sample at 50 ms came 2 ms late and the one at 100 ms is missing.
+  std::vector<double> t;
+  for (int k = 0; k < 20; ++k) {
+    if (k == 10) continue;
+    t.push_back(k == 5 ? 0.052 : 0.01 * k);
+  }
+  auto theta = [](double x) { return x * x * 100; };  // curved: interpolation is visible
+  std::ostringstream csv;
+  csv.precision(17);
+  csv << "t,theta,alpha,u\n";
+  for (const double x : t) csv << x << "," << theta(x) << "," << 2 * x << "," << 1 - x << "\n";
+  const auto path = write_file(dir, "irregular.csv", csv.str());
+
+  const ImportedSeries s = import_csv(path, parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_NEAR(s.sample_period_s, 0.01, 1e-15);
+  ASSERT_EQ(s.t_s.size(), 20u);  // 0 .. 190 ms, the missing sample restored
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_THAT(s.warnings[0], HasSubstr("irregular time stamps"));
+  EXPECT_THAT(s.warnings[0], HasSubstr("a step of 20 ms at line 12"));  // 90 -> 110 ms
+  EXPECT_THAT(s.warnings[0], HasSubstr("resampled by linear interpolation to 10 ms"));
+  for (int k = 0; k < 20; ++k) EXPECT_NEAR(s.t_s[k], 0.01 * k, 1e-15) << k;
+
+  // 50 ms lies between the rows at 40 and 52 ms; 100 ms halfway between 90 and 110 ms.
+  const double w = 0.010 / 0.012;
+  EXPECT_NEAR(s.q1_rad[5], theta(0.04) + w * (theta(0.052) - theta(0.04)), 1e-12);
+  EXPECT_NEAR(s.q1_rad[6], theta(0.06), 1e-12);
+  EXPECT_NEAR(s.q1_rad[10], 0.5 * (theta(0.09) + theta(0.11)), 1e-12);
+  EXPECT_NEAR(s.q2_rad[10], 0.2, 1e-12);  // linear channels come back exact
+  EXPECT_NEAR(s.input[10], 0.9, 1e-12);
+  EXPECT_NEAR(s.q1_rad[19], theta(0.19), 1e-12);
+}
+
+TEST(CsvImport, JitterWithinOnePercentIsKeptAsRecorded) {
+  testing::TempDir dir;
+  std::ostringstream csv;
+  csv.precision(17);
+  csv << "t,theta,alpha,u\n";
+  std::vector<double> t;
+  for (int k = 0; k < 16; ++k) t.push_back(0.016 * k + (k % 2 ? 0.00005 : 0.0));  // +-0.3 %
+  for (const double x : t) csv << x << ",0,0,0\n";
+  const ImportedSeries s = import_csv(write_file(dir, "jitter.csv", csv.str()),
+                                      parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_TRUE(s.warnings.empty());
+  ASSERT_EQ(s.t_s.size(), t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) EXPECT_DOUBLE_EQ(s.t_s[i], t[i]);
+  EXPECT_NEAR(s.sample_period_s, 0.016, 0.0001);
+}
+
+TEST(CsvImport, AGapOfManyPeriodsIsNotInterpolatedAcross) {
+  testing::TempDir dir;
+  std::ostringstream csv;
+  csv << "t,theta,alpha,u\n";
+  for (int k = 0; k < 20; ++k) csv << 0.01 * k + (k >= 10 ? 60.0 : 0.0) << ",0,0,0\n";
+  const CsvImportError e = import_error(write_file(dir, "joined.csv", csv.str()),
+                                        parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_EQ(e.line(), 12);
+  EXPECT_THAT(e.what(), HasSubstr("too irregular to resample"));
+}
+
+TEST(CsvImport, MissingColumnListsTheHeader) {
+  testing::TempDir dir;
+  const auto path = write_file(dir, "data.csv", simple_csv(20));
+  std::string text = spec_text();
+  text.replace(text.find("\"u\""), 3, "\"volts\"");
+  const CsvImportError e = import_error(path, parse_csv_import_spec(text, "spec.toml"));
+  EXPECT_EQ(e.file(), path.string());
+  EXPECT_EQ(e.line(), 1);
+  EXPECT_EQ(e.field(), "volts");
+  EXPECT_THAT(e.what(), HasSubstr(path.string() + ":1: volts: no such column for input"));
+  EXPECT_THAT(e.what(), HasSubstr("\"t\", \"theta\", \"alpha\", \"u\""));
+}
+
+TEST(CsvImport, NonNumericCellNamesLineAndColumn) {
+  testing::TempDir dir;
+  std::string csv = simple_csv(20);
+  const std::size_t line5 = csv.find("\n0.03,");  // the fifth line holds t = 0.03
+  csv.replace(csv.find(',', line5) + 1, 3, "1.2.3");
+  const auto path = write_file(dir, "data.csv", csv);
+  const CsvImportError e = import_error(path, parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_EQ(e.field(), "theta");
+  EXPECT_THAT(e.what(), HasSubstr(path.string() + ":5: theta: '1.2.3"));
+}
+
+TEST(CsvImport, NotANumberEmptyCellsAndShortRowsAreRejected) {
+  testing::TempDir dir;
+  const CsvImportSpec spec = parse_csv_import_spec(spec_text(), "spec.toml");
+  auto with_line3 = [&](const std::string& line) {
+    std::string csv = simple_csv(20);
+    const std::size_t start = csv.find('\n', csv.find('\n') + 1) + 1;  // line 3
+    csv.replace(start, csv.find('\n', start) - start, line);
+    return import_error(write_file(dir, "data.csv", csv), spec);
+  };
+  const CsvImportError nan = with_line3("0.02,NaN,0,0");
+  EXPECT_EQ(nan.line(), 3);
+  EXPECT_EQ(nan.field(), "theta");
+  EXPECT_THAT(nan.what(), HasSubstr("not a finite number"));
+  const CsvImportError empty = with_line3("0.02,1,,0");
+  EXPECT_EQ(empty.field(), "alpha");
+  EXPECT_THAT(empty.what(), HasSubstr("empty cell"));
+  const CsvImportError signs = with_line3("0.02,+-1,0,0");
+  EXPECT_EQ(signs.field(), "theta");
+  const CsvImportError short_row = with_line3("0.02,1,2");
+  EXPECT_EQ(short_row.field(), "u");
+  EXPECT_THAT(short_row.what(), HasSubstr("only 3 fields"));
+  const CsvImportError quote = with_line3("0.02,\"1,2,3");
+  EXPECT_THAT(quote.what(), HasSubstr("unterminated quote"));
+  const CsvImportError blank = with_line3("");
+  EXPECT_EQ(blank.line(), 3);
+  EXPECT_THAT(blank.what(), HasSubstr("blank line inside the data"));
+}
+
+TEST(CsvImport, NumbersWithSignsExponentsAndQuotesParse) {
+  testing::TempDir dir;
+  std::string csv = "t,theta,alpha,u\n";
+  for (int k = 0; k < 16; ++k) {
+    csv += std::to_string(k) + "e-2, +1.5E-1 ,\"-2\",.5\n";
+  }
+  const ImportedSeries s =
+      import_csv(write_file(dir, "data.csv", csv), parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_DOUBLE_EQ(s.t_s[3], 0.03);
+  EXPECT_DOUBLE_EQ(s.q1_rad[3], 0.15);
+  EXPECT_DOUBLE_EQ(s.q2_rad[3], -2.0);
+  EXPECT_DOUBLE_EQ(s.input[3], 0.5);
+}
+
+TEST(CsvImport, TimeThatDoesNotIncreaseNamesTheLine) {
+  testing::TempDir dir;
+  std::string csv = simple_csv(20);
+  const std::size_t line8 = csv.find("\n0.06,") + 1;  // line 8 holds t = 0.06
+  csv.replace(line8, 4, "0.05");
+  const auto path = write_file(dir, "data.csv", csv);
+  const CsvImportError e = import_error(path, parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_EQ(e.line(), 8);
+  EXPECT_EQ(e.field(), "t");
+  EXPECT_THAT(e.what(),
+              HasSubstr(path.string() + ":8: t: time does not increase (0.05 after 0.05)"));
+}
+
+TEST(CsvImport, SixteenRowsAtLeast) {
+  testing::TempDir dir;
+  const CsvImportSpec spec = parse_csv_import_spec(spec_text(), "spec.toml");
+  const CsvImportError e = import_error(write_file(dir, "short.csv", simple_csv(15)), spec);
+  EXPECT_THAT(e.what(), HasSubstr("15 data rows; at least 16 are needed"));
+  EXPECT_EQ(import_csv(write_file(dir, "enough.csv", simple_csv(16)), spec).t_s.size(), 16u);
+  EXPECT_THAT(import_error(write_file(dir, "empty.csv", "\n\n"), spec).what(),
+              HasSubstr("the file is empty"));
+  EXPECT_THAT(import_error(dir.path() / "absent.csv", spec).what(),
+              HasSubstr("cannot open the file"));
+}
+
+TEST(CsvImport, AmbiguousHeaderNamesAreRejected) {
+  testing::TempDir dir;
+  std::string csv = simple_csv(20);
+  csv.replace(0, csv.find('\n'), "t,theta,alpha,u,theta");
+  const CsvImportError e =
+      import_error(write_file(dir, "data.csv", csv), parse_csv_import_spec(spec_text(), "s"));
+  EXPECT_EQ(e.field(), "theta");
+  EXPECT_THAT(e.what(), HasSubstr("columns 2 and 5"));
+}
+
+TEST(CsvImport, DutyOutsideUnitRangeIsFlagged) {
+  testing::TempDir dir;
+  std::string csv = "t,theta,alpha,u\n";
+  for (int k = 0; k < 16; ++k) csv += std::to_string(0.01 * k) + ",0,0,40\n";
+  const ImportedSeries s =
+      import_csv(write_file(dir, "pct.csv", csv), parse_csv_import_spec(spec_text(), "spec.toml"));
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_THAT(s.warnings[0], HasSubstr("input_scale = 0.01"));
+}
+
+TEST(CsvImportSpec, ParsesDefaultsAndLoadsFromAFile) {
+  testing::TempDir dir;
+  const auto path = write_file(dir, "import.toml", spec_text("[motor]\nresistance_ohm = 2.5\n"));
+  const CsvImportSpec spec = load_csv_import_spec(path);
+  EXPECT_EQ(spec.delimiter, ',');
+  EXPECT_TRUE(spec.has_header);
+  EXPECT_EQ(spec.time.name, "t");
+  EXPECT_EQ(spec.input.name, "u");
+  EXPECT_DOUBLE_EQ(spec.input.scale, 1.0);
+  EXPECT_DOUBLE_EQ(spec.time_scale_s, 1.0);
+  EXPECT_EQ(spec.angle_unit, AngleUnit::rad);
+  EXPECT_EQ(spec.pendulum_zero, PendulumZero::down);
+  EXPECT_EQ(spec.input_kind, InputKind::duty);
+  EXPECT_THROW(load_csv_import_spec(dir.path() / "absent.toml"), ConfigError);
+}
+
+TEST(CsvImportSpec, UnknownKeyNamesFileLineAndField) {
+  const ConfigError e = spec_error(spec_text("colour = \"blue\"\n"));
+  EXPECT_EQ(e.file(), "spec.toml");
+  EXPECT_EQ(e.line(), 10);
+  EXPECT_EQ(e.field(), "csv.colour");
+  EXPECT_THAT(e.what(), HasSubstr("spec.toml:10: csv.colour: unknown key"));
+  EXPECT_THAT(spec_error("time_unit = \"s\"\n" + spec_text()).what(),
+              HasSubstr("spec.toml:1: time_unit: unknown key"));
+  EXPECT_THAT(spec_error(spec_text("time_scale = 2\n")).what(), HasSubstr("csv.time_scale"));
+}
+
+TEST(CsvImportSpec, BadEnumValuesListTheChoices) {
+  std::string text = spec_text();
+  text.replace(text.find("\"rad\""), 5, "\"grad\"");
+  const ConfigError e = spec_error(text);
+  EXPECT_EQ(e.line(), 7);
+  EXPECT_EQ(e.field(), "csv.angle_unit");
+  EXPECT_THAT(e.what(),
+              HasSubstr("spec.toml:7: csv.angle_unit: 'grad' is not one of: rad, deg, counts"));
+  text = spec_text();
+  text.replace(text.find("\"down\""), 6, "\"sideways\"");
+  EXPECT_THAT(spec_error(text).what(), HasSubstr("spec.toml:8: csv.pendulum_zero: 'sideways'"));
+  text = spec_text();
+  text.replace(text.find("\"duty\""), 6, "\"current\"");
+  EXPECT_THAT(spec_error(text).what(), HasSubstr("spec.toml:9: csv.input_kind: 'current'"));
+  text = spec_text();
+  text.replace(text.find("time_unit = \"s\""), 15, "time_unit = \"min\"");
+  EXPECT_THAT(spec_error(text).what(), HasSubstr("csv.time_unit: 'min' is not one of: s, ms, us"));
+}
+
+TEST(CsvImportSpec, CountsNeedCountsPerRevolution) {
+  std::string text = spec_text();
+  text.replace(text.find("\"rad\""), 5, "\"counts\"");
+  const ConfigError missing = spec_error(text + "pendulum_counts_per_rev = 2000\n");
+  EXPECT_EQ(missing.field(), "csv.arm_counts_per_rev");
+  EXPECT_EQ(missing.line(), 1);  // the [csv] line: where to add it
+  EXPECT_THAT(missing.what(), HasSubstr("spec.toml:1: csv.arm_counts_per_rev: missing"));
+  const ConfigError negative =
+      spec_error(text + "arm_counts_per_rev = 4096\npendulum_counts_per_rev = -1\n");
+  EXPECT_THAT(negative.what(), HasSubstr("spec.toml:11: csv.pendulum_counts_per_rev: must be > 0"));
+  const ConfigError unused = spec_error(spec_text("arm_counts_per_rev = 4096\n"));
+  EXPECT_THAT(unused.what(),
+              HasSubstr("spec.toml:10: csv.arm_counts_per_rev: only applies when angle_unit"));
+}
+
+TEST(CsvImportSpec, OtherMistakesAreLocated) {
+  EXPECT_THAT(spec_error("[other]\nx = 1\n").what(), HasSubstr("spec.toml: csv: missing table"));
+  EXPECT_THAT(spec_error("csv = 3\n").what(), HasSubstr("spec.toml:1: csv: must be a table"));
+  EXPECT_THAT(spec_error("[csv\n").what(), HasSubstr("spec.toml:1:"));
+
+  std::string no_input = spec_text();
+  no_input.erase(no_input.find("input = \"u\"\n"), 12);
+  EXPECT_THAT(spec_error(no_input).what(), HasSubstr("spec.toml:1: csv.input: missing"));
+
+  EXPECT_THAT(spec_error(spec_text("delimiter = \";;\"\n")).what(),
+              HasSubstr("spec.toml:10: csv.delimiter: must be a single ASCII character"));
+  EXPECT_THAT(spec_error(spec_text("delimiter = \".\"\n")).what(),
+              HasSubstr("csv.delimiter: '.' cannot separate fields"));
+  EXPECT_THAT(spec_error(spec_text("has_header = \"no\"\n")).what(),
+              HasSubstr("csv.has_header: must be true or false"));
+  EXPECT_THAT(spec_error(spec_text("has_header = false\n")).what(),
+              HasSubstr("spec.toml:2: csv.time: 't' is not a 1-based column index"));
+  EXPECT_THAT(spec_error(spec_text("input_scale = 0\n")).what(),
+              HasSubstr("spec.toml:10: csv.input_scale: must not be 0"));
+  EXPECT_THAT(spec_error(spec_text("pendulum_angle_scale = \"x\"\n")).what(),
+              HasSubstr("csv.pendulum_angle_scale: must be a number"));
+
+  std::string same = spec_text();
+  same.replace(same.find("\"alpha\""), 7, "\"theta\"");
+  EXPECT_THAT(spec_error(same).what(),
+              HasSubstr("spec.toml:4: csv.pendulum_angle: same column as arm_angle ('theta')"));
+  std::string number = spec_text();
+  number.replace(number.find("\"u\""), 3, "4");
+  EXPECT_THAT(spec_error(number).what(), HasSubstr("spec.toml:5: csv.input: must be a string"));
+}
+
+}  // namespace
+}  // namespace furuta::identification
