@@ -364,6 +364,9 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
         [](std::int64_t v) { return v >= 1 && v <= 16; }, "in [1, 16]"));
     ec.multisine_f_min_hz = e.number("multisine_f_min_hz", ec.multisine_f_min_hz, positive, "> 0");
     ec.multisine_f_max_hz = e.number("multisine_f_max_hz", ec.multisine_f_max_hz, positive, "> 0");
+    ec.board_acceleration_pct_per_s = e.number(
+        "board_acceleration_pct_per_s", ec.board_acceleration_pct_per_s,
+        [](double v) { return v >= 6250.0 / 255 && v <= 6250.0; }, "in [24.5, 6250]");
     e.reject_unknown_keys();
   }
 

@@ -101,6 +101,7 @@ bool ControlLoop::write_command(double duty, double braking_fraction, RawReport*
   bridge::MotorCommand1065 command;
   command.duty_cycle = duty;
   command.braking_fraction = braking_fraction;
+  command.acceleration_pct_per_s = settings_.acceleration_pct_per_s;
   bridge::MotorOutput1065 output;
   if (bridge::to_output_1065(command, output) != bridge::CodecStatus::ok) return false;
   std::array<std::uint8_t, bridge::kMaxReportBytes> bytes{};

@@ -120,6 +120,7 @@ DaemonSettings daemon_settings_from_config(const config::RigConfig& config) {
   loop.pendulum_encoder = config.pendulum_encoder;
   loop.pendulum_channel = config.pendulum_channel;
   loop.rest_check_s = config.daemon.rest_check_s;
+  loop.acceleration_pct_per_s = config.excitation.board_acceleration_pct_per_s;
 
   d.recorder.logs_dir = config.daemon.logs_dir;
   d.recorder.flush_interval = std::chrono::milliseconds(config.daemon.flush_interval_ms);

@@ -84,28 +84,31 @@ JointSeries preprocess(const RawExperiment& e, const PreprocessOptions& options,
   if (e.input_kind == InputKind::voltage && !(voltage_motor.resistance_ohm > 0)) {
     throw std::invalid_argument(e.name + ": voltage input needs the motor's resistance (> 0)");
   }
-  std::vector<double> tau(e.input.size());
+  // The input goes through the same low-pass as the angles, and the torque is formed from the
+  // filtered input and the filtered velocity. Eq. 4 and the DC-motor form are linear, so this
+  // equals the low-passed torque; forming it from the raw input and filtering afterwards would
+  // low-pass the velocity twice and bias every inertia.
+  const std::vector<double> input = filtfilt(lowpass, e.input);
+  std::vector<double> tau(input.size());
   for (std::size_t i = 0; i < tau.size(); ++i) {
     switch (e.input_kind) {
       case InputKind::duty:
-        tau[i] = motor.arm_torque_nm(e.input[i], s.dq1[i]);
+        tau[i] = motor.arm_torque_nm(input[i], s.dq1[i]);
         break;
       case InputKind::voltage: {
         const double omega_motor = voltage_motor.gear_ratio * s.dq1[i];
         tau[i] = voltage_motor.gear_ratio * voltage_motor.efficiency *
                  voltage_motor.torque_constant_nm_per_a *
-                 (e.input[i] - voltage_motor.back_emf_v_s_per_rad * omega_motor) /
+                 (input[i] - voltage_motor.back_emf_v_s_per_rad * omega_motor) /
                  voltage_motor.resistance_ohm;
         break;
       }
       case InputKind::torque:
-        tau[i] = e.input[i];
+        tau[i] = input[i];
         break;
     }
   }
-  // The torque goes through the same low-pass as the angles, so both sides of the model see the
-  // same band.
-  s.tau = filtfilt(lowpass, tau);
+  s.tau = std::move(tau);
   return s;
 }
 

@@ -31,22 +31,31 @@ constexpr double kPi = std::numbers::pi;
 // has to separate neighbouring extrema.
 constexpr int kGridDensity = 16;
 constexpr int kMaxIterations = 100;
-// Relative spread of |error| over the extremals at which the exchange stops.
+// The exchange stops when |error| at the extremals is level to this, relatively...
 constexpr double kLevelTolerance = 1e-9;
-// Rounding puts a floor under that spread, about 1e-16 |P| / |delta|, which reaches 1e-9 for errors
-// below ~1e-6 (long filters, wide bands). Once delta stops growing (it grows at every exchange in
-// exact arithmetic), a spread within this is as level as double precision makes it.
-constexpr double kStalledLevelTolerance = 1e-6;
+// ... or absolutely. The weighted error is dimensionless (a relative slope error), P is of order 1,
+// and rounding in evaluating it leaves ~1e-13: designs with errors below ~1e-4 (long filters, wide
+// transition bands) reach this floor before the relative level.
+constexpr double kLevelFloor = 1e-12;
+// When rounding scrambles the alternation before either (errors near 1e-12), the best design met is
+// kept if its error is below this: a relative slope error no use of the filter can notice.
+constexpr double kNegligibleError = 1e-9;
+// A shorter design standing in for one whose optimum is below rounding must be at least this good
+// (a relative slope error far below the encoder's resolution in any use here).
+constexpr double kNegligibleShortfall = 1e-6;
 constexpr int kGoldenSteps = 64;
+// Up to this many cosine coefficients the exchange starts from evenly spread extremals.
+constexpr std::size_t kEvenStartLimit = 24;
 constexpr int kMaxTaps = 1025;
 
 // Stop-band weight. The stop-band gain is weighed as a fraction of the gain at the pass-band edge,
-// 2 pi f_pass, and counts a tenth as much as the pass-band relative error: the achieved stop-band gain
-// is then 10 x (pass-band relative error) x 2 pi f_pass. Pass-band slope accuracy is what the
+// 2 pi f_pass, and counts a tenth as much as the pass-band relative error: the achieved stop-band
+// gain is then 10 x (pass-band relative error) x 2 pi f_pass. Pass-band slope accuracy is what the
 // identification sees (it scales velocities and accelerations directly), while the stop band only
-// sees what the Butterworth ahead of it lets through (-106 dB at 10 Hz for an 8th-order 5 Hz low-pass
-// applied twice at 62.5 Hz). For 31 taps, 5 / 10 Hz at 62.5 Hz this buys 0.24 % slope error instead
-// of 1.0 % with equal weights, for a stop-band gain of 2.4 % instead of 1.0 % of the edge gain.
+// sees what the Butterworth ahead of it lets through (-106 dB at 10 Hz for an 8th-order 5 Hz
+// low-pass applied twice at 62.5 Hz). For 31 taps, 5 / 10 Hz at 62.5 Hz this buys 0.24 % slope
+// error instead of 1.0 % with equal weights, for a stop-band gain of 2.4 % instead of 1.0 % of the
+// edge gain.
 constexpr double kStopbandRelativeWeight = 0.1;
 
 void require(bool ok, const char* parameter, const std::string& why) {
@@ -79,16 +88,23 @@ struct Problem {
   }
 };
 
+// cos a - cos b, without the cancellation of the direct difference: node spacings near w = 0, where
+// the pass band's relative error is measured, would otherwise lose half their digits.
+double cos_difference(double a, double b) {
+  return -2 * std::sin((a + b) / 2) * std::sin((a - b) / 2);
+}
+
 // The polynomial P through the current extremals with the levelled error delta, in barycentric form
-// on x = cos w (well conditioned where the monomial or linear-system forms are not).
+// on x = cos w (well conditioned where the monomial or linear-system forms are not). Nodes are kept
+// as angles so that every x difference goes through cos_difference.
 struct LevelledInterpolant {
-  std::vector<double> x, value, bary;
+  std::vector<double> angle, value, bary;
   double delta = 0;
 
-  double operator()(double at) const {
+  double operator()(double w) const {
     double num = 0, den = 0;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      const double d = at - x[i];
+    for (std::size_t i = 0; i < angle.size(); ++i) {
+      const double d = cos_difference(w, angle[i]);
       if (d == 0.0) return value[i];
       const double t = bary[i] / d;
       num += t * value[i];
@@ -98,23 +114,24 @@ struct LevelledInterpolant {
   }
 };
 
-// Barycentric weights 1 / prod_{j != i} (x_i - x_j) over the first `count` nodes, up to a common
-// factor (which cancels everywhere they are used); computed through logarithms so that long filters
-// neither overflow nor underflow.
-std::vector<double> barycentric_weights(std::span<const double> x, std::size_t count) {
-  std::vector<double> log_mag(count, 0.0);
-  std::vector<double> sign(count, 1.0);
-  for (std::size_t i = 0; i < count; ++i) {
-    for (std::size_t j = 0; j < count; ++j) {
+// Barycentric weights 1 / prod_{j != i} (x_i - x_j), up to a common factor (which cancels
+// everywhere they are used); computed through logarithms so that long filters neither overflow nor
+// underflow.
+std::vector<double> barycentric_weights(std::span<const double> angle) {
+  const std::size_t n = angle.size();
+  std::vector<double> log_mag(n, 0.0);
+  std::vector<double> sign(n, 1.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
       if (j == i) continue;
-      const double d = x[i] - x[j];
+      const double d = cos_difference(angle[i], angle[j]);
       log_mag[i] -= std::log(std::abs(d));
       if (d < 0) sign[i] = -sign[i];
     }
   }
-  const double top = count > 0 ? *std::max_element(log_mag.begin(), log_mag.end()) : 0.0;
-  std::vector<double> w(count);
-  for (std::size_t i = 0; i < count; ++i) w[i] = sign[i] * std::exp(log_mag[i] - top);
+  const double top = n > 0 ? *std::max_element(log_mag.begin(), log_mag.end()) : 0.0;
+  std::vector<double> w(n);
+  for (std::size_t i = 0; i < n; ++i) w[i] = sign[i] * std::exp(log_mag[i] - top);
   return w;
 }
 
@@ -126,15 +143,19 @@ struct Point {
   bool extremal = false;
 };
 
+// Points closer than this (rad / sample) are one point: far below any grid step (pi / (16 * 513)),
+// far above rounding.
+constexpr double kSamePoint = 1e-9;
+
 LevelledInterpolant level(const Problem& problem, std::span<const Point> extremals) {
   const std::size_t n = extremals.size();  // m + 1
-  std::vector<double> x(n), d(n), wt(n);
+  std::vector<double> angle(n), d(n), wt(n);
   for (std::size_t i = 0; i < n; ++i) {
-    x[i] = std::cos(extremals[i].w);
+    angle[i] = extremals[i].w;
     d[i] = problem.desired(extremals[i].w, extremals[i].band->pass);
     wt[i] = problem.weight(extremals[i].w, extremals[i].band->pass);
   }
-  const std::vector<double> gamma = barycentric_weights(x, n);
+  const std::vector<double> gamma = barycentric_weights(angle);
   double num = 0, den = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double alt = (i % 2 == 0) ? 1.0 : -1.0;
@@ -147,7 +168,7 @@ LevelledInterpolant level(const Problem& problem, std::span<const Point> extrema
   // formula over all m + 1 (whose degree-m term vanishes by the choice of delta) never
   // extrapolates: through m nodes, the one left out can sit across a band gap, where rounding grows
   // by 1e10.
-  p.x = std::move(x);
+  p.angle = std::move(angle);
   p.value.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double alt = (i % 2 == 0) ? 1.0 : -1.0;
@@ -158,7 +179,7 @@ LevelledInterpolant level(const Problem& problem, std::span<const Point> extrema
 }
 
 double weighted_error(const Problem& problem, const LevelledInterpolant& p, double w, bool pass) {
-  return problem.weight(w, pass) * (p(std::cos(w)) - problem.desired(w, pass));
+  return problem.weight(w, pass) * (p(w) - problem.desired(w, pass));
 }
 
 // Golden-section search for the extremum of sign `sign` of the error within [lo, hi].
@@ -196,15 +217,20 @@ double polish(const Problem& problem, const LevelledInterpolant& p, bool pass, d
 }
 
 struct Candidate {
-  Point point;
+  std::size_t index;  // into the evaluated points
   double error;
+};
+
+struct Exchange {
+  std::vector<Point> next;  // empty when rounding has scrambled the alternation
+  double max_error = 0;     // of the current P over the grid and extremals
 };
 
 // The next set of m + 1 alternating extremals of the current error, from the grid and the current
 // extremals (at which |error| = |delta| exactly, so there are always enough), each polished on the
 // continuous axis.
-std::vector<Point> exchange(const Problem& problem, const LevelledInterpolant& p,
-                            std::span<const Point> grid, std::span<const Point> current) {
+Exchange exchange(const Problem& problem, const LevelledInterpolant& p, std::span<const Point> grid,
+                  std::span<const Point> current) {
   std::vector<Point> points(current.begin(), current.end());
   for (Point& pt : points) pt.extremal = true;
   points.insert(points.end(), grid.begin(), grid.end());
@@ -212,17 +238,19 @@ std::vector<Point> exchange(const Problem& problem, const LevelledInterpolant& p
   std::stable_sort(points.begin(), points.end(),
                    [](const Point& a, const Point& b) { return a.w < b.w; });
   points.erase(std::unique(points.begin(), points.end(),
-                           [](const Point& a, const Point& b) { return b.w - a.w < 1e-13; }),
+                           [](const Point& a, const Point& b) { return b.w - a.w < kSamePoint; }),
                points.end());
 
+  Exchange result;
   std::vector<double> e(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     e[i] = weighted_error(problem, p, points[i].w, points[i].band->pass);
+    result.max_error = std::max(result.max_error, std::abs(e[i]));
   }
+  if (!std::isfinite(result.max_error)) return result;
   const double threshold = std::abs(p.delta) * (1 - 1e-6);
 
   std::vector<Candidate> found;
-  std::vector<std::size_t> found_index;
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!points[i].extremal && std::abs(e[i]) < threshold) continue;
     const double s = e[i] > 0 ? 1.0 : -1.0;
@@ -232,14 +260,10 @@ std::vector<Point> exchange(const Problem& problem, const LevelledInterpolant& p
     if (!left_ok || !right_ok) continue;
     // Neighbouring extrema of one sign (a flat top, or a wiggle): keep the larger.
     if (!found.empty() && (found.back().error > 0) == (e[i] > 0)) {
-      if (std::abs(e[i]) > std::abs(found.back().error)) {
-        found.back() = {points[i], e[i]};
-        found_index.back() = i;
-      }
+      if (std::abs(e[i]) > std::abs(found.back().error)) found.back() = {i, e[i]};
       continue;
     }
-    found.push_back({points[i], e[i]});
-    found_index.push_back(i);
+    found.push_back({i, e[i]});
   }
 
   const std::size_t wanted = problem.m + 1;
@@ -256,7 +280,6 @@ std::vector<Point> exchange(const Problem& problem, const LevelledInterpolant& p
     }
     if (k == 0 || k + 1 == found.size()) {
       found.erase(found.begin() + static_cast<std::ptrdiff_t>(k));
-      found_index.erase(found_index.begin() + static_cast<std::ptrdiff_t>(k));
       continue;
     }
     const std::size_t drop =
@@ -264,36 +287,182 @@ std::vector<Point> exchange(const Problem& problem, const LevelledInterpolant& p
     const std::size_t first = std::min(k, drop);
     found.erase(found.begin() + static_cast<std::ptrdiff_t>(first),
                 found.begin() + static_cast<std::ptrdiff_t>(first + 2));
-    found_index.erase(found_index.begin() + static_cast<std::ptrdiff_t>(first),
-                      found_index.begin() + static_cast<std::ptrdiff_t>(first + 2));
   }
-  if (found.size() < wanted) {
-    throw std::runtime_error("design_fir_differentiator: the Remez exchange lost alternation (" +
-                             std::to_string(found.size()) + " extremals for " +
-                             std::to_string(wanted) + ")");
-  }
+  if (found.size() < wanted) return result;
 
   std::vector<Point> next(wanted);
   for (std::size_t k = 0; k < wanted; ++k) {
-    const std::size_t i = found_index[k];
+    const std::size_t i = found[k].index;
     const Band* band = points[i].band;
     // Search between the neighbouring evaluated points, never past the band or a neighbouring
     // extremal's half-way mark, so the polished extremals stay ordered.
     double lo = i > 0 && points[i - 1].band == band ? points[i - 1].w : points[i].w;
     double hi = i + 1 < points.size() && points[i + 1].band == band ? points[i + 1].w : points[i].w;
-    if (k > 0) lo = std::max(lo, (points[found_index[k - 1]].w + points[i].w) / 2);
-    if (k + 1 < wanted) hi = std::min(hi, (points[found_index[k + 1]].w + points[i].w) / 2);
+    if (k > 0) lo = std::max(lo, (points[found[k - 1].index].w + points[i].w) / 2);
+    if (k + 1 < wanted) hi = std::min(hi, (points[found[k + 1].index].w + points[i].w) / 2);
     const double sign = found[k].error > 0 ? 1.0 : -1.0;
-    next[k] = {polish(problem, p, band->pass, sign, lo, hi), band, false};
+    next[k] = {polish(problem, p, band->pass, sign, lo, hi), band};
   }
-  return next;
+  // Two polished extremals may meet at a shared half-way mark; the unpolished ones are distinct.
+  for (std::size_t k = 1; k < wanted; ++k) {
+    if (next[k].w - next[k - 1].w < kSamePoint) {
+      next[k - 1].w = points[found[k - 1].index].w;
+      next[k].w = points[found[k].index].w;
+    }
+  }
+  result.next = std::move(next);
+  return result;
+}
+
+std::vector<Point> make_grid(const Problem& problem, std::span<const Band> bands) {
+  // For odd length A(pi) = 0 whatever the taps, and the weight W Q vanishes there: the grid stops
+  // one step short of pi.
+  const std::size_t grid_size = static_cast<std::size_t>(kGridDensity) * (problem.m + 1);
+  double span = 0;
+  for (const Band& band : bands) span += band.hi - band.lo;
+  std::vector<Point> grid;
+  for (const Band& band : bands) {
+    const auto count =
+        std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(static_cast<double>(grid_size) *
+                                                                    (band.hi - band.lo) / span)));
+    const double step = (band.hi - band.lo) / static_cast<double>(count - 1);
+    const std::size_t last = (!band.pass && problem.odd_length) ? count - 1 : count;
+    for (std::size_t i = 0; i < last; ++i) {
+      grid.push_back({band.lo + step * static_cast<double>(i), &band});
+    }
+  }
+  return grid;
+}
+
+// The classic start: m + 1 points spread evenly over the grid. Good for short filters; for long
+// ones it levels the error at 1e-15 or below, where rounding scrambles its signs.
+std::vector<Point> even_start(std::span<const Point> grid, std::size_t m) {
+  std::vector<Point> start(m + 1);
+  for (std::size_t i = 0; i <= m; ++i) start[i] = grid[i * (grid.size() - 1) / m];
+  return start;
+}
+
+// A start for m from the extremals of a smaller problem: each band keeps its share of extremals,
+// laid out like the smaller solution's (piecewise linearly in their index). The optimal extremals'
+// distribution changes little with the length, so this starts close to the answer.
+std::vector<Point> scaled_start(std::span<const Point> smaller, std::size_t m,
+                                std::span<const Band> bands) {
+  std::vector<std::vector<double>> old(bands.size());
+  for (const Point& pt : smaller) {
+    old[static_cast<std::size_t>(pt.band - bands.data())].push_back(pt.w);
+  }
+  std::vector<std::size_t> count(bands.size());
+  std::size_t assigned = 0;
+  for (std::size_t b = 0; b + 1 < bands.size(); ++b) {
+    count[b] = static_cast<std::size_t>(
+        std::lround(static_cast<double>(old[b].size()) * static_cast<double>(m + 1) /
+                    static_cast<double>(smaller.size())));
+    count[b] = std::min(count[b], m + 1 - assigned);
+    assigned += count[b];
+  }
+  count.back() = m + 1 - assigned;
+
+  std::vector<Point> start;
+  for (std::size_t b = 0; b < bands.size(); ++b) {
+    const std::vector<double>& w = old[b];
+    for (std::size_t k = 0; k < count[b]; ++k) {
+      double at = 0;
+      if (w.empty()) {
+        at = bands[b].lo + (bands[b].hi - bands[b].lo) * (static_cast<double>(k) + 0.5) /
+                               static_cast<double>(count[b]);
+      } else if (count[b] == 1 || w.size() == 1) {
+        at = w[w.size() / 2];
+      } else {
+        const double u = static_cast<double>(k) * static_cast<double>(w.size() - 1) /
+                         static_cast<double>(count[b] - 1);
+        const auto i = std::min(static_cast<std::size_t>(u), w.size() - 2);
+        at = w[i] + (u - static_cast<double>(i)) * (w[i + 1] - w[i]);
+      }
+      start.push_back({at, &bands[b]});
+    }
+  }
+  return start;
+}
+
+struct Stage {
+  LevelledInterpolant p;
+  std::vector<Point> extremals;
+  int iterations = 0;
+  bool converged = false;
+  double max_error = 0;
+  std::string failure;
+};
+
+// The exchange from `start` until the error is level, or, when rounding stops it first, the best
+// design it met.
+Stage run_exchange(const Problem& problem, std::span<const Point> grid, std::vector<Point> start) {
+  Stage best;
+  best.max_error = std::numeric_limits<double>::infinity();
+  std::vector<Point> extremals = std::move(start);
+  for (int iteration = 1;; ++iteration) {
+    const LevelledInterpolant p = level(problem, extremals);
+    const Exchange step = exchange(problem, p, grid, extremals);
+    best.iterations = iteration;
+    if (std::isfinite(p.delta) && step.max_error < best.max_error) {
+      best.p = p;
+      best.extremals = extremals;
+      best.max_error = step.max_error;
+    }
+    if (!step.next.empty()) {
+      double lo = std::numeric_limits<double>::infinity(), hi = 0;
+      for (const Point& pt : step.next) {
+        const double e = std::abs(weighted_error(problem, p, pt.w, pt.band->pass));
+        lo = std::min(lo, e);
+        hi = std::max(hi, e);
+      }
+      if (hi - lo <= std::max(kLevelTolerance * hi, kLevelFloor)) {
+        best.p = p;
+        best.extremals = step.next;
+        best.max_error = hi;
+        best.converged = true;
+        return best;
+      }
+      extremals = step.next;
+    }
+    if (step.next.empty() || iteration == kMaxIterations) {
+      // Rounding, not the design, stopped the exchange: the best design is still good if its error
+      // is far below anything a differentiator here needs.
+      best.converged = best.max_error <= kNegligibleError;
+      best.failure = std::string(step.next.empty() ? "alternation lost" : "iteration limit") +
+                     " after " + std::to_string(iteration) + " iterations, max weighted error " +
+                     std::to_string(best.max_error);
+      return best;
+    }
+  }
+}
+
+// The design for problem.m cosine coefficients. Long filters start from the solution for half their
+// length, recursively, down to one short enough for the even start ("reference scaling").
+Stage solve(const Problem& problem, std::span<const Band> bands) {
+  std::vector<std::size_t> sizes{problem.m};
+  while (sizes.back() > kEvenStartLimit) sizes.push_back(sizes.back() / 2);
+  std::reverse(sizes.begin(), sizes.end());
+  Stage stage;
+  int iterations = 0;
+  for (std::size_t i = 0; i < sizes.size(); ++i) {
+    Problem sub = problem;
+    sub.m = sizes[i];
+    const std::vector<Point> grid = make_grid(sub, bands);
+    std::vector<Point> start =
+        i == 0 ? even_start(grid, sub.m) : scaled_start(stage.extremals, sub.m, bands);
+    // A smaller problem that stopped short still gives a usable start; only the last one counts.
+    stage = run_exchange(sub, grid, std::move(start));
+    iterations += stage.iterations;
+  }
+  stage.iterations = iterations;
+  return stage;
 }
 
 // Cosine coefficients of P from its values at the Chebyshev angles (a discrete cosine transform).
 std::vector<double> cosine_coefficients(const LevelledInterpolant& p, std::size_t m) {
   std::vector<double> values(m);
   for (std::size_t j = 0; j < m; ++j) {
-    values[j] = p(std::cos(kPi * (static_cast<double>(j) + 0.5) / static_cast<double>(m)));
+    values[j] = p(kPi * (static_cast<double>(j) + 0.5) / static_cast<double>(m));
   }
   std::vector<double> coefficients(m);
   for (std::size_t k = 0; k < m; ++k) {
@@ -337,8 +506,72 @@ std::vector<double> taps_from_cosines(std::span<const double> p, bool odd_length
 double amplitude(std::span<const double> taps, double w) {
   const double centre = (static_cast<double>(taps.size()) - 1) / 2;
   double a = 0;
-  for (std::size_t j = 0; j < taps.size(); ++j)
+  for (std::size_t j = 0; j < taps.size(); ++j) {
     a += taps[j] * std::sin(w * (centre - static_cast<double>(j)));
+  }
+  return a;
+}
+
+// One design of problem.m cosine coefficients, as taps (per sample) of the requested length, with
+// the errors the taps achieve.
+struct Attempt {
+  std::vector<double> taps;
+  bool converged = false;
+  std::string failure;
+  int iterations = 0;
+  double level = 0;     // the exchange's levelled weighted error
+  double achieved = 0;  // the taps' maximum weighted error
+  double max_passband_relative_error = 0;
+  double max_stopband_gain_per_sample = 0;
+
+  // The requested length must deliver the level it found (up to evaluation on another grid); a
+  // stand-in of another length must be negligible.
+  bool acceptable(bool requested_length) const {
+    if (!converged) return false;
+    const bool delivers_level = achieved <= level * (1 + 1e-6) + 1e-12;
+    return (requested_length && delivers_level) || achieved <= kNegligibleShortfall;
+  }
+};
+
+Attempt attempt(const Problem& problem, std::span<const Band> bands, int num_taps) {
+  Attempt a;
+  Stage stage = solve(problem, bands);
+  a.converged = stage.converged;
+  a.failure = stage.failure;
+  a.iterations = stage.iterations;
+  a.level = stage.max_error;
+  if (!a.converged) return a;
+
+  a.taps.assign(static_cast<std::size_t>(num_taps), 0.0);
+  const std::vector<double> core =
+      taps_from_cosines(cosine_coefficients(stage.p, problem.m), problem.odd_length);
+  std::copy(core.begin(), core.end(),
+            a.taps.begin() + static_cast<std::ptrdiff_t>((a.taps.size() - core.size()) / 2));
+
+  // Achieved errors from the taps themselves (an independent check of the conversion), on a fine
+  // grid plus the polished extremals, where the maxima are.
+  const double wp = bands[0].hi, ws = bands[1].lo;
+  const std::size_t fine = 64 * static_cast<std::size_t>(num_taps);
+  std::vector<double> pass_points, stop_points;
+  for (std::size_t i = 1; i <= fine; ++i) {
+    pass_points.push_back(wp * static_cast<double>(i) / static_cast<double>(fine));
+    stop_points.push_back(ws +
+                          (kPi - ws) * static_cast<double>(i - 1) / static_cast<double>(fine - 1));
+  }
+  for (const Point& pt : stage.extremals) {
+    (pt.band->pass ? pass_points : stop_points).push_back(pt.w);
+  }
+  for (double w : pass_points) {
+    if (w <= 0) continue;
+    a.max_passband_relative_error =
+        std::max(a.max_passband_relative_error, std::abs(amplitude(a.taps, w) - w) / w);
+  }
+  for (double w : stop_points) {
+    a.max_stopband_gain_per_sample =
+        std::max(a.max_stopband_gain_per_sample, std::abs(amplitude(a.taps, w)));
+  }
+  a.achieved =
+      std::max(a.max_passband_relative_error, problem.stop_weight * a.max_stopband_gain_per_sample);
   return a;
 }
 
@@ -371,89 +604,51 @@ FirDifferentiator design_fir_differentiator(int num_taps, double passband_hz, do
   const double ws = 2 * kPi * stopband_hz / sample_rate_hz;
   const Problem problem{odd_length, static_cast<std::size_t>(num_taps / 2), wp,
                         kStopbandRelativeWeight / wp};
-
-  // For odd length A(pi) = 0 whatever the taps, and the weight W Q vanishes there: the grid stops
-  // one step short of pi.
-  const std::size_t grid_size = static_cast<std::size_t>(kGridDensity) * (problem.m + 1);
-  const double span = wp + (kPi - ws);
   const Band bands[2] = {{0.0, wp, true}, {ws, kPi, false}};
-  std::vector<Point> grid;
-  for (const Band& band : bands) {
-    const auto count =
-        std::max<std::size_t>(8, static_cast<std::size_t>(std::ceil(static_cast<double>(grid_size) *
-                                                                    (band.hi - band.lo) / span)));
-    const double step = (band.hi - band.lo) / static_cast<double>(count - 1);
-    const std::size_t last = (!band.pass && odd_length) ? count - 1 : count;
-    for (std::size_t i = 0; i < last; ++i)
-      grid.push_back({band.lo + step * static_cast<double>(i), &band});
-  }
 
-  // Start from m + 1 points spread evenly over the grid.
-  std::vector<Point> extremals(problem.m + 1);
-  for (std::size_t i = 0; i <= problem.m; ++i) {
-    extremals[i] = grid[i * (grid.size() - 1) / problem.m];
-  }
-
-  LevelledInterpolant p;
-  int iteration = 0;
-  bool converged = false;
-  double previous_delta = 0;
-  while (!converged && iteration < kMaxIterations) {
-    ++iteration;
-    p = level(problem, extremals);
-    std::vector<Point> next = exchange(problem, p, grid, extremals);
-    double lo = std::numeric_limits<double>::infinity(), hi = 0;
-    for (const Point& pt : next) {
-      const double e = std::abs(weighted_error(problem, p, pt.w, pt.band->pass));
-      lo = std::min(lo, e);
-      hi = std::max(hi, e);
+  Attempt best = attempt(problem, bands, num_taps);
+  int iterations = best.iterations;
+  if (!best.acceptable(true)) {
+    // A length far beyond what the band edges need puts the optimal error below rounding: the
+    // exchange cannot level it, or the taps cannot hold it (they grow large and cancel). The
+    // longest shorter design that works (found by bisection) is kept if its error is negligible:
+    // padded with zero taps at both ends, it is a filter of the requested length.
+    const std::string failure =
+        best.converged
+            ? "the taps lose the levelled error to rounding: " + std::to_string(best.achieved) +
+                  " for " + std::to_string(best.level)
+            : best.failure;
+    std::size_t bad = problem.m, good = 0;
+    Attempt kept;
+    for (std::size_t trial = problem.m / 2; trial >= 1 && good + 1 < bad;) {
+      Problem shorter = problem;
+      shorter.m = trial;
+      Attempt a = attempt(shorter, bands, num_taps);
+      iterations += a.iterations;
+      if (a.acceptable(false)) {
+        good = trial;
+        kept = std::move(a);
+      } else {
+        bad = trial;
+      }
+      trial = good == 0 ? trial / 2 : (good + bad) / 2;
     }
-    if (!std::isfinite(p.delta) || !std::isfinite(hi) || !(hi > 0)) {
-      throw std::runtime_error(
-          "design_fir_differentiator: the Remez exchange broke down numerically");
+    if (good == 0) {
+      throw std::runtime_error("design_fir_differentiator: the Remez exchange did not converge (" +
+                               failure + "); fewer taps or a narrower transition band would help");
     }
-    const double spread = (hi - lo) / hi;
-    const bool stalled = std::abs(p.delta) <= previous_delta * (1 + 1e-12);
-    converged = spread <= kLevelTolerance || (stalled && spread <= kStalledLevelTolerance);
-    previous_delta = std::abs(p.delta);
-    extremals = std::move(next);
+    best = std::move(kept);
   }
-  if (!converged) {
-    throw std::runtime_error(
-        "design_fir_differentiator: the Remez exchange did not level the error in " +
-        std::to_string(kMaxIterations) + " iterations");
-  }
-
-  std::vector<double> taps = taps_from_cosines(cosine_coefficients(p, problem.m), odd_length);
 
   FirDifferentiator filter;
+  filter.taps = std::move(best.taps);
+  for (double& t : filter.taps) t *= sample_rate_hz;
   filter.sample_rate_hz = sample_rate_hz;
   filter.passband_hz = passband_hz;
   filter.stopband_hz = stopband_hz;
-  filter.iterations = iteration;
-
-  // Achieved errors from the taps themselves (an independent check of the conversion), on a fine
-  // grid plus the polished extremals, where the maxima are.
-  const std::size_t fine = 64 * static_cast<std::size_t>(num_taps);
-  std::vector<double> pass_points, stop_points;
-  for (std::size_t i = 1; i <= fine; ++i) {
-    pass_points.push_back(wp * static_cast<double>(i) / static_cast<double>(fine));
-    stop_points.push_back(ws +
-                          (kPi - ws) * static_cast<double>(i - 1) / static_cast<double>(fine - 1));
-  }
-  for (const Point& pt : extremals) (pt.band->pass ? pass_points : stop_points).push_back(pt.w);
-  for (double w : pass_points) {
-    if (w <= 0) continue;
-    filter.max_passband_relative_error =
-        std::max(filter.max_passband_relative_error, std::abs(amplitude(taps, w) - w) / w);
-  }
-  for (double w : stop_points) {
-    filter.max_stopband_gain = std::max(filter.max_stopband_gain, std::abs(amplitude(taps, w)));
-  }
-  filter.max_stopband_gain *= sample_rate_hz;
-
-  for (double& t : taps) t *= sample_rate_hz;
-  filter.taps = std::move(taps);
+  filter.max_passband_relative_error = best.max_passband_relative_error;
+  filter.max_stopband_gain = best.max_stopband_gain_per_sample * sample_rate_hz;
+  filter.iterations = iterations;
   return filter;
 }
 

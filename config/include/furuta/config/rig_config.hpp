@@ -83,6 +83,7 @@ struct ExcitationConfig {
   int multisine_components = 8;
   double multisine_f_min_hz = 0.2;
   double multisine_f_max_hz = 5.0;
+  double board_acceleration_pct_per_s = 6250.0;  // the 1065's duty ramp
 };
 
 struct RigConfig {

@@ -32,7 +32,10 @@ struct LoopSettings {
   bridge::EncoderGeometry pendulum_encoder;
   int pendulum_channel = 0;
   double stop_braking_fraction = 1.0;  // braking applied with the zero command on every stop
-  double rest_check_s = 1.0;           // the pendulum must not have moved for this long to start
+  // The 1065's duty ramp (%/s; 6250 = full scale, 0 to 100 % in 16 ms). A gentler ramp keeps the
+  // duty's edges slower than the sampling, which the identification needs (docs: identification).
+  double acceleration_pct_per_s = 6250.0;
+  double rest_check_s = 1.0;  // the pendulum must not have moved for this long to start
   // How long a start request waits for the pendulum to come to rest before it is refused
   // (0: refused at once, as the daemon does; a one-shot run waits).
   double rest_wait_s = 0.0;
