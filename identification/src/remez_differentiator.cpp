@@ -40,9 +40,6 @@ constexpr double kLevelFloor = 1e-12;
 // When rounding scrambles the alternation before either (errors near 1e-12), the best design met is
 // kept if its error is below this: a relative slope error no use of the filter can notice.
 constexpr double kNegligibleError = 1e-9;
-// A shorter design standing in for one whose optimum is below rounding must be at least this good
-// (a relative slope error far below the encoder's resolution in any use here).
-constexpr double kNegligibleShortfall = 1e-6;
 constexpr int kGoldenSteps = 64;
 // Up to this many cosine coefficients the exchange starts from evenly spread extremals.
 constexpr std::size_t kEvenStartLimit = 24;
@@ -524,13 +521,9 @@ struct Attempt {
   double max_passband_relative_error = 0;
   double max_stopband_gain_per_sample = 0;
 
-  // The requested length must deliver the level it found (up to evaluation on another grid); a
-  // stand-in of another length must be negligible.
-  bool acceptable(bool requested_length) const {
-    if (!converged) return false;
-    const bool delivers_level = achieved <= level * (1 + 1e-6) + 1e-12;
-    return (requested_length && delivers_level) || achieved <= kNegligibleShortfall;
-  }
+  // The taps achieve the level the exchange found (up to evaluation on another grid): the design is
+  // the optimum for its length.
+  bool delivers_level() const { return converged && achieved <= level * (1 + 1e-6) + 1e-12; }
 };
 
 Attempt attempt(const Problem& problem, std::span<const Band> bands, int num_taps) {
@@ -608,11 +601,12 @@ FirDifferentiator design_fir_differentiator(int num_taps, double passband_hz, do
 
   Attempt best = attempt(problem, bands, num_taps);
   int iterations = best.iterations;
-  if (!best.acceptable(true)) {
+  if (!best.delivers_level()) {
     // A length far beyond what the band edges need puts the optimal error below rounding: the
     // exchange cannot level it, or the taps cannot hold it (they grow large and cancel). The
-    // longest shorter design that works (found by bisection) is kept if its error is negligible:
-    // padded with zero taps at both ends, it is a filter of the requested length.
+    // longest shorter design that still delivers its own level (found by bisection) is as good as
+    // double precision allows; padded with zero taps at both ends it is a filter of the requested
+    // length. Of it and the full-length attempt, the one whose taps do better is kept.
     const std::string failure =
         best.converged
             ? "the taps lose the levelled error to rounding: " + std::to_string(best.achieved) +
@@ -625,7 +619,7 @@ FirDifferentiator design_fir_differentiator(int num_taps, double passband_hz, do
       shorter.m = trial;
       Attempt a = attempt(shorter, bands, num_taps);
       iterations += a.iterations;
-      if (a.acceptable(false)) {
+      if (a.delivers_level()) {
         good = trial;
         kept = std::move(a);
       } else {
@@ -633,11 +627,11 @@ FirDifferentiator design_fir_differentiator(int num_taps, double passband_hz, do
       }
       trial = good == 0 ? trial / 2 : (good + bad) / 2;
     }
-    if (good == 0) {
+    if (good == 0 && !best.converged) {
       throw std::runtime_error("design_fir_differentiator: the Remez exchange did not converge (" +
                                failure + "); fewer taps or a narrower transition band would help");
     }
-    best = std::move(kept);
+    if (good != 0 && (!best.converged || kept.achieved < best.achieved)) best = std::move(kept);
   }
 
   FirDifferentiator filter;
