@@ -18,6 +18,11 @@ namespace {
 // Far above any use here; a typo (80 for 8) then fails at once instead of designing nonsense.
 constexpr int kMaxOrder = 20;
 
+// Below this cut-off (relative to the sample rate) liquid's float poles stray from the exact ones
+// by a sizeable part of their spacing at high orders (first seen at 3e-4, order 20); 0.06 Hz
+// at 62.5 Hz is far below any use here.
+constexpr double kMinRelativeCutoff = 1e-3;
+
 // A matched liquid pole must sit this close to its exact counterpart, as a fraction of the smallest
 // distance between two exact poles: close enough that the match cannot be ambiguous, loose enough
 // for single-precision rounding of a pole that crowds z = 1 (about 1e-5 at fc = 0.005 fs).
@@ -70,6 +75,9 @@ IirFilter design_butterworth_lowpass(int order, double cutoff_hz, double sample_
           "must be finite and positive");
   require(std::isfinite(cutoff_hz) && cutoff_hz > 0 && cutoff_hz < sample_rate_hz / 2, "cutoff_hz",
           "must be in (0, sample_rate_hz / 2)");
+  require(cutoff_hz >= kMinRelativeCutoff * sample_rate_hz, "cutoff_hz",
+          "below 1e-3 of the sample rate, liquid-dsp's single-precision design cannot place the "
+          "poles (they crowd z = 1 closer than float resolves)");
 
   // liquid's cut-off is relative to the sample rate, in (0, 0.5).
   const double fc = cutoff_hz / sample_rate_hz;
@@ -121,19 +129,26 @@ IirFilter design_butterworth_lowpass(int order, double cutoff_hz, double sample_
     used[best] = true;
     const std::complex<double> p = exact[best];
 
+    // The zeros are all at z = -1: numerator (1, 2, 1) or (1, 1, 0). liquid's are exact multiples
+    // of those, unless its float gain underflowed to 0 (order 20 near the lowest cut-off).
+    const double shape[3] = {1.0, first_order ? 1.0 : 2.0, first_order ? 0.0 : 1.0};
+    if (b[i] != 0.0f) {
+      for (int k = 1; k < 3; ++k) {
+        if (std::abs(b[i + k] / b[i] - shape[k]) > 1e-6) {
+          throw std::logic_error("liquid_iirdes section " + std::to_string(s) +
+                                 " has zeros away from z = -1");
+        }
+      }
+    }
     SecondOrderSection section;
-    section.b0 = b[i];
-    section.b1 = b[i + 1];
-    section.b2 = b[i + 2];
     section.a1 = first_order ? -p.real() : -2.0 * p.real();
     section.a2 = first_order ? 0.0 : std::norm(p);
     // Unit DC gain per section, so the cascade's is 1 to rounding and intermediate signals keep the
-    // input's scale; liquid's numerators are exact multiples of (1, 2, 1) or (1, 1, 0), zeros at
-    // -1.
-    const double dc = (1.0 + section.a1 + section.a2) / (section.b0 + section.b1 + section.b2);
-    section.b0 *= dc;
-    section.b1 *= dc;
-    section.b2 *= dc;
+    // input's scale.
+    const double dc = (1.0 + section.a1 + section.a2) / (shape[0] + shape[1] + shape[2]);
+    section.b0 = shape[0] * dc;
+    section.b1 = shape[1] * dc;
+    section.b2 = shape[2] * dc;
     filter.sections.push_back(section);
   }
   filter.gain = 1.0;

@@ -105,6 +105,17 @@ TEST(ButterworthTest, MatchesTheAnalyticMagnitudeForOrders1To10AndSeveralCutoffs
             << "\n";
 }
 
+TEST(ButterworthTest, TheHighestOrderAtTheLowestCutoffKeepsItsShape) {
+  // Order 20 at 0.07 Hz: liquid's float gain underflows to 0 and its poles sit within 1e-3 of z
+  // = 1.
+  const IirFilter f = design_butterworth_lowpass(20, 0.07, kFs);
+  EXPECT_NEAR(std::abs(f.response(0.0, kFs)), 1.0, 1e-12);
+  EXPECT_NEAR(std::abs(f.response(0.07, kFs)), 1 / std::sqrt(2.0), 1e-9);
+  EXPECT_NEAR(std::abs(f.response(0.14, kFs)), analytic_butterworth(20, 0.14, 0.07, kFs), 1e-9);
+  const std::vector<double> x(200, 2.0);
+  for (double y : filtfilt(f, x)) ASSERT_NEAR(y, 2.0, 1e-9);
+}
+
 TEST(ButterworthTest, RejectsBadArgumentsNamingThem) {
   expect_invalid([] { design_butterworth_lowpass(0, 5, kFs); }, "order");
   expect_invalid([] { design_butterworth_lowpass(-3, 5, kFs); }, "order");
@@ -112,6 +123,7 @@ TEST(ButterworthTest, RejectsBadArgumentsNamingThem) {
   expect_invalid([] { design_butterworth_lowpass(8, 0, kFs); }, "cutoff_hz");
   expect_invalid([] { design_butterworth_lowpass(8, -1, kFs); }, "cutoff_hz");
   expect_invalid([] { design_butterworth_lowpass(8, kFs / 2, kFs); }, "cutoff_hz");
+  expect_invalid([] { design_butterworth_lowpass(8, 0.05, kFs); }, "cutoff_hz");  // < fs / 1000
   expect_invalid([] { design_butterworth_lowpass(8, NAN, kFs); }, "cutoff_hz");
   expect_invalid([] { design_butterworth_lowpass(8, 5, 0); }, "sample_rate_hz");
   expect_invalid([] { design_butterworth_lowpass(8, 5, INFINITY); }, "sample_rate_hz");
@@ -332,7 +344,7 @@ TEST(RemezDifferentiatorTest, TypeIVIsEquiripple) {
 TEST(RemezDifferentiatorTest, LongFiltersStillConverge) {
   const FirDifferentiator d = design_fir_differentiator(101, 5, 8, kFs);
   expect_equiripple(d, 1e-6);
-  EXPECT_LT(d.iterations, 30);
+  EXPECT_LT(d.iterations, 40);  // over both stages: 25 coefficients from an even start, then 50
 }
 
 // A least-squares design of the same length and weights: the minimax design must have the smaller
