@@ -377,13 +377,17 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   return c;
 }
 
-RigConfig load_rig_config(const std::filesystem::path& path) {
+std::string read_config_text(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path.string(), 0, "", "cannot open the file");
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw ConfigError(path.string(), 0, "", "cannot read the file");
-  return parse_rig_config(text.str(), path.string());
+  return text.str();
+}
+
+RigConfig load_rig_config(const std::filesystem::path& path) {
+  return parse_rig_config(read_config_text(path), path.string());
 }
 
 std::filesystem::path default_rig_config_path() {

@@ -267,12 +267,7 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
 }
 
 CsvImportSpec load_csv_import_spec(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path.string(), 0, "", "cannot open the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw ConfigError(path.string(), 0, "", "cannot read the file");
-  return parse_csv_import_spec(text.str(), path.string());
+  return parse_csv_import_spec(config::read_config_text(path), path.string());
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -106,6 +106,8 @@ struct RigConfig {
 };
 
 RigConfig load_rig_config(const std::filesystem::path& path);  // throws ConfigError
+// A configuration file's text; ConfigError naming the file when it cannot be opened or read.
+std::string read_config_text(const std::filesystem::path& path);
 RigConfig parse_rig_config(const std::string& text, const std::string& source_name);
 // The configuration shipped in config/rig.toml, for tools run without --config.
 std::filesystem::path default_rig_config_path();
