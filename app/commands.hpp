@@ -23,12 +23,14 @@ struct RemoteOptions {
   std::filesystem::path config_path;
   double reply_timeout_s = 2.0;
 };
+// A session's excitation as the user gave it; what is left out comes from the configuration's
+// [excitation], field by field.
 struct StartOptions {
-  std::string profile = "bang_bang";
-  double amplitude_duty = 0.3;
-  double duration_s = 10.0;
+  std::optional<std::string> profile;
+  std::optional<double> amplitude_duty;
+  std::optional<double> duration_s;
   std::string label;
-  std::int64_t seed = 1;
+  std::optional<std::int64_t> seed;
 };
 enum class RemoteKind { start, stop, estop, status };
 // Sends one command and prints the daemon's reply. 0: accepted; 1: refused (the reason is printed);
@@ -44,7 +46,6 @@ struct RunOptions {
   std::filesystem::path logs_dir;  // empty: the configuration's
   std::string lcm_url;             // empty: the configuration's; "memq://" publishes nowhere
   StartOptions session;
-  bool profile_given = false;  // else the configuration's [excitation]
 };
 int run_session_command(const RunOptions& options, std::ostream& out, std::ostream& err);
 

@@ -26,18 +26,18 @@ int main(int argc, char** argv) {
     cmd->add_option("--timeout", remote.reply_timeout_s, "Seconds to wait for the daemon")
         ->check(CLI::Range(0.1, 60.0));
   };
-  auto add_session = [&](CLI::App* cmd, bool* given) {
-    auto* p = cmd->add_option("--profile", start.profile,
-                              "bang_bang, free_decay, step, prbs, chirp, multisine");
+  auto add_session = [&](CLI::App* cmd, furuta::app::StartOptions& start) {
+    cmd->add_option("--profile", start.profile,
+                    "bang_bang, free_decay, step, prbs, chirp, multisine (default: the "
+                    "configuration's [excitation], as for every option left out)");
     cmd->add_option("--amplitude", start.amplitude_duty, "Duty amplitude (0, 1]");
     cmd->add_option("--duration", start.duration_s, "Seconds");
     cmd->add_option("--label", start.label, "A label for the session's name");
     cmd->add_option("--seed", start.seed, "Seed of randomised profiles");
-    if (given) p->each([given](const std::string&) { *given = true; });
   };
   CLI::App* start_cmd = app.add_subcommand("start", "Start a session on the running daemon");
   add_remote(start_cmd);
-  add_session(start_cmd, nullptr);
+  add_session(start_cmd, start);
   CLI::App* stop_cmd = app.add_subcommand("stop", "Stop the running session");
   add_remote(stop_cmd);
   CLI::App* estop_cmd = app.add_subcommand("estop", "Emergency stop: motor to zero, braked");
@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
                     "Simulated rig: run as fast as possible instead of in real time");
   run_cmd->add_option("--logs-dir", run.logs_dir, "Where the log goes");
   run_cmd->add_option("--lcm-url", run.lcm_url, "LCM URL for samples (memq:// for none)");
-  add_session(run_cmd, &run.profile_given);
+  add_session(run_cmd, run.session);
 
   std::string log_path, csv_path, replay_config;
   CLI::App* log_cmd = app.add_subcommand("log", "Session logs");

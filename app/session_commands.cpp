@@ -62,6 +62,15 @@ struct ReplyWaiter {
   }
 };
 
+void fill_start_command(const StartOptions& start, const config::ExcitationConfig& defaults,
+                        furuta::rig_command_t& command) {
+  command.profile = start.profile.value_or(defaults.profile);
+  command.amplitude_duty = start.amplitude_duty.value_or(defaults.amplitude_duty);
+  command.duration_s = start.duration_s.value_or(defaults.duration_s);
+  command.seed = start.seed.value_or(defaults.seed);
+  command.label = start.label;
+}
+
 std::string lcm_url_for(const RemoteOptions& remote) {
   if (!remote.lcm_url.empty()) return remote.lcm_url;
   return config::load_rig_config(remote.config_path).daemon.lcm_url;
@@ -111,11 +120,7 @@ int run_remote_command(RemoteKind kind, const RemoteOptions& remote, const Start
   switch (kind) {
     case RemoteKind::start:
       command.kind = furuta::rig_command_t::KIND_START_SESSION;
-      command.profile = start.profile;
-      command.amplitude_duty = start.amplitude_duty;
-      command.duration_s = start.duration_s;
-      command.label = start.label;
-      command.seed = start.seed;
+      fill_start_command(start, config::load_rig_config(remote.config_path).excitation, command);
       break;
     case RemoteKind::stop:
       command.kind = furuta::rig_command_t::KIND_STOP;
@@ -172,14 +177,7 @@ int run_session_command(const RunOptions& options, std::ostream& out, std::ostre
   daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
   furuta::rig_command_t command{};
   command.kind = furuta::rig_command_t::KIND_START_SESSION;
-  const daemon::ExcitationSpec& d = settings.default_excitation;
-  command.profile =
-      options.profile_given ? options.session.profile : std::string(daemon::to_string(d.kind));
-  command.amplitude_duty =
-      options.profile_given ? options.session.amplitude_duty : d.amplitude_duty;
-  command.duration_s = options.profile_given ? options.session.duration_s : d.duration_s;
-  command.seed = options.profile_given ? options.session.seed : static_cast<std::int64_t>(d.seed);
-  command.label = options.session.label;
+  fill_start_command(options.session, rig.excitation, command);
   const furuta::rig_status_t reply = daemon.handle_command(command);
   if (!reply.request_accepted) {
     err << "furuta run: refused: " << reply.request_reason << "\n";

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "furuta/session_log/session_log.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::app {
@@ -30,13 +31,35 @@ fs::path run_simulated_session(const fs::path& logs, double duration_s) {
   options.virtual_time = true;
   options.logs_dir = logs;
   options.lcm_url = "memq://";
-  options.profile_given = true;
   options.session.duration_s = duration_s;
   options.session.label = "cli";
   std::ostringstream out, err;
   EXPECT_EQ(run_session_command(options, out, err), 0) << out.str() << err.str();
   EXPECT_NE(out.str().find("session ended: duration_reached"), std::string::npos) << out.str();
   return only_log_in(logs);
+}
+
+TEST(RunCommand, OptionsLeftOutComeFromTheConfigurationFieldByField) {
+  // Giving only --amplitude and --seed must not fall back to the configuration for them (nor for
+  // the duration to a built-in default).
+  TempDir dir;
+  RunOptions options;
+  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  options.simulated = true;
+  options.virtual_time = true;
+  options.logs_dir = dir.path();
+  options.lcm_url = "memq://";
+  options.session.amplitude_duty = 0.125;
+  options.session.seed = 7;
+  options.session.duration_s = 1.0;
+  std::ostringstream out, err;
+  ASSERT_EQ(run_session_command(options, out, err), 0) << out.str() << err.str();
+  const session_log::SessionLog log = session_log::load_session_log(only_log_in(dir.path()));
+  ASSERT_TRUE(log.start.has_value());
+  EXPECT_EQ(log.start->amplitude_duty, 0.125);
+  EXPECT_EQ(log.start->seed, 7);
+  EXPECT_EQ(log.start->duration_s, 1.0);
+  EXPECT_EQ(log.start->profile, "bang_bang");  // the configuration's
 }
 
 TEST(RunCommand, ASimulatedSessionLeavesALogThatInfoExportAndReplayRead) {
