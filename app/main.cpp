@@ -106,7 +106,6 @@ int main(int argc, char** argv) {
                                              std::cerr);
     }
     if (*run_cmd) {
-      run.session = start;
       return furuta::app::run_session_command(run, std::cout, std::cerr);
     }
     if (*info_cmd) return furuta::app::run_log_info_command(log_path, std::cout, std::cerr);

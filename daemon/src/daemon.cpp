@@ -33,6 +33,26 @@ std::string session_name(std::int64_t wall_time_ns, const std::string& label) {
   return name;
 }
 
+std::string unique_session_name(const std::string& name, const std::filesystem::path& logs_dir) {
+  namespace fs = std::filesystem;
+  const auto taken = [&](const std::string& candidate) {
+    for (const fs::path& dir : {logs_dir, logs_dir / "done", logs_dir / "failed"}) {
+      std::error_code ec;
+      for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string leaf = it->path().filename().string();
+        if (leaf.size() > candidate.size() && leaf.compare(0, candidate.size(), candidate) == 0 &&
+            leaf[candidate.size()] == '.') {
+          return true;
+        }
+      }
+    }
+    return false;
+  };
+  std::string candidate = name;
+  for (int n = 2; taken(candidate); ++n) candidate = name + "-" + std::to_string(n);
+  return candidate;
+}
+
 Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, bridge::Clock& clock,
                lcm::LCM& lcm)
     : settings_(std::move(settings)),
@@ -228,7 +248,8 @@ furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command
         const auto wall = std::chrono::duration_cast<std::chrono::nanoseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();
-        copy_to(request.session, session_name(wall, command.label));
+        copy_to(request.session, unique_session_name(session_name(wall, command.label),
+                                                     settings_.recorder.logs_dir));
         copy_to(request.label, command.label);
         if (!loop_->request_session(request)) {
           decision = {false, "a start request is already waiting"};

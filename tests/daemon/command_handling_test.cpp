@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
 #include <limits>
 #include <memory>
@@ -22,6 +23,7 @@
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_status_t.hpp"
+#include "temp_dir.hpp"
 
 namespace furuta::daemon {
 namespace {
@@ -324,6 +326,28 @@ TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
   const rig_status_t stopped = rig.ask(status_request());
   EXPECT_EQ(stopped.state, +rig_status_t::STATE_IDLE);
   EXPECT_EQ(stopped.cycles, 81);
+}
+
+}  // namespace
+}  // namespace furuta::daemon
+
+namespace furuta::daemon {
+namespace {
+
+TEST(SessionNames, ASecondSessionInTheSameSecondGetsItsOwnName) {
+  furuta::testing::TempDir dir;
+  const std::string base = session_name(1'800'000'000'000'000'000, "bang");
+  EXPECT_EQ(unique_session_name(base, dir.path()), base);
+  std::ofstream(dir.path() / (base + ".lcmlog")) << "x";
+  EXPECT_EQ(unique_session_name(base, dir.path()), base + "-2");
+  std::filesystem::create_directories(dir.path() / "done");
+  std::ofstream(dir.path() / "done" / (base + "-2.lcmlog")) << "x";
+  std::ofstream(dir.path() / (base + "-3.lcmlog.part")) << "x";
+  EXPECT_EQ(unique_session_name(base, dir.path()), base + "-4");
+  // A longer name that merely starts with the same stamp does not count as taken.
+  std::ofstream(dir.path() / (base + "x.lcmlog")) << "x";
+  EXPECT_EQ(unique_session_name(base + "x", dir.path()), base + "x-2");
+  EXPECT_EQ(unique_session_name(base + "y", dir.path()), base + "y");
 }
 
 }  // namespace
