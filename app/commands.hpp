@@ -64,8 +64,23 @@ struct IdentifyCommandOptions {
   std::filesystem::path validate;           // optional held-out session log
   std::filesystem::path config_path;        // empty: the configuration carried by the first log
   std::filesystem::path output_dir = "identification";
-  double cutoff_hz = 5.0;
+  // Given here, these override the configuration's [identification].
+  std::optional<double> cutoff_hz;
+  std::optional<double> input_lag_ms;  // the torque is formed from the input this much earlier
+  bool estimate_input_lag = false;     // estimate it even when the configuration gives it
 };
+}  // namespace furuta::app
+namespace furuta::config {
+struct RigConfig;
+}
+namespace furuta::identification {
+struct IdentifyOptions;
+}
+namespace furuta::app {
+// The identification settings for a rig: its configuration's [identification], then the command's
+// overrides.
+identification::IdentifyOptions identify_options_for(const config::RigConfig& rig,
+                                                     const IdentifyCommandOptions& options);
 // Prints Table I (and the held-out RMSE), writes results.json, table.txt and SVG figures.
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err);

@@ -21,6 +21,24 @@ void write_file(const std::filesystem::path& path, const std::string& text) {
 
 }  // namespace
 
+identification::IdentifyOptions identify_options_for(const config::RigConfig& rig,
+                                                     const IdentifyCommandOptions& options) {
+  identification::IdentifyOptions identify_options;
+  const double cutoff_hz = options.cutoff_hz.value_or(rig.identification.cutoff_hz);
+  identify_options.preprocess.cutoff_hz = cutoff_hz;
+  identify_options.preprocess.differentiator_passband_hz = cutoff_hz;
+  identify_options.preprocess.differentiator_stopband_hz = 2 * cutoff_hz;
+  identify_options.preprocess.butterworth_order = rig.identification.butterworth_order;
+  identify_options.preprocess.differentiator_taps = rig.identification.differentiator_taps;
+  const std::optional<double> lag_ms =
+      options.estimate_input_lag
+          ? std::nullopt
+          : (options.input_lag_ms ? options.input_lag_ms : rig.identification.input_lag_ms);
+  identify_options.estimate_input_lag = !lag_ms.has_value();
+  identify_options.preprocess.input_lag_s = lag_ms.value_or(0.0) * 1e-3;
+  return identify_options;
+}
+
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err) {
   if (options.logs.empty()) {
@@ -49,10 +67,7 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   std::optional<identification::RawExperiment> validation;
   if (held_out) validation = identification::experiment_from_log(*held_out);
 
-  identification::IdentifyOptions identify_options;
-  identify_options.preprocess.cutoff_hz = options.cutoff_hz;
-  identify_options.preprocess.differentiator_passband_hz = options.cutoff_hz;
-  identify_options.preprocess.differentiator_stopband_hz = 2 * options.cutoff_hz;
+  const identification::IdentifyOptions identify_options = identify_options_for(rig, options);
   identification::Identification id =
       identification::identify(experiments, validation, identify_options, rig.motor);
   if (rig.nominal) id.nominal = identification::to_vector(*rig.nominal);

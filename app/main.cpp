@@ -83,8 +83,15 @@ int main(int argc, char** argv) {
                    "Rig configuration (default: the one the first log carries)")
       ->check(CLI::ExistingFile);
   identify_cmd->add_option("-o,--output", identify.output_dir, "Directory for results and figures");
-  identify_cmd->add_option("--cutoff", identify.cutoff_hz, "Low-pass cut-off [Hz]")
-      ->check(CLI::Range(0.1, 30.0));
+  identify_cmd->add_option("--cutoff", identify.cutoff_hz,
+                           "Low-pass cut-off [Hz] (default: the configuration's)");
+  auto* lag_option = identify_cmd->add_option(
+      "--input-lag-ms", identify.input_lag_ms,
+      "Input-to-angle lag [ms] (default: the configuration's, else estimated)");
+  identify_cmd
+      ->add_flag("--estimate-input-lag", identify.estimate_input_lag,
+                 "Estimate the lag from the data (to calibrate the configuration's)")
+      ->excludes(lag_option);
 
   CLI11_PARSE(app, argc, argv);
 

@@ -370,6 +370,26 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     e.reject_unknown_keys();
   }
 
+  {
+    Section s = top.child("identification");
+    IdentificationConfig& ic = c.identification;
+    const double nyquist_hz = 0.5e9 / static_cast<double>(c.daemon.period_ns);
+    ic.cutoff_hz = s.number(
+        "cutoff_hz", ic.cutoff_hz, [&](double v) { return v > 0 && 2 * v < nyquist_hz; },
+        "in (0, Nyquist / 2) (the differentiator's stop band starts at twice it)");
+    ic.butterworth_order = static_cast<int>(s.integer(
+        "butterworth_order", ic.butterworth_order, [](std::int64_t v) { return v >= 1 && v <= 16; },
+        "in [1, 16]"));
+    ic.differentiator_taps = static_cast<int>(s.integer(
+        "differentiator_taps", ic.differentiator_taps,
+        [](std::int64_t v) { return v >= 5 && v <= 201 && v % 2 == 1; }, "odd, in [5, 201]"));
+    if (s.has("input_lag_ms")) {
+      ic.input_lag_ms = s.number(
+          "input_lag_ms", 0.0, [](double v) { return std::abs(v) <= 100; }, "in [-100, 100]");
+    }
+    s.reject_unknown_keys();
+  }
+
   Section nominal = top.child("nominal");
   if (nominal.present()) c.nominal = read_parameters(nominal, bridge::ModelParameters{});
 

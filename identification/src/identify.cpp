@@ -26,10 +26,45 @@ Identification identify(const std::vector<RawExperiment>& experiments,
     id.processed.push_back(preprocess(e, options.preprocess, motor, voltage_motor));
   }
   std::vector<const JointSeries*> all;
-  for (const JointSeries& s : id.processed) {
-    id.per_experiment.push_back(solve_lsmi({&s}, lsmi));
-    all.push_back(&s);
+  for (const JointSeries& s : id.processed) all.push_back(&s);
+  id.input_lag_s = options.preprocess.input_lag_s;
+  if (options.estimate_input_lag) {
+    // Golden-section search of the residual over the lag: the residual is smooth and has one
+    // minimum within a sample period (measured on simulated sessions; see the README).
+    const auto residual = [&](double lag) {
+      for (std::size_t i = 0; i < id.processed.size(); ++i) {
+        torque_with_input_lag(id.processed[i], lag, experiments[i].input_kind, motor,
+                              voltage_motor);
+      }
+      return solve_lsmi(all, lsmi).sigma;
+    };
+    const double period = id.processed.front().sample_period_s;
+    const double golden = (std::sqrt(5.0) - 1) / 2;
+    double a = id.input_lag_s - period, b = id.input_lag_s + period;
+    double c = b - golden * (b - a), d = a + golden * (b - a);
+    double fc = residual(c), fd = residual(d);
+    while (b - a > 1e-6) {
+      if (fc < fd) {
+        b = d;
+        d = c;
+        fd = fc;
+        c = b - golden * (b - a);
+        fc = residual(c);
+      } else {
+        a = c;
+        c = d;
+        fc = fd;
+        d = a + golden * (b - a);
+        fd = residual(d);
+      }
+    }
+    id.input_lag_s = (a + b) / 2;
+    for (std::size_t i = 0; i < id.processed.size(); ++i) {
+      torque_with_input_lag(id.processed[i], id.input_lag_s, experiments[i].input_kind, motor,
+                            voltage_motor);
+    }
   }
+  for (const JointSeries& s : id.processed) id.per_experiment.push_back(solve_lsmi({&s}, lsmi));
   id.combined = solve_lsmi(all, lsmi);
   for (std::size_t i = 0; i < id.per_experiment.size(); ++i) {
     for (const auto& w : id.per_experiment[i].warnings) {
@@ -41,7 +76,9 @@ Identification identify(const std::vector<RawExperiment>& experiments,
     for (const auto& w : validation->warnings) id.warnings.push_back(w);
     ValidationResult v;
     v.name = validation->name;
-    v.series = preprocess(*validation, options.preprocess, motor, voltage_motor);
+    PreprocessOptions preprocess = options.preprocess;
+    preprocess.input_lag_s = id.input_lag_s;
+    v.series = identification::preprocess(*validation, preprocess, motor, voltage_motor);
     v.fit = torque_fit(v.series, id.combined.estimate, lsmi.trim_samples);
     id.validation = std::move(v);
   }
@@ -146,6 +183,8 @@ std::string format_table_one(const Identification& id) {
   out << std::left << std::setw(19) << "residual sigma N m";
   for (const LsmiResult& r : id.per_experiment) out << std::setw(w) << sci(r.sigma, 2);
   out << std::setw(w) << sci(id.combined.sigma, 2) << "\n";
+  out << "input lag (torque formed from the input this much earlier): " << std::fixed
+      << std::setprecision(3) << id.input_lag_s * 1e3 << " ms\n";
   if (id.validation) {
     out << "\nheld-out torque on " << id.validation->name << ": RMSE "
         << sci(id.validation->fit.rmse_nm, 3) << " N m = " << std::fixed << std::setprecision(2)
@@ -172,6 +211,7 @@ std::string results_json(const Identification& id, const std::vector<InputFile>&
         << ", \"lsmi\": " << json_lsmi(id.per_experiment[i]) << "}";
   }
   out << "],\n  \"combined\": " << json_lsmi(id.combined);
+  out << ",\n  \"input_lag_s\": " << json_number(id.input_lag_s);
   if (id.nominal) out << ",\n  \"nominal\": " << json_vector(*id.nominal);
   if (id.truth) out << ",\n  \"truth\": " << json_vector(*id.truth);
   if (id.validation) {

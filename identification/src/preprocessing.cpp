@@ -1,10 +1,54 @@
 #include "furuta/identification/preprocessing.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "furuta/identification/filters.hpp"
 
 namespace furuta::identification {
+
+namespace {
+
+// Catmull-Rom interpolation of (t, x) (t strictly increasing) at `at`; linear in the first and
+// last intervals, held constant outside.
+double cubic_at(const std::vector<double>& t, const std::vector<double>& x, double at) {
+  const std::size_t n = t.size();
+  if (n == 1 || at <= t.front()) return x.front();
+  if (at >= t.back()) return x.back();
+  const std::size_t j =
+      static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), at) - t.begin()) - 1;
+  const double h = t[j + 1] - t[j];
+  const double u = (at - t[j]) / h;
+  if (j == 0 || j + 2 >= n) return x[j] + u * (x[j + 1] - x[j]);
+  // Tangents from the neighbours, scaled to this interval (non-uniform spacing allowed).
+  const double m1 = (x[j + 1] - x[j - 1]) / (t[j + 1] - t[j - 1]) * h;
+  const double m2 = (x[j + 2] - x[j]) / (t[j + 2] - t[j]) * h;
+  const double u2 = u * u, u3 = u2 * u;
+  return (2 * u3 - 3 * u2 + 1) * x[j] + (u3 - 2 * u2 + u) * m1 + (-2 * u3 + 3 * u2) * x[j + 1] +
+         (u3 - u2) * m2;
+}
+
+double linear_at(const std::vector<double>& t, const std::vector<double>& x, double at) {
+  if (t.size() == 1 || at <= t.front()) return x.front();
+  if (at >= t.back()) return x.back();
+  const std::size_t j =
+      static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), at) - t.begin()) - 1;
+  const double u = (at - t[j]) / (t[j + 1] - t[j]);
+  return x[j] + u * (x[j + 1] - x[j]);
+}
+
+// A channel's values at the host times of the reports they came from: one point per sample that
+// had a fresh report (a stale sample repeats the last value and adds nothing).
+struct TimedChannel {
+  std::vector<double> t_s, value;
+  void add(double t, double v) {
+    if (!t_s.empty() && t <= t_s.back()) return;
+    t_s.push_back(t);
+    value.push_back(v);
+  }
+};
+
+}  // namespace
 
 RawExperiment experiment_from_log(const session_log::SessionLog& log) {
   RawExperiment e;
@@ -14,15 +58,45 @@ RawExperiment experiment_from_log(const session_log::SessionLog& log) {
     throw std::invalid_argument(log.path.string() + ": fewer than two samples");
   }
   const std::int64_t t0 = log.samples.front().monotonic_ns;
+  const auto seconds = [t0](std::int64_t ns) { return static_cast<double>(ns - t0) * 1e-9; };
+  TimedChannel arm, duty, pendulum;
+  std::vector<double> motor_lag_s;
   for (const auto& s : log.samples) {
-    e.t_s.push_back(static_cast<double>(s.monotonic_ns - t0) * 1e-9);
-    e.q1.push_back(s.arm_angle_rad);
-    e.q2.push_back(s.pendulum_angle_rad);
-    e.input.push_back(s.applied_duty);
+    const double cycle = seconds(s.monotonic_ns);
+    if (s.n_motor_reports > 0) {
+      const double at = seconds(s.motor_report_host_ns[s.n_motor_reports - 1]);
+      arm.add(at, s.arm_angle_rad);
+      duty.add(at, s.applied_duty);
+      motor_lag_s.push_back(cycle - at);
+    }
+    if (s.n_encoder_reports > 0) {
+      pendulum.add(seconds(s.encoder_report_host_ns[s.n_encoder_reports - 1]),
+                   s.pendulum_angle_rad);
+    }
   }
   e.sample_period_s = log.start && log.start->period_ns > 0
                           ? static_cast<double>(log.start->period_ns) * 1e-9
-                          : e.t_s[1] - e.t_s[0];
+                          : seconds(log.samples[1].monotonic_ns);
+  if (arm.t_s.size() < 2 || pendulum.t_s.size() < 2) {
+    // Without report times (old or foreign logs): the samples as the daemon wrote them.
+    for (const auto& s : log.samples) {
+      e.t_s.push_back(seconds(s.monotonic_ns));
+      e.q1.push_back(s.arm_angle_rad);
+      e.q2.push_back(s.pendulum_angle_rad);
+      e.input.push_back(s.applied_duty);
+    }
+  } else {
+    std::nth_element(motor_lag_s.begin(), motor_lag_s.begin() + motor_lag_s.size() / 2,
+                     motor_lag_s.end());
+    const double lag = motor_lag_s[motor_lag_s.size() / 2];
+    for (const auto& s : log.samples) {
+      const double at = seconds(s.monotonic_ns) - lag;
+      e.t_s.push_back(at);
+      e.q1.push_back(cubic_at(arm.t_s, arm.value, at));
+      e.q2.push_back(cubic_at(pendulum.t_s, pendulum.value, at));
+      e.input.push_back(linear_at(duty.t_s, duty.value, at));
+    }
+  }
   const auto& last = log.samples.back();
   if (last.motor_lost_reports > 0 || last.encoder_lost_reports > 0) {
     e.warnings.push_back(
@@ -88,28 +162,48 @@ JointSeries preprocess(const RawExperiment& e, const PreprocessOptions& options,
   // filtered input and the filtered velocity. Eq. 4 and the DC-motor form are linear, so this
   // equals the low-passed torque; forming it from the raw input and filtering afterwards would
   // low-pass the velocity twice and bias every inertia.
-  const std::vector<double> input = filtfilt(lowpass, e.input);
-  std::vector<double> tau(input.size());
-  for (std::size_t i = 0; i < tau.size(); ++i) {
-    switch (e.input_kind) {
+  s.input = filtfilt(lowpass, e.input);
+  torque_with_input_lag(s, options.input_lag_s, e.input_kind, motor, voltage_motor);
+  return s;
+}
+
+void torque_with_input_lag(JointSeries& s, double lag_s, InputKind kind,
+                           const bridge::MotorData& motor, const VoltageMotor& voltage_motor) {
+  if (s.input.size() != s.size() || s.dq1.size() != s.size()) {
+    throw std::invalid_argument(s.name +
+                                ": torque needs the filtered input and dq1 at every sample");
+  }
+  // The filtered input is smooth (band-limited far below the sample rate), so a fractional delay
+  // by linear interpolation is accurate.
+  const double shift = lag_s / s.sample_period_s;
+  const auto delayed = [&](std::size_t i) {
+    const double at = static_cast<double>(i) - shift;
+    if (at <= 0) return s.input.front();
+    if (at >= static_cast<double>(s.input.size() - 1)) return s.input.back();
+    const auto j = static_cast<std::size_t>(at);
+    const double u = at - static_cast<double>(j);
+    return s.input[j] + u * (s.input[j + 1] - s.input[j]);
+  };
+  s.tau.assign(s.size(), 0.0);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const double input = delayed(i);
+    switch (kind) {
       case InputKind::duty:
-        tau[i] = motor.arm_torque_nm(input[i], s.dq1[i]);
+        s.tau[i] = motor.arm_torque_nm(input, s.dq1[i]);
         break;
       case InputKind::voltage: {
         const double omega_motor = voltage_motor.gear_ratio * s.dq1[i];
-        tau[i] = voltage_motor.gear_ratio * voltage_motor.efficiency *
-                 voltage_motor.torque_constant_nm_per_a *
-                 (input[i] - voltage_motor.back_emf_v_s_per_rad * omega_motor) /
-                 voltage_motor.resistance_ohm;
+        s.tau[i] = voltage_motor.gear_ratio * voltage_motor.efficiency *
+                   voltage_motor.torque_constant_nm_per_a *
+                   (input - voltage_motor.back_emf_v_s_per_rad * omega_motor) /
+                   voltage_motor.resistance_ohm;
         break;
       }
       case InputKind::torque:
-        tau[i] = input[i];
+        s.tau[i] = input;
         break;
     }
   }
-  s.tau = std::move(tau);
-  return s;
 }
 
 }  // namespace furuta::identification

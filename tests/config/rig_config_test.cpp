@@ -101,3 +101,26 @@ TEST(RigConfig, AMissingFileIsAnErrorNamingIt) {
 
 }  // namespace
 }  // namespace furuta::config
+
+namespace furuta::config {
+namespace {
+
+TEST(RigConfig, IdentificationSectionIsCheckedAgainstTheSamplePeriod) {
+  const RigConfig shipped = load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  EXPECT_EQ(shipped.identification.cutoff_hz, 15.0);
+  ASSERT_TRUE(shipped.identification.input_lag_ms.has_value());
+  EXPECT_FALSE(parse_rig_config("", "empty").identification.input_lag_ms.has_value());
+  // 16 ms: Nyquist 31.25 Hz, so the cut-off must stay below 15.625 Hz.
+  const ConfigError high = error_of("[identification]\ncutoff_hz = 16\n");
+  EXPECT_EQ(high.field(), "identification.cutoff_hz");
+  EXPECT_EQ(high.line(), 2);
+  // A faster loop allows a higher cut-off.
+  EXPECT_EQ(parse_rig_config("[daemon]\nperiod_ms = 8\n[identification]\ncutoff_hz = 20\n", "x")
+                .identification.cutoff_hz,
+            20.0);
+  EXPECT_EQ(error_of("[identification]\ndifferentiator_taps = 30\n").field(),
+            "identification.differentiator_taps");
+}
+
+}  // namespace
+}  // namespace furuta::config

@@ -67,6 +67,19 @@ struct CommandLimitsConfig {
 };
 
 // [excitation]: defaults for sessions (a command overrides profile, amplitude, duration, seed).
+// [identification]: how sessions of this rig are preprocessed for identification.
+struct IdentificationConfig {
+  // Low-pass cut-off; the differentiator's pass band ends there and its stop band starts at twice
+  // it, which must stay below the Nyquist frequency.
+  double cutoff_hz = 15.0;
+  int butterworth_order = 8;
+  int differentiator_taps = 31;
+  // The lag between the logged input and the angles (USB, board and sampling phase), a property of
+  // the rig's data path: calibrate it once on a gentle session (`furuta identify` estimates it when
+  // this is absent) and set it here.
+  std::optional<double> input_lag_ms;
+};
+
 struct ExcitationConfig {
   std::string profile = "bang_bang";
   double amplitude_duty = 0.3;
@@ -101,6 +114,7 @@ struct RigConfig {
   SafetyConfig safety;
   CommandLimitsConfig limits;
   ExcitationConfig excitation;
+  IdentificationConfig identification;
   std::string source_text;  // the file verbatim, so logs can carry it
   std::string source_name;
 };

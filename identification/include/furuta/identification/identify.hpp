@@ -14,6 +14,10 @@ namespace furuta::identification {
 struct IdentifyOptions {
   PreprocessOptions preprocess;
   LsmiOptions lsmi;  // trim_samples 0 here means: the filters' edge length
+  // Estimate the lag between the recorded input and the angles (USB and board latencies the log
+  // cannot see) as the one, within +- one sample period, that minimises the combined fit's
+  // residual; preprocess.input_lag_s is then only the starting point. See torque_with_input_lag.
+  bool estimate_input_lag = true;
 };
 
 struct ValidationResult {
@@ -30,6 +34,7 @@ struct Identification {
   std::optional<ParameterVector> nominal;  // CAD values, from the configuration
   std::optional<ParameterVector> truth;    // simulated sessions: the simulated rig's parameters
   std::optional<ValidationResult> validation;
+  double input_lag_s = 0;  // as used (estimated or given)
   std::vector<std::string> warnings;
 };
 

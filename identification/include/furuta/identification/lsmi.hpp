@@ -27,6 +27,7 @@ struct JointSeries {
   std::string name;
   double sample_period_s = 0;
   std::vector<double> t_s, q1, q2, dq1, dq2, ddq1, ddq2, tau;
+  std::vector<double> input;  // the filtered input (duty, voltage or torque) tau was formed from
   std::size_t size() const { return t_s.size(); }
 };
 

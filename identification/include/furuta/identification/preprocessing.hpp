@@ -24,6 +24,10 @@ struct RawExperiment {
 
 // The samples of a session log: q1, q2 as the daemon computed them, the duty the board applied
 // (its echo, not the command). Warns about lost reports and overruns in the session.
+// The two boards report at their own times (up to a report period apart): each channel is placed
+// at the host receive time of the report it came from and resampled (cubic) onto one uniform grid,
+// the 1065's times shifted by their median lag behind the cycle. The duty (a step signal) is
+// resampled linearly.
 RawExperiment experiment_from_log(const session_log::SessionLog& log);
 RawExperiment experiment_from_csv(const ImportedSeries& series, const std::string& name);
 
@@ -42,12 +46,22 @@ struct PreprocessOptions {
   int differentiator_taps = 31;  // odd
   double differentiator_passband_hz = 5.0;
   double differentiator_stopband_hz = 10.0;
+  // The torque at t is formed from the input at t - input_lag_s (see torque_with_input_lag).
+  double input_lag_s = 0.0;
 };
 
 // Filters and differentiates; `motor` gives eq. 4 for duty input, `voltage_motor` the DC-motor
 // form.
 JointSeries preprocess(const RawExperiment& experiment, const PreprocessOptions& options,
                        const bridge::MotorData& motor, const VoltageMotor& voltage_motor = {});
+
+// Forms series.tau from series.input (the filtered input) delayed by lag_s, and series.dq1.
+// The arm's time constant (mu1 over the back-EMF and viscous damping, about 4.4 ms on the paper's
+// rig) is far below the 16 ms sample period, so the torque is a small difference of two large
+// terms and mu1 moves by (fv1 + back-EMF damping) / mu1 per second of misalignment between input
+// and angles (about 23 % per ms): an unmodelled lag of a millisecond is a large bias.
+void torque_with_input_lag(JointSeries& series, double lag_s, InputKind kind,
+                           const bridge::MotorData& motor, const VoltageMotor& voltage_motor);
 
 // How many samples at each end the filters disturb (to trim before fitting).
 std::size_t edge_samples(const PreprocessOptions& options);
