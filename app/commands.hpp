@@ -59,15 +59,25 @@ int run_replay_command(const std::filesystem::path& log, const std::filesystem::
                        std::ostream& out, std::ostream& err);
 
 // --- identification ---
+// Fits either session logs or CSV recordings (another rig, another logger), not both: they are
+// fitted together as one rig.
 struct IdentifyCommandOptions {
   std::vector<std::filesystem::path> logs;  // session logs to fit
-  std::filesystem::path validate;           // optional held-out session log
-  std::filesystem::path config_path;        // empty: the configuration carried by the first log
+  std::vector<std::filesystem::path> csvs;  // or CSV recordings to fit, mapped by import_spec
+  std::filesystem::path import_spec;        // TOML ([csv], [motor]); required with CSV inputs
+  std::filesystem::path validate;  // optional held-out session: a log, or a CSV (name ends .csv)
+  // Empty: the configuration carried by the first log. With CSVs it is optional: only duty input
+  // needs it (eq. 4's motor data); it also gives the CAD values and [identification]'s filters.
+  std::filesystem::path config_path;
   std::filesystem::path output_dir = "identification";
   // Given here, these override the configuration's [identification].
   std::optional<double> cutoff_hz;
-  std::optional<double> input_lag_ms;  // the torque is formed from the input this much earlier
-  bool estimate_input_lag = false;     // estimate it even when the configuration gives it
+  // The torque is formed from the input this much earlier. CSVs: 0 unless given (the
+  // configuration's lag belongs to the daemon's data path, not another logger's).
+  std::optional<double> input_lag_ms;
+  bool estimate_input_lag = false;  // estimate it even when the configuration gives it
+  bool sivia = false;               // guaranteed identification after the LSMI ([sivia])
+  std::optional<int> threads;       // SIVIA threads (default: the configuration's)
 };
 }  // namespace furuta::app
 namespace furuta::config {

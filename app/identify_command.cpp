@@ -1,10 +1,20 @@
-// `furuta identify LOG... [--validate LOG]`: LSMI on session logs, Table I, results.json, figures.
+// `furuta identify LOG... [--validate LOG]` and `furuta identify --csv FILE... --import-spec SPEC
+// [--validate FILE.csv]`: LSMI on session logs or CSV recordings, Table I, results.json, figures.
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
 #include <fstream>
+#include <numbers>
 #include <ostream>
+#include <sstream>
 
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/rig_connection.hpp"
+#include "furuta/identification/csv_import.hpp"
+#include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/session_log/session_log.hpp"
 
@@ -17,6 +27,193 @@ void write_file(const std::filesystem::path& path, const std::string& text) {
   out << text;
   out.close();
   if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+// A CSV recording rather than a session log: decided by the name alone, as the user sees it.
+bool is_csv(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".csv";
+}
+
+// What the fit needs besides the experiments, whichever kind of input they came from.
+struct FitInputs {
+  std::vector<identification::RawExperiment> experiments;
+  std::optional<identification::RawExperiment> validation;
+  config::RigConfig settings;  // [identification] and the motor for eq. 4
+  std::optional<bridge::ModelParameters> nominal, truth;
+  identification::VoltageMotor voltage_motor;
+  double angle_resolution_rad = 0;  // the signals figures' quantisation band
+};
+
+struct GuaranteedRun {
+  std::string json, svg, summary;
+};
+
+// SIVIA over the fitted sessions: the mu's around the combined LSMI estimate (Table II style), the
+// frictions' priors, the data bounds and the paver settings from [sivia].
+GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
+                             const identification::Identification& id,
+                             const identification::IdentifyOptions& identify_options,
+                             const IdentifyCommandOptions& options,
+                             const std::optional<bridge::ModelParameters>& truth) {
+  using namespace identification;
+  GuaranteedOptions g;
+  g.prior = paper_prior(id.combined.estimate, cfg.mu_uncertainty_pct, 1.0);
+  g.prior[5] = interval::Interval(cfg.fv1_prior[0], cfg.fv1_prior[1]);
+  g.prior[6] = interval::Interval(cfg.fv2_prior[0], cfg.fv2_prior[1]);
+  g.unknown.fill(false);
+  for (const std::string& name : cfg.unknowns) {
+    for (int k = 0; k < kParameterCount; ++k) {
+      if (name == kParameterNames[k]) g.unknown[k] = true;
+    }
+  }
+  g.epsilon = cfg.epsilon;
+  g.epsilon_relative = cfg.epsilon_relative;
+  g.contract = cfg.contract;
+  g.inner = cfg.inner_test == "witness"              ? InnerTest::witness
+            : cfg.inner_test == "intermediate_value" ? InnerTest::intermediate_value
+            : cfg.inner_test == "for_all_data"       ? InnerTest::for_all_data
+                                                     : InnerTest::none;
+  g.q = cfg.q;
+  g.threads = options.threads.value_or(cfg.threads);
+  // Progress only on a terminal: logs and CI stay quiet.
+  const bool tty = ::isatty(STDERR_FILENO) == 1;
+  if (tty) {
+    g.progress = [](std::size_t tested, std::size_t pending) {
+      std::fprintf(stderr, "\rSIVIA: %zu boxes tested, %zu pending   ", tested, pending);
+      std::fflush(stderr);
+    };
+  }
+  DataErrorBounds bounds;
+  const auto bound = [](const std::array<double, 2>& b) { return ChannelErrorBound{b[0], b[1]}; };
+  bounds.q2 = bound(cfg.q2_bound);
+  bounds.dq1 = bound(cfg.dq1_bound);
+  bounds.dq2 = bound(cfg.dq2_bound);
+  bounds.ddq1 = bound(cfg.ddq1_bound);
+  bounds.ddq2 = bound(cfg.ddq2_bound);
+  bounds.tau = bound(cfg.tau_bound);
+  std::vector<const JointSeries*> series;
+  for (const JointSeries& s : id.processed) series.push_back(&s);
+  const std::size_t trim = identify_options.lsmi.trim_samples != 0
+                               ? identify_options.lsmi.trim_samples
+                               : edge_samples(identify_options.preprocess);
+  const SampleConstraints constraints(interval_samples(series, bounds, trim), g.prior, g.unknown);
+  const GuaranteedResult r = guaranteed_identification(constraints, g);
+  if (tty) std::fprintf(stderr, "\n");
+
+  GuaranteedRun run;
+  run.json = guaranteed_json(r, constraints);
+  std::vector<double> reference;
+  if (truth) {
+    const ParameterVector t = to_vector(*truth);
+    reference.assign(t.begin(), t.end());
+  }
+  run.svg = svg_paving(r, 5, 6, truth ? &reference : nullptr);
+  std::ostringstream s;
+  s << "\nSIVIA (" << r.samples << " samples, q = " << r.q << "): " << r.paving.inner.size()
+    << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
+    << " outer boxes; " << r.paving.boxes_tested << " tested in " << r.paving.seconds << " s"
+    << (r.paving.truncated ? " (truncated)" : "") << "\n";
+  if (r.empty) {
+    s << r.finding << "\n";
+  } else {
+    const interval::Box hull = r.paving.outer_hull();
+    for (int k = 0; k < kParameterCount; ++k) {
+      if (!g.unknown[k]) continue;
+      s << "  " << kParameterNames[k] << " in " << hull[static_cast<std::size_t>(k)] << " "
+        << kParameterUnits[k];
+      if (truth) {
+        const ParameterVector t = to_vector(*truth);
+        s << (hull[static_cast<std::size_t>(k)].contains(t[k]) ? "  (contains the truth)"
+                                                               : "  (misses the truth)");
+      }
+      s << "\n";
+    }
+    if (!r.inconsistent_samples.empty()) {
+      s << "  " << r.inconsistent_samples.size() << " samples inconsistent (tolerated by q)\n";
+    }
+  }
+  run.summary = s.str();
+  return run;
+}
+
+// Session logs: the rig is the one the first log carries, unless --config gives one.
+std::optional<FitInputs> inputs_from_logs(const IdentifyCommandOptions& options,
+                                          std::ostream& err) {
+  std::vector<session_log::SessionLog> logs;
+  for (const auto& path : options.logs) logs.push_back(session_log::load_session_log(path));
+  if (!logs.front().start && options.config_path.empty()) {
+    err << "furuta identify: " << options.logs.front().string()
+        << " has no session start record (and so no configuration); pass --config\n";
+    return std::nullopt;
+  }
+  FitInputs in;
+  in.settings =
+      options.config_path.empty()
+          ? config::parse_rig_config(logs.front().start->rig_config_toml,
+                                     options.logs.front().string() + " (rig configuration)")
+          : config::load_rig_config(options.config_path);
+  for (const auto& log : logs) in.experiments.push_back(identification::experiment_from_log(log));
+  if (!options.validate.empty()) {
+    in.validation =
+        identification::experiment_from_log(session_log::load_session_log(options.validate));
+  }
+  in.nominal = in.settings.nominal;
+  if (in.settings.backend == config::UsbBackend::simulated) {
+    in.truth = in.settings.simulation.parameters;
+  }
+  in.angle_resolution_rad = bridge::resolution_rad(in.settings.pendulum_encoder);
+  return in;
+}
+
+// CSV recordings, mapped by the import spec. The rig configuration is optional: duty input needs
+// its motor (eq. 4); voltage input has its motor in the spec's [motor], torque input needs none.
+std::optional<FitInputs> inputs_from_csvs(const IdentifyCommandOptions& options,
+                                          std::ostream& err) {
+  const identification::CsvImportSpec spec =
+      identification::load_csv_import_spec(options.import_spec);
+  FitInputs in;
+  if (!options.config_path.empty()) {
+    in.settings = config::load_rig_config(options.config_path);
+    in.nominal = in.settings.nominal;  // no truth: the simulation is not where the CSVs came from
+  } else if (spec.input_kind == identification::InputKind::duty) {
+    err << "furuta identify: " << options.import_spec.string()
+        << ": input_kind = \"duty\" needs the rig's motor data (eq. 4): pass --config RIG.toml\n";
+    return std::nullopt;
+  }
+  // The configuration's input lag is the daemon's data path; another logger's is unknown, so 0
+  // unless the command gives one (or asks for it to be estimated).
+  in.settings.identification.input_lag_ms = 0.0;
+  if (spec.voltage_motor) in.voltage_motor = *spec.voltage_motor;
+  const auto load = [&](const std::filesystem::path& path) {
+    return identification::experiment_from_csv(identification::import_csv(path, spec),
+                                               path.filename().string());
+  };
+  for (const auto& path : options.csvs) in.experiments.push_back(load(path));
+  if (!options.validate.empty()) in.validation = load(options.validate);
+  if (spec.angle_unit == identification::AngleUnit::counts) {
+    in.angle_resolution_rad = 2 * std::numbers::pi / spec.pendulum_counts_per_rev;
+  }
+
+  // The differentiator's stop band (twice the cut-off) must fit below every file's Nyquist
+  // frequency; a recording slower than the rig's loop needs a lower cut-off than its default.
+  const double cutoff_hz = options.cutoff_hz.value_or(in.settings.identification.cutoff_hz);
+  std::vector<const identification::RawExperiment*> all;
+  for (const auto& e : in.experiments) all.push_back(&e);
+  if (in.validation) all.push_back(&*in.validation);
+  for (const auto* e : all) {
+    const double nyquist_hz = 0.5 / e->sample_period_s;
+    if (!(2 * cutoff_hz < nyquist_hz)) {
+      err << "furuta identify: " << e->name << ": the cut-off " << cutoff_hz
+          << " Hz puts the differentiator's stop band (" << 2 * cutoff_hz
+          << " Hz) above the Nyquist frequency " << nyquist_hz << " Hz; pass --cutoff below "
+          << nyquist_hz / 2 << "\n";
+      return std::nullopt;
+    }
+  }
+  return in;
 }
 
 }  // namespace
@@ -41,63 +238,91 @@ identification::IdentifyOptions identify_options_for(const config::RigConfig& ri
 
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err) {
-  if (options.logs.empty()) {
-    err << "furuta identify: give at least one session log\n";
+  if (options.logs.empty() && options.csvs.empty()) {
+    err << "furuta identify: give at least one session log, or --csv FILE with --import-spec "
+           "SPEC\n";
     return 2;
   }
-  std::vector<session_log::SessionLog> logs;
-  for (const auto& path : options.logs) logs.push_back(session_log::load_session_log(path));
-  std::optional<session_log::SessionLog> held_out;
-  if (!options.validate.empty()) held_out = session_log::load_session_log(options.validate);
-
-  // The rig the data came from: the configuration its first log carries, unless one is given.
-  if (!logs.front().start && options.config_path.empty()) {
-    err << "furuta identify: " << options.logs.front().string()
-        << " has no session start record (and so no configuration); pass --config\n";
+  for (const auto& path : options.logs) {
+    if (is_csv(path)) {
+      err << "furuta identify: " << path.string()
+          << " is a CSV file: pass it as --csv FILE, with --import-spec SPEC\n";
+      return 2;
+    }
+  }
+  const bool csv_input = !options.csvs.empty();
+  if (csv_input && !options.logs.empty()) {
+    err << "furuta identify: session logs and CSV files are fitted together as one rig; give "
+           "one kind\n";
     return 2;
   }
-  const config::RigConfig rig =
-      options.config_path.empty()
-          ? config::parse_rig_config(logs.front().start->rig_config_toml,
-                                     options.logs.front().string() + " (rig configuration)")
-          : config::load_rig_config(options.config_path);
-
-  std::vector<identification::RawExperiment> experiments;
-  for (const auto& log : logs) experiments.push_back(identification::experiment_from_log(log));
-  std::optional<identification::RawExperiment> validation;
-  if (held_out) validation = identification::experiment_from_log(*held_out);
-
-  const identification::IdentifyOptions identify_options = identify_options_for(rig, options);
-  identification::Identification id =
-      identification::identify(experiments, validation, identify_options, rig.motor);
-  if (rig.nominal) id.nominal = identification::to_vector(*rig.nominal);
-  if (rig.backend == config::UsbBackend::simulated) {
-    id.truth = identification::to_vector(rig.simulation.parameters);
+  if (!options.validate.empty() && is_csv(options.validate) != csv_input) {
+    err << "furuta identify: the held-out " << options.validate.string() << " is "
+        << (csv_input ? "not a CSV file" : "a CSV file") << " but the fitted inputs are "
+        << (csv_input ? "CSV files" : "session logs") << "; validate on the same kind\n";
+    return 2;
   }
+  if (csv_input && options.import_spec.empty()) {
+    err << "furuta identify: --csv needs --import-spec SPEC (the columns, units and conventions; "
+           "see identification/README.md)\n";
+    return 2;
+  }
+  if (!csv_input && !options.import_spec.empty()) {
+    err << "furuta identify: --import-spec applies to --csv inputs only\n";
+    return 2;
+  }
+
+  std::optional<FitInputs> fit;
+  try {
+    fit = csv_input ? inputs_from_csvs(options, err) : inputs_from_logs(options, err);
+  } catch (const config::ConfigError& e) {  // the import spec or the rig configuration
+    err << "furuta identify: " << e.what() << "\n";
+    return 2;
+  } catch (const identification::CsvImportError& e) {
+    err << "furuta identify: " << e.what() << "\n";
+    return 2;
+  }
+  if (!fit) return 2;
+
+  const identification::IdentifyOptions identify_options =
+      identify_options_for(fit->settings, options);
+  identification::Identification id = identification::identify(
+      fit->experiments, fit->validation, identify_options, fit->settings.motor, fit->voltage_motor);
+  if (fit->nominal) id.nominal = identification::to_vector(*fit->nominal);
+  if (fit->truth) id.truth = identification::to_vector(*fit->truth);
 
   std::filesystem::create_directories(options.output_dir);
   std::vector<identification::InputFile> inputs;
-  for (const auto& path : options.logs) {
+  const auto add_input = [&](const std::filesystem::path& path) {
     inputs.push_back({path.string(), identification::sha256_file(path.string())});
-  }
-  if (!options.validate.empty()) {
-    inputs.push_back(
-        {options.validate.string(), identification::sha256_file(options.validate.string())});
-  }
+  };
+  for (const auto& path : options.logs) add_input(path);
+  for (const auto& path : options.csvs) add_input(path);
+  if (!options.validate.empty()) add_input(options.validate);
+  if (csv_input) add_input(options.import_spec);
   const std::string table = identification::format_table_one(id);
   write_file(options.output_dir / "table.txt", table);
+  std::string sivia_json;
+  std::string sivia_summary;
+  if (options.sivia) {
+    const GuaranteedRun run =
+        run_guaranteed(fit->settings.sivia, id, identify_options, options, fit->truth);
+    sivia_json = "\"sivia\": " + run.json;
+    sivia_summary = run.summary;
+    write_file(options.output_dir / "sivia.json", run.json + "\n");
+    write_file(options.output_dir / "sivia.svg", run.svg);
+  }
   write_file(options.output_dir / "results.json",
-             identification::results_json(id, inputs, daemon::kSoftwareVersion));
-  const double resolution = bridge::resolution_rad(rig.pendulum_encoder);
+             identification::results_json(id, inputs, daemon::kSoftwareVersion, sivia_json));
   for (std::size_t i = 0; i < id.processed.size(); ++i) {
     write_file(options.output_dir / ("signals_" + std::to_string(i + 1) + ".svg"),
-               identification::svg_signals(id.raw[i], id.processed[i], resolution));
+               identification::svg_signals(id.raw[i], id.processed[i], fit->angle_resolution_rad));
   }
   if (id.validation) {
     write_file(options.output_dir / "torque_validation.svg",
                identification::svg_torque_validation(*id.validation));
   }
-  out << table;
+  out << table << sivia_summary;
   out << "wrote " << (options.output_dir / "results.json").string() << " and figures in "
       << options.output_dir.string() << "\n";
   return 0;

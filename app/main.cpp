@@ -71,27 +71,42 @@ int main(int argc, char** argv) {
   replay_cmd->add_option("--config", replay_config, "Override the configuration the log carries");
 
   furuta::app::IdentifyCommandOptions identify;
-  CLI::App* identify_cmd =
-      app.add_subcommand("identify", "Least-squares identification (Table I) of session logs");
-  identify_cmd->add_option("LOG", identify.logs, "Session logs to fit")
-      ->required()
+  CLI::App* identify_cmd = app.add_subcommand(
+      "identify", "Least-squares identification (Table I) of session logs or CSV recordings");
+  identify_cmd->add_option("LOG", identify.logs, "Session logs to fit")->check(CLI::ExistingFile);
+  identify_cmd
+      ->add_option("--csv", identify.csvs,
+                   "A CSV recording to fit instead of logs (repeat for several); needs "
+                   "--import-spec")
       ->check(CLI::ExistingFile);
-  identify_cmd->add_option("--validate", identify.validate, "A held-out session log")
+  identify_cmd
+      ->add_option("--import-spec", identify.import_spec,
+                   "TOML mapping the CSVs' columns, units, pendulum zero and input ([csv]; "
+                   "[motor] for voltage input)")
+      ->check(CLI::ExistingFile);
+  identify_cmd
+      ->add_option("--validate", identify.validate,
+                   "A held-out session: a log, or a CSV (name ending .csv) when fitting CSVs")
       ->check(CLI::ExistingFile);
   identify_cmd
       ->add_option("--config", identify.config_path,
-                   "Rig configuration (default: the one the first log carries)")
+                   "Rig configuration (default: the one the first log carries; with CSVs only "
+                   "needed for duty input)")
       ->check(CLI::ExistingFile);
   identify_cmd->add_option("-o,--output", identify.output_dir, "Directory for results and figures");
   identify_cmd->add_option("--cutoff", identify.cutoff_hz,
-                           "Low-pass cut-off [Hz] (default: the configuration's)");
+                           "Low-pass cut-off [Hz] (default: the configuration's; 15 without one)");
   auto* lag_option = identify_cmd->add_option(
       "--input-lag-ms", identify.input_lag_ms,
-      "Input-to-angle lag [ms] (default: the configuration's, else estimated)");
+      "Input-to-angle lag [ms] (default: the configuration's, else estimated; CSVs: 0)");
   identify_cmd
       ->add_flag("--estimate-input-lag", identify.estimate_input_lag,
                  "Estimate the lag from the data (to calibrate the configuration's)")
       ->excludes(lag_option);
+  identify_cmd->add_flag("--sivia", identify.sivia,
+                         "Guaranteed identification by SIVIA after the LSMI ([sivia] settings)");
+  identify_cmd->add_option("--threads", identify.threads, "SIVIA threads (0: all cores)")
+      ->check(CLI::Range(0, 1024));
 
   CLI11_PARSE(app, argc, argv);
 

@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -90,6 +91,60 @@ class Section {
       list += list.empty() ? a : std::string(", ") + a;
     }
     fail(key, table_->get(key), "'" + value + "' is not one of: " + list);
+  }
+  // A fixed-length array of numbers, each checked.
+  template <std::size_t N>
+  std::array<double, N> numbers(const std::string& key, const std::array<double, N>& fallback,
+                                const std::function<bool(double)>& valid = {},
+                                const char* rule = "") {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (!node) return fallback;
+    const toml::array* a = node->as_array();
+    if (!a || a->size() != N) {
+      fail(key, node, "must be an array of " + std::to_string(N) + " numbers");
+    }
+    std::array<double, N> out{};
+    for (std::size_t i = 0; i < N; ++i) {
+      const toml::node& e = *a->get(i);
+      if (auto v = e.as_integer()) {
+        out[i] = static_cast<double>(v->get());
+      } else if (auto f = e.as_floating_point()) {
+        out[i] = f->get();
+      } else {
+        fail(key, node, "must be an array of " + std::to_string(N) + " numbers");
+      }
+      if (!std::isfinite(out[i])) fail(key, node, "must be finite");
+      if (valid && !valid(out[i])) fail(key, node, std::string("entries must be ") + rule);
+    }
+    return out;
+  }
+  // An array of strings, each one of `allowed`, no repeats.
+  std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
+                                   std::initializer_list<const char*> allowed) {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (!node) return fallback;
+    const toml::array* a = node->as_array();
+    if (!a) fail(key, node, "must be an array of names");
+    std::vector<std::string> out;
+    for (const toml::node& e : *a) {
+      const auto s = e.as_string();
+      if (!s) fail(key, node, "must be an array of names");
+      const std::string value = s->get();
+      bool known = false;
+      std::string list;
+      for (const char* name : allowed) {
+        known = known || value == name;
+        list += list.empty() ? name : std::string(", ") + name;
+      }
+      if (!known) fail(key, node, "'" + value + "' is not one of: " + list);
+      if (std::find(out.begin(), out.end(), value) != out.end()) {
+        fail(key, node, "'" + value + "' is given twice");
+      }
+      out.push_back(value);
+    }
+    return out;
   }
   // Call after reading every key this section knows.
   void reject_unknown_keys() const {
@@ -387,6 +442,39 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
       ic.input_lag_ms = s.number(
           "input_lag_ms", 0.0, [](double v) { return std::abs(v) <= 100; }, "in [-100, 100]");
     }
+    s.reject_unknown_keys();
+  }
+
+  {
+    Section s = top.child("sivia");
+    SiviaConfig& sc = c.sivia;
+    sc.unknowns =
+        s.choices("unknowns", sc.unknowns, {"mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"});
+    if (sc.unknowns.empty()) s.fail("unknowns", nullptr, "must name at least one parameter");
+    sc.mu_uncertainty_pct =
+        s.numbers("mu_uncertainty_pct", sc.mu_uncertainty_pct, non_negative, ">= 0");
+    const auto ordered_prior = [&](const char* key, std::array<double, 2> fallback) {
+      const std::array<double, 2> v = s.numbers(key, fallback);
+      if (!(v[0] < v[1])) s.fail(key, nullptr, "must be [low, high] with low < high");
+      return v;
+    };
+    sc.fv1_prior = ordered_prior("fv1", sc.fv1_prior);
+    sc.fv2_prior = ordered_prior("fv2", sc.fv2_prior);
+    sc.epsilon = s.number("epsilon", sc.epsilon, positive, "> 0");
+    sc.epsilon_relative = s.boolean("epsilon_relative", sc.epsilon_relative);
+    sc.contract = s.boolean("contract", sc.contract);
+    sc.inner_test = s.choice("inner_test", sc.inner_test,
+                             {"witness", "intermediate_value", "for_all_data", "none"});
+    sc.q = static_cast<int>(s.integer(
+        "q", sc.q, [](std::int64_t v) { return v >= 0; }, ">= 0"));
+    sc.threads = static_cast<int>(s.integer(
+        "threads", sc.threads, [](std::int64_t v) { return v >= 0 && v <= 1024; }, "in [0, 1024]"));
+    sc.q2_bound = s.numbers("q2_bound", sc.q2_bound, non_negative, ">= 0");
+    sc.dq1_bound = s.numbers("dq1_bound", sc.dq1_bound, non_negative, ">= 0");
+    sc.dq2_bound = s.numbers("dq2_bound", sc.dq2_bound, non_negative, ">= 0");
+    sc.ddq1_bound = s.numbers("ddq1_bound", sc.ddq1_bound, non_negative, ">= 0");
+    sc.ddq2_bound = s.numbers("ddq2_bound", sc.ddq2_bound, non_negative, ">= 0");
+    sc.tau_bound = s.numbers("tau_bound", sc.tau_bound, non_negative, ">= 0");
     s.reject_unknown_keys();
   }
 

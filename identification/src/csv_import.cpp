@@ -10,13 +10,16 @@
 #include <cstddef>
 #include <fstream>
 #include <iomanip>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <string_view>
+#include <utility>
 
 #include "furuta/config/rig_config.hpp"
+#include "furuta/identification/preprocessing.hpp"
 
 namespace furuta::identification {
 
@@ -59,12 +62,16 @@ std::optional<std::size_t> column_index(const std::string& text) {
 // ---------------------------------------------------------------------------------------------
 // The import spec (TOML)
 
-// Reads the [csv] table, remembering which keys were used so the rest can be reported as unknown
-// (the rig configuration's rule: a mistyped key must never become a silent default).
+// Reads one table ([csv], [motor]), remembering which keys were used so the rest can be reported as
+// unknown (the rig configuration's rule: a mistyped key must never become a silent default).
+int line_of(const toml::node* node) {
+  return static_cast<int>(node->source().begin.line);
+}
+
 class SpecTable {
  public:
-  SpecTable(const toml::table& table, const std::string& file)
-      : table_(table), file_(file), line_(line_of(&table)) {}
+  SpecTable(const toml::table& table, const std::string& file, std::string name)
+      : table_(table), file_(file), name_(std::move(name)), line_(line_of(&table)) {}
 
   const toml::node* get(const std::string& key) {
     used_.insert(key);
@@ -112,6 +119,13 @@ class SpecTable {
     if (!std::isfinite(value)) fail(key, node, "must be finite");
     return value;
   }
+  // A required number > 0 (a motor constant).
+  double positive(const std::string& key, const std::string& what) {
+    const std::optional<double> value = number(key);
+    if (!value) fail(key, nullptr, "missing: " + what);
+    if (!(*value > 0)) fail(key, node(key), "must be > 0");
+    return *value;
+  }
   bool boolean(const std::string& key, bool fallback) {
     const toml::node* node = get(key);
     if (!node) return fallback;
@@ -126,18 +140,17 @@ class SpecTable {
     }
   }
 
-  // A missing key is reported at the [csv] line: the place to add it.
+  // A missing key is reported at the table's line ([csv], [motor]): the place to add it.
   [[noreturn]] void fail(const std::string& key, const toml::node* node,
                          const std::string& problem) const {
-    throw ConfigError(file_, node ? line_of(node) : line_, "csv." + key, problem);
+    throw ConfigError(file_, node ? line_of(node) : line_, name_ + "." + key, problem);
   }
   const toml::node* node(const std::string& key) const { return table_.get(key); }
 
  private:
-  static int line_of(const toml::node* node) { return static_cast<int>(node->source().begin.line); }
-
   const toml::table& table_;
   const std::string& file_;
+  std::string name_;
   int line_;
   std::set<std::string> used_;
 };
@@ -163,6 +176,46 @@ CsvColumn read_column(SpecTable& s, const std::string& key, bool has_header, boo
   return c;
 }
 
+// The [motor] table: the DC motor of a voltage-driven rig. Required with input_kind = "voltage"
+// (k_t, k_e and R have no sensible default) and refused with the other kinds, where it would be
+// silently ignored: duty input takes eq. 4's motor from the rig configuration, torque needs none.
+std::shared_ptr<const VoltageMotor> parse_motor_table(const toml::table& root, SpecTable& csv,
+                                                      const std::string& input_kind,
+                                                      const std::string& file) {
+  const toml::node* node = root.get("motor");  // a table, if there (checked by the caller)
+  if (input_kind != "voltage") {
+    if (!node) return nullptr;
+    throw ConfigError(
+        file, line_of(node), "motor",
+        "only applies when csv.input_kind = \"voltage\" (it is \"" + input_kind + "\"; " +
+            (input_kind == "duty" ? "duty input uses the rig configuration's motor, eq. 4)"
+                                  : "torque input needs no motor)"));
+  }
+  if (!node) {
+    csv.fail("input_kind", csv.node("input_kind"),
+             "\"voltage\" needs a [motor] table: torque_constant_nm_per_a, back_emf_v_s_per_rad, "
+             "resistance_ohm (gear_ratio and efficiency default to 1)");
+  }
+  SpecTable m(*node->as_table(), file, "motor");
+  VoltageMotor motor;
+  motor.torque_constant_nm_per_a =
+      m.positive("torque_constant_nm_per_a", "the motor's torque constant k_t [N m/A]");
+  motor.back_emf_v_s_per_rad =
+      m.positive("back_emf_v_s_per_rad", "the motor's back-EMF constant k_e [V s/rad]");
+  motor.resistance_ohm = m.positive("resistance_ohm", "the motor's winding resistance R [ohm]");
+  motor.gear_ratio = m.number("gear_ratio").value_or(1.0);
+  if (!(motor.gear_ratio > 0)) {
+    m.fail("gear_ratio", m.node("gear_ratio"),
+           "must be > 0 (motor turns per arm turn; a reversed arm is arm_angle_scale = -1)");
+  }
+  motor.efficiency = m.number("efficiency").value_or(1.0);
+  if (!(motor.efficiency > 0 && motor.efficiency <= 1)) {
+    m.fail("efficiency", m.node("efficiency"), "must be in (0, 1]");
+  }
+  m.reject_unknown_keys();
+  return std::make_shared<const VoltageMotor>(motor);
+}
+
 }  // namespace
 
 CsvImportError::CsvImportError(const std::string& file, int line, const std::string& field,
@@ -185,17 +238,19 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
     throw ConfigError(source_name, static_cast<int>(csv_node->source().begin.line), "csv",
                       "must be a table ([csv])");
   }
-  // Other tables may hold other readers' settings (a motor model for the rig, say); a bare key at
-  // the top belongs to nobody and is most likely a [csv] key written above the table.
+  // Other tables may hold other readers' settings; a bare key at the top belongs to nobody and is
+  // most likely a [csv] key written above the table.
   for (auto&& [key, node] : root) {
     if (!node.is_table()) {
-      throw ConfigError(source_name, static_cast<int>(node.source().begin.line),
-                        std::string(key.str()), "unknown key (the import keys belong in [csv])");
+      const bool motor = key.str() == "motor";
+      throw ConfigError(
+          source_name, line_of(&node), std::string(key.str()),
+          motor ? "must be a table ([motor])" : "unknown key (the import keys belong in [csv])");
     }
   }
   if (!csv_node) throw ConfigError(source_name, 0, "csv", "missing table [csv]");
 
-  SpecTable s(*csv_node->as_table(), source_name);
+  SpecTable s(*csv_node->as_table(), source_name, "csv");
   CsvImportSpec spec;
 
   const std::string delimiter = s.text("delimiter", ",");
@@ -263,6 +318,7 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
                     : kind == "torque" ? InputKind::torque
                                        : InputKind::duty;
   s.reject_unknown_keys();
+  spec.voltage_motor = parse_motor_table(root, s, kind, source_name);
   return spec;
 }
 

@@ -196,7 +196,7 @@ std::string format_table_one(const Identification& id) {
 }
 
 std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
-                         const std::string& software_version) {
+                         const std::string& software_version, const std::string& more) {
   std::ostringstream out;
   out << "{\n  \"software_version\": " << json_string(software_version) << ",\n  \"inputs\": [";
   for (std::size_t i = 0; i < inputs.size(); ++i) {
@@ -220,6 +220,7 @@ std::string results_json(const Identification& id, const std::vector<InputFile>&
         << ", \"rmse_percent_of_range\": " << json_number(id.validation->fit.rmse_percent_of_range)
         << "}";
   }
+  if (!more.empty()) out << ",\n  " << more;
   out << ",\n  \"warnings\": [";
   for (std::size_t i = 0; i < id.warnings.size(); ++i) {
     out << (i ? ", " : "") << json_string(id.warnings[i]);

@@ -154,3 +154,37 @@ TEST(IdentifyCommand, AMissingOrForeignFileIsAClearError) {
 
 }  // namespace
 }  // namespace furuta::app
+
+namespace furuta::app {
+namespace {
+
+TEST_F(SimulatedTruth, SiviaAfterLsmiWritesThePavingAndContainsTheTruth) {
+  TempDir out_dir;
+  IdentifyCommandOptions options;
+  options.logs = {sessions_[0], sessions_[1]};
+  options.output_dir = out_dir.path();
+  options.sivia = true;
+  options.threads = 2;
+  std::ostringstream out, err;
+  ASSERT_EQ(run_identify_command(options, out, err), 0) << err.str();
+  const std::string text = out.str();
+  std::printf("[ measured ] %s", text.substr(text.find("SIVIA")).c_str());
+  EXPECT_NE(text.find("fv1 in ["), std::string::npos) << text;
+  EXPECT_NE(text.find("fv2 in ["), std::string::npos) << text;
+  EXPECT_EQ(text.find("misses the truth"), std::string::npos) << text;
+  for (const char* name : {"sivia.json", "sivia.svg"}) {
+    EXPECT_TRUE(fs::exists(out_dir.path() / name)) << name;
+  }
+  std::ifstream json(out_dir.path() / "results.json");
+  std::stringstream content;
+  content << json.rdbuf();
+  EXPECT_NE(content.str().find("\"sivia\": {\"unknowns\": [\"fv1\", \"fv2\"]"), std::string::npos);
+  std::ifstream svg(out_dir.path() / "sivia.svg");
+  std::stringstream svg_text;
+  svg_text << svg.rdbuf();
+  EXPECT_NE(svg_text.str().find("class=\"boundary\""), std::string::npos);
+  EXPECT_NE(svg_text.str().find("fv1 [N m s]"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace furuta::app

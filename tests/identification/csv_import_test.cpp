@@ -10,6 +10,7 @@
 #include <string>
 
 #include "furuta/config/rig_config.hpp"
+#include "furuta/identification/preprocessing.hpp"  // VoltageMotor
 #include "temp_dir.hpp"
 
 namespace furuta::identification {
@@ -88,7 +89,9 @@ TEST(CsvImport, MatlabStyleExportInDegreesWithUprightZeroMillisecondsAndVolts) {
       "time = \"time_ms\"\ntime_unit = \"ms\"\n"
       "arm_angle = \"theta_deg\"\npendulum_angle = \"alpha_deg\"\nangle_unit = \"deg\"\n"
       "pendulum_zero = \"up\"\n"
-      "input = \"u_V\"\ninput_kind = \"voltage\"\n",
+      "input = \"u_V\"\ninput_kind = \"voltage\"\n"
+      "[motor]\ntorque_constant_nm_per_a = 0.05\nback_emf_v_s_per_rad = 0.05\n"
+      "resistance_ohm = 2.5\n",
       "spec.toml");
 
   const ImportedSeries s = import_csv(path, spec);
@@ -345,7 +348,7 @@ TEST(CsvImport, DutyOutsideUnitRangeIsFlagged) {
 
 TEST(CsvImportSpec, ParsesDefaultsAndLoadsFromAFile) {
   testing::TempDir dir;
-  const auto path = write_file(dir, "import.toml", spec_text("[motor]\nresistance_ohm = 2.5\n"));
+  const auto path = write_file(dir, "import.toml", spec_text("[logger]\nrate_hz = 100\n"));
   const CsvImportSpec spec = load_csv_import_spec(path);
   EXPECT_EQ(spec.delimiter, ',');
   EXPECT_TRUE(spec.has_header);
@@ -356,6 +359,7 @@ TEST(CsvImportSpec, ParsesDefaultsAndLoadsFromAFile) {
   EXPECT_EQ(spec.angle_unit, AngleUnit::rad);
   EXPECT_EQ(spec.pendulum_zero, PendulumZero::down);
   EXPECT_EQ(spec.input_kind, InputKind::duty);
+  EXPECT_EQ(spec.voltage_motor, nullptr);  // duty input: eq. 4's motor comes from the rig config
   EXPECT_THROW(load_csv_import_spec(dir.path() / "absent.toml"), ConfigError);
 }
 
@@ -433,6 +437,109 @@ TEST(CsvImportSpec, OtherMistakesAreLocated) {
   std::string number = spec_text();
   number.replace(number.find("\"u\""), 3, "4");
   EXPECT_THAT(spec_error(number).what(), HasSubstr("spec.toml:5: csv.input: must be a string"));
+}
+
+// A voltage-input spec (lines 1-9) with a [motor] table from line 10; `motor` is its body.
+std::string voltage_spec(const std::string& motor) {
+  std::string text = spec_text();
+  text.replace(text.find("\"duty\""), 6, "\"voltage\"");
+  return text + "[motor]\n" + motor;
+}
+
+constexpr const char* kMotorConstants =
+    "torque_constant_nm_per_a = 0.05\nback_emf_v_s_per_rad = 0.06\nresistance_ohm = 2.5\n";
+
+TEST(CsvImportSpec, VoltageInputReadsTheMotorTable) {
+  const CsvImportSpec spec = parse_csv_import_spec(
+      voltage_spec(std::string(kMotorConstants) + "gear_ratio = 4\nefficiency = 0.85\n"),
+      "spec.toml");
+  EXPECT_EQ(spec.input_kind, InputKind::voltage);
+  ASSERT_NE(spec.voltage_motor, nullptr);
+  EXPECT_DOUBLE_EQ(spec.voltage_motor->torque_constant_nm_per_a, 0.05);
+  EXPECT_DOUBLE_EQ(spec.voltage_motor->back_emf_v_s_per_rad, 0.06);
+  EXPECT_DOUBLE_EQ(spec.voltage_motor->resistance_ohm, 2.5);
+  EXPECT_DOUBLE_EQ(spec.voltage_motor->gear_ratio, 4.0);
+  EXPECT_DOUBLE_EQ(spec.voltage_motor->efficiency, 0.85);
+
+  const CsvImportSpec defaults = parse_csv_import_spec(voltage_spec(kMotorConstants), "spec.toml");
+  ASSERT_NE(defaults.voltage_motor, nullptr);
+  EXPECT_DOUBLE_EQ(defaults.voltage_motor->gear_ratio, 1.0);
+  EXPECT_DOUBLE_EQ(defaults.voltage_motor->efficiency, 1.0);
+  EXPECT_DOUBLE_EQ(parse_csv_import_spec(voltage_spec("resistance_ohm = 3\n"
+                                                      "torque_constant_nm_per_a = 1\n"
+                                                      "back_emf_v_s_per_rad = 2\nefficiency = 1\n"),
+                                         "spec.toml")
+                       .voltage_motor->resistance_ohm,
+                   3.0);  // integers are numbers too, and efficiency 1 is allowed
+}
+
+TEST(CsvImportSpec, MotorTableMistakesNameFileLineAndField) {
+  // A missing constant is reported at the [motor] line (10): where to add it.
+  const ConfigError missing =
+      spec_error(voltage_spec("torque_constant_nm_per_a = 0.05\nback_emf_v_s_per_rad = 0.06\n"));
+  EXPECT_EQ(missing.file(), "spec.toml");
+  EXPECT_EQ(missing.line(), 10);
+  EXPECT_EQ(missing.field(), "motor.resistance_ohm");
+  EXPECT_THAT(missing.what(), HasSubstr("spec.toml:10: motor.resistance_ohm: missing"));
+  EXPECT_THAT(
+      spec_error(voltage_spec("back_emf_v_s_per_rad = 0.06\nresistance_ohm = 2.5\n")).what(),
+      HasSubstr("motor.torque_constant_nm_per_a: missing"));
+  EXPECT_THAT(
+      spec_error(voltage_spec("torque_constant_nm_per_a = 0.05\nresistance_ohm = 2.5\n")).what(),
+      HasSubstr("motor.back_emf_v_s_per_rad: missing"));
+
+  EXPECT_THAT(
+      spec_error(voltage_spec(std::string(kMotorConstants) + "resistance_ohm = 0\n")).what(),
+      HasSubstr("spec.toml:14:"));  // TOML itself refuses the second one
+  std::string zero_r = voltage_spec(kMotorConstants);
+  zero_r.replace(zero_r.find("2.5"), 3, "0");
+  EXPECT_THAT(spec_error(zero_r).what(),
+              HasSubstr("spec.toml:13: motor.resistance_ohm: must be > 0"));
+  std::string negative_k = voltage_spec(kMotorConstants);
+  negative_k.replace(negative_k.find("0.05"), 4, "-0.05");
+  EXPECT_THAT(spec_error(negative_k).what(),
+              HasSubstr("spec.toml:11: motor.torque_constant_nm_per_a: must be > 0"));
+  EXPECT_THAT(spec_error(voltage_spec(std::string(kMotorConstants) + "efficiency = 1.2\n")).what(),
+              HasSubstr("spec.toml:14: motor.efficiency: must be in (0, 1]"));
+  EXPECT_THAT(spec_error(voltage_spec(std::string(kMotorConstants) + "efficiency = 0\n")).what(),
+              HasSubstr("motor.efficiency: must be in (0, 1]"));
+  EXPECT_THAT(spec_error(voltage_spec(std::string(kMotorConstants) + "gear_ratio = -5\n")).what(),
+              HasSubstr("spec.toml:14: motor.gear_ratio: must be > 0"));
+  EXPECT_THAT(spec_error(voltage_spec(std::string(kMotorConstants) + "gear = 5\n")).what(),
+              HasSubstr("spec.toml:14: motor.gear: unknown key"));
+  EXPECT_THAT(
+      spec_error(voltage_spec(std::string(kMotorConstants) + "resistance = \"2\"\n")).what(),
+      HasSubstr("motor.resistance: unknown key"));
+  std::string text_r = voltage_spec(kMotorConstants);
+  text_r.replace(text_r.find("2.5"), 3, "\"2.5\"");
+  EXPECT_THAT(spec_error(text_r).what(), HasSubstr("motor.resistance_ohm: must be a number"));
+  EXPECT_THAT(spec_error(voltage_spec("")).what(),
+              HasSubstr("spec.toml:10: motor.torque_constant_nm_per_a: missing"));
+
+  std::string not_table = spec_text();
+  not_table.replace(not_table.find("\"duty\""), 6, "\"voltage\"");
+  EXPECT_THAT(spec_error("motor = 3\n" + not_table).what(),
+              HasSubstr("spec.toml:1: motor: must be a table"));
+}
+
+TEST(CsvImportSpec, VoltageWithoutMotorTableIsRefusedAtInputKind) {
+  std::string text = spec_text();
+  text.replace(text.find("\"duty\""), 6, "\"voltage\"");
+  const ConfigError e = spec_error(text);
+  EXPECT_EQ(e.line(), 9);
+  EXPECT_EQ(e.field(), "csv.input_kind");
+  EXPECT_THAT(e.what(), HasSubstr("needs a [motor] table"));
+}
+
+TEST(CsvImportSpec, MotorTableWithOtherInputKindsIsRefusedNotIgnored) {
+  const ConfigError duty = spec_error(spec_text(std::string("[motor]\n") + kMotorConstants));
+  EXPECT_EQ(duty.line(), 10);
+  EXPECT_EQ(duty.field(), "motor");
+  EXPECT_THAT(duty.what(), HasSubstr("only applies when csv.input_kind = \"voltage\""));
+  EXPECT_THAT(duty.what(), HasSubstr("rig configuration"));
+  std::string torque = spec_text(std::string("[motor]\n") + kMotorConstants);
+  torque.replace(torque.find("\"duty\""), 6, "\"torque\"");
+  EXPECT_THAT(spec_error(torque).what(), HasSubstr("spec.toml:10: motor: only applies"));
 }
 
 }  // namespace

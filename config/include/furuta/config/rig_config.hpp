@@ -2,6 +2,7 @@
 // The rig configuration (TOML): boards, encoder geometry, motor data, the simulated rig.
 // Unknown keys are errors, not ignored: a mistyped limit must never become a silent default.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -80,6 +81,30 @@ struct IdentificationConfig {
   std::optional<double> input_lag_ms;
 };
 
+// [sivia]: guaranteed identification (furuta identify --sivia).
+struct SiviaConfig {
+  // Which of mu1, mu2, mu3, mu4, mug, fv1, fv2 are unknowns (bisected); the others are carried as
+  // intervals: the LSMI estimate +- mu_uncertainty_pct (the paper's Table II).
+  std::vector<std::string> unknowns = {"fv1", "fv2"};
+  std::array<double, 5> mu_uncertainty_pct = {12, 12, 10, 12, 15};
+  std::array<double, 2> fv1_prior = {-1.5, 1.5};
+  std::array<double, 2> fv2_prior = {-1.5, 1.5};
+  double epsilon = 0.01;
+  bool epsilon_relative = true;  // to each unknown's prior width; else absolute
+  bool contract = true;
+  std::string inner_test = "witness";  // witness | intermediate_value | for_all_data | none
+  int q = 0;                           // samples allowed to be inconsistent
+  int threads = 0;                     // 0: all cores
+  // Error bounds of the preprocessed data, [absolute, relative] per channel (SI units):
+  // |error| <= absolute + relative * |value|.
+  std::array<double, 2> q2_bound = {0.0, 0.0};
+  std::array<double, 2> dq1_bound = {0.0, 0.0};
+  std::array<double, 2> dq2_bound = {0.0, 0.0};
+  std::array<double, 2> ddq1_bound = {0.0, 0.0};
+  std::array<double, 2> ddq2_bound = {0.0, 0.0};
+  std::array<double, 2> tau_bound = {0.0, 0.0};
+};
+
 struct ExcitationConfig {
   std::string profile = "bang_bang";
   double amplitude_duty = 0.3;
@@ -115,6 +140,7 @@ struct RigConfig {
   CommandLimitsConfig limits;
   ExcitationConfig excitation;
   IdentificationConfig identification;
+  SiviaConfig sivia;
   std::string source_text;  // the file verbatim, so logs can carry it
   std::string source_name;
 };

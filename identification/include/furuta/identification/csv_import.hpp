@@ -3,11 +3,14 @@
 // import spec (TOML) onto the quantities identification needs.
 
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace furuta::identification {
+
+struct VoltageMotor;  // preprocessing.hpp (which includes this header)
 
 enum class AngleUnit { rad, deg, counts };
 enum class InputKind { duty, voltage, torque };
@@ -25,6 +28,10 @@ struct CsvColumn {
 //   arm_counts_per_rev = 4096   pendulum_counts_per_rev = 4096     (angle_unit = "counts")
 //   pendulum_zero = "up" | "down"
 //   input = "u"   input_kind = "voltage" | "duty" | "torque"
+// and, for input_kind = "voltage" only, the rig's DC motor:
+//   [motor]
+//   torque_constant_nm_per_a = 0.05   back_emf_v_s_per_rad = 0.05   resistance_ohm = 2.5
+//   gear_ratio = 5 (default 1)        efficiency = 0.9 (default 1, in (0, 1])
 struct CsvImportSpec {
   char delimiter = ',';
   bool has_header = true;
@@ -34,9 +41,14 @@ struct CsvImportSpec {
   double arm_counts_per_rev = 0, pendulum_counts_per_rev = 0;
   PendulumZero pendulum_zero = PendulumZero::down;
   InputKind input_kind = InputKind::duty;
+  // The [motor] table: set exactly when input_kind = voltage (pass *voltage_motor to preprocess or
+  // identify). Held by pointer only because VoltageMotor is defined in preprocessing.hpp, which
+  // includes this header; include preprocessing.hpp to use it.
+  std::shared_ptr<const VoltageMotor> voltage_motor;
 };
 
-// Parses the [csv] table of an import spec file; errors name file, line and field (ConfigError).
+// Parses the [csv] and [motor] tables of an import spec file; errors name file, line and field
+// (ConfigError).
 CsvImportSpec load_csv_import_spec(const std::filesystem::path& path);
 CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& source_name);
 

@@ -52,8 +52,9 @@ struct InputFile {
   std::string sha256;
 };
 // Every figure above as JSON, with the software version and the inputs' checksums.
+// `more` holds further members ("\"sivia\": {...}") appended to the top-level object.
 std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
-                         const std::string& software_version);
+                         const std::string& software_version, const std::string& more = "");
 
 // SVG figures: measured signals with their uncertainty bands (Fig. 2/3), measured vs predicted
 // torque on the held-out session (Fig. 5).

@@ -1,0 +1,441 @@
+#include "furuta/identification/guaranteed.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+namespace furuta::identification {
+
+namespace {
+
+bool is_zero(const Interval& a) {
+  return a.lo() == 0 && a.hi() == 0;
+}
+
+using LinearRow = SampleConstraints::LinearRow;
+
+// constant + sum_j a_j p_idx(j): the exact range for independent coefficients and parameters,
+// rounded outward.
+Interval evaluate(const LinearRow& row, const Box& p) {
+  Interval sum = row.constant;
+  for (int j = 0; j < row.terms; ++j) sum += row.coefficient[j] * p[row.index[j]];
+  return sum;
+}
+
+// HC4-revise on constant + sum_j a_j p_j = y: forward terms, intersection with y, then each term's
+// projection back onto its parameter (the other terms' sum from prefix and suffix sums). False when
+// the box is emptied.
+bool contract_linear(const LinearRow& row, const Interval& y, Box& p) {
+  const int n = row.terms;
+  std::array<Interval, kParameterCount> term;
+  for (int j = 0; j < n; ++j) term[j] = row.coefficient[j] * p[row.index[j]];
+  // prefix[j] = constant + term[0..j-1]; suffix[j] = term[j..n-1].
+  std::array<Interval, kParameterCount + 1> prefix, suffix;
+  prefix[0] = row.constant;
+  for (int j = 0; j < n; ++j) prefix[j + 1] = prefix[j] + term[j];
+  suffix[n] = Interval(0.0);
+  for (int j = n - 1; j >= 0; --j) suffix[j] = suffix[j + 1] + term[j];
+  const Interval sum = intersect(prefix[n], y);
+  if (sum.is_empty()) return false;
+  for (int j = 0; j < n; ++j) {
+    const Interval t = intersect(term[j], sum - (prefix[j] + suffix[j + 1]));
+    if (t.is_empty()) return false;
+    Interval coefficient = row.coefficient[j];
+    Interval parameter = p[row.index[j]];
+    interval::bwd_mul(t, coefficient, parameter);
+    if (parameter.is_empty()) return false;
+    p[row.index[j]] = parameter;
+  }
+  return true;
+}
+
+// A row's coefficients split into the unknowns' terms and a constant from the carried components
+// (each carried p_k given as an interval: its prior, or its midpoint).
+LinearRow reduce(const std::array<Interval, kParameterCount>& a, const Box& carried,
+                 const std::array<bool, kParameterCount>& unknown) {
+  LinearRow row;
+  for (int k = 0; k < kParameterCount; ++k) {
+    if (is_zero(a[k])) continue;
+    if (unknown[k]) {
+      row.coefficient[row.terms] = a[k];
+      row.index[row.terms] = k;
+      ++row.terms;
+    } else {
+      row.constant += a[k] * carried[k];
+    }
+  }
+  return row;
+}
+
+Interval widened(double value, const ChannelErrorBound& bound) {
+  const double b = std::nextafter(bound.absolute + bound.relative * std::abs(value),
+                                  std::numeric_limits<double>::infinity());
+  return Interval(value) + Interval(-b, b);
+}
+
+Interval point_of(const Interval& x) {
+  return Interval(x.mid());
+}
+
+}  // namespace
+
+std::vector<IntervalSample> interval_samples(const std::vector<const JointSeries*>& experiments,
+                                             const DataErrorBounds& bounds, std::size_t trim) {
+  std::vector<IntervalSample> out;
+  for (const JointSeries* e : experiments) {
+    if (e->size() <= 2 * trim) continue;
+    for (std::size_t i = trim; i + trim < e->size(); ++i) {
+      IntervalSample s;
+      s.experiment = e->name;
+      s.index = i;
+      s.t_s = e->t_s[i];
+      s.q2 = widened(e->q2[i], bounds.q2);
+      s.dq1 = widened(e->dq1[i], bounds.dq1);
+      s.dq2 = widened(e->dq2[i], bounds.dq2);
+      s.ddq1 = widened(e->ddq1[i], bounds.ddq1);
+      s.ddq2 = widened(e->ddq2[i], bounds.ddq2);
+      s.tau = widened(e->tau[i], bounds.tau);
+      out.push_back(std::move(s));
+    }
+  }
+  return out;
+}
+
+RegressorEnclosure regressor_enclosure(const Interval& q2, const Interval& dq1, const Interval& dq2,
+                                       const Interval& ddq1, const Interval& ddq2) {
+  const Interval s = interval::sin(q2);
+  const Interval c = interval::cos(q2);
+  // s^2 and s c as single enclosures where they repeat; sqr keeps s^2 non-negative.
+  const Interval s2 = interval::sqr(s);
+  const Interval sc = s * c;
+  RegressorEnclosure r;
+  const Interval zero(0.0);
+  r.row1 = {ddq1,
+            s2 * ddq1 + Interval(2.0) * sc * dq1 * dq2,
+            c * ddq2 - s * interval::sqr(dq2),
+            zero,
+            zero,
+            dq1,
+            zero};
+  r.row2 = {zero, -(sc * interval::sqr(dq1)), c * ddq1, ddq2, s, zero, dq2};
+  return r;
+}
+
+SampleConstraints::SampleConstraints(std::vector<IntervalSample> samples, const Box& prior,
+                                     const std::array<bool, kParameterCount>& unknown)
+    : samples_(std::move(samples)) {
+  if (prior.size() != static_cast<std::size_t>(kParameterCount)) {
+    throw std::invalid_argument("guaranteed identification: the prior box needs 7 components");
+  }
+  Box midpoints = prior;
+  for (int k = 0; k < kParameterCount; ++k) midpoints[k] = Interval(prior[k].mid());
+  pre_.reserve(samples_.size());
+  for (const IntervalSample& d : samples_) {
+    Precomputed p;
+    const RegressorEnclosure full = regressor_enclosure(d.q2, d.dq1, d.dq2, d.ddq1, d.ddq2);
+    p.row1 = reduce(full.row1, prior, unknown);
+    p.row2 = reduce(full.row2, prior, unknown);
+    // The witness rectangle: q2, dq1, dq2 fixed at points of their intervals, (ddq1, ddq2) free.
+    const Interval q2 = point_of(d.q2), dq1 = point_of(d.dq1), dq2 = point_of(d.dq2);
+    const auto face = [&](const Interval& ddq1, const Interval& ddq2) {
+      return regressor_enclosure(q2, dq1, dq2, ddq1, ddq2);
+    };
+    p.row1_ddq1_lo = reduce(face(Interval(d.ddq1.lo()), d.ddq2).row1, midpoints, unknown);
+    p.row1_ddq1_hi = reduce(face(Interval(d.ddq1.hi()), d.ddq2).row1, midpoints, unknown);
+    p.row2_ddq2_lo = reduce(face(d.ddq1, Interval(d.ddq2.lo())).row2, midpoints, unknown);
+    p.row2_ddq2_hi = reduce(face(d.ddq1, Interval(d.ddq2.hi())).row2, midpoints, unknown);
+    const Interval sn = interval::sin(q2), cs = interval::cos(q2), zero(0.0), one(1.0);
+    using Row = std::array<Interval, kParameterCount>;
+    p.a11 = reduce(Row{one, interval::sqr(sn), zero, zero, zero, zero, zero}, midpoints, unknown);
+    p.a12 = reduce(Row{zero, zero, cs, zero, zero, zero, zero}, midpoints, unknown);
+    p.a22 = reduce(Row{zero, zero, zero, one, zero, zero, zero}, midpoints, unknown);
+    p.r1 = reduce(Row{zero, Interval(2.0) * sn * cs * dq1 * dq2, -(sn * interval::sqr(dq2)), zero,
+                      zero, dq1, zero},
+                  midpoints, unknown);
+    p.r2 = reduce(Row{zero, -(sn * cs * interval::sqr(dq1)), zero, zero, sn, zero, dq2}, midpoints,
+                  unknown);
+    pre_.push_back(p);
+  }
+  build_preconditioned_system(unknown);
+}
+
+void SampleConstraints::build_preconditioned_system(
+    const std::array<bool, kParameterCount>& unknown) {
+  for (int k = 0; k < kParameterCount; ++k) {
+    if (unknown[k]) unknown_index_.push_back(k);
+  }
+  const auto n = static_cast<Eigen::Index>(unknown_index_.size());
+  const auto rows = static_cast<Eigen::Index>(2 * pre_.size());
+  if (n == 0 || rows < n) return;
+  // Row r of A over the unknowns, and its right-hand side y - constant.
+  std::vector<std::array<Interval, kParameterCount>> a(static_cast<std::size_t>(rows));
+  std::vector<Interval> y(static_cast<std::size_t>(rows));
+  Eigen::MatrixXd mid(rows, n);
+  for (std::size_t i = 0; i < pre_.size(); ++i) {
+    for (int r = 0; r < 2; ++r) {
+      const LinearRow& row = r == 0 ? pre_[i].row1 : pre_[i].row2;
+      const std::size_t at = 2 * i + static_cast<std::size_t>(r);
+      a[at].fill(Interval(0.0));
+      for (int j = 0; j < row.terms; ++j) {
+        const auto col = std::find(unknown_index_.begin(), unknown_index_.end(), row.index[j]) -
+                         unknown_index_.begin();
+        a[at][static_cast<std::size_t>(col)] = row.coefficient[j];
+      }
+      y[at] = (r == 0 ? samples_[i].tau : Interval(0.0)) - row.constant;
+      for (Eigen::Index c = 0; c < n; ++c) {
+        const Interval& e = a[at][static_cast<std::size_t>(c)];
+        mid(static_cast<Eigen::Index>(at), c) = std::isfinite(e.mid()) ? e.mid() : 0.0;
+      }
+    }
+  }
+  // Any C is sound; the pseudo-inverse of the midpoint (columns scaled, since units differ) makes
+  // I - C A small.
+  const Eigen::VectorXd scale = mid.colwise().norm().cwiseMax(1e-300).transpose();
+  const Eigen::MatrixXd scaled = mid * scale.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd c_scaled = scaled.completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd c = scale.cwiseInverse().asDiagonal() * c_scaled;
+  cy_.assign(static_cast<std::size_t>(n), Interval(0.0));
+  g_.assign(static_cast<std::size_t>(n * n), Interval(0.0));
+  for (Eigen::Index k = 0; k < n; ++k) {
+    Interval cy(0.0);
+    std::vector<Interval> ca(static_cast<std::size_t>(n), Interval(0.0));
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      const double ckr = c(k, r);
+      if (ckr == 0) continue;
+      const Interval ck(ckr);
+      cy += ck * y[static_cast<std::size_t>(r)];
+      for (Eigen::Index j = 0; j < n; ++j) {
+        const Interval& e = a[static_cast<std::size_t>(r)][static_cast<std::size_t>(j)];
+        if (!is_zero(e)) ca[static_cast<std::size_t>(j)] += ck * e;
+      }
+    }
+    cy_[static_cast<std::size_t>(k)] = cy;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      g_[static_cast<std::size_t>(k * n + j)] =
+          Interval(k == j ? 1.0 : 0.0) - ca[static_cast<std::size_t>(j)];
+    }
+  }
+}
+
+bool SampleConstraints::contract_all(Box& p) const {
+  const std::size_t n = unknown_index_.size();
+  if (cy_.empty()) return true;
+  for (int sweep = 0; sweep < 3; ++sweep) {
+    bool shrank = false;
+    for (std::size_t k = 0; k < n; ++k) {
+      Interval v = cy_[k];
+      for (std::size_t j = 0; j < n; ++j) {
+        const Interval& g = g_[k * n + j];
+        if (!is_zero(g)) v += g * p[static_cast<std::size_t>(unknown_index_[j])];
+      }
+      Interval& target = p[static_cast<std::size_t>(unknown_index_[k])];
+      const Interval next = intersect(target, v);
+      if (next.is_empty()) return false;
+      if (next.width() < 0.9 * target.width()) shrank = true;
+      target = next;
+    }
+    if (!shrank) break;
+  }
+  return true;
+}
+
+bool SampleConstraints::proves_inconsistent(std::size_t i, const Box& p) const {
+  const Precomputed& pre = pre_[i];
+  if (evaluate(pre.row1, p).is_disjoint(samples_[i].tau)) return true;
+  return !evaluate(pre.row2, p).contains(0.0);
+}
+
+bool SampleConstraints::proves_consistent(std::size_t i, const Box& p, InnerTest kind) const {
+  const Precomputed& pre = pre_[i];
+  const Interval& y1 = samples_[i].tau;
+  switch (kind) {
+    case InnerTest::none:
+      return false;
+    case InnerTest::for_all_data:
+      return evaluate(pre.row1, p).is_subset(y1) && evaluate(pre.row2, p).is_subset(Interval(0.0));
+    case InnerTest::intermediate_value:
+      return faces_separate(pre, y1, p);
+    case InnerTest::witness:
+      return solved_inside(i, pre, p) || faces_separate(pre, y1, p);
+  }
+  return false;
+}
+
+// Poincare-Miranda on the rectangle [ddq1] x [ddq2]: F1 = row1 - c (some c in [y1]) of opposite
+// signs on the faces ddq1 = lo, hi; F2 = row2 of opposite signs on the faces ddq2 = lo, hi; each
+// face evaluated over the other acceleration's whole interval and the whole box. Then for every p
+// a zero exists inside the rectangle: data in the data box meeting both outputs.
+bool SampleConstraints::faces_separate(const Precomputed& pre, const Interval& y1,
+                                       const Box& p) const {
+  const Interval f1_lo = evaluate(pre.row1_ddq1_lo, p);
+  const Interval f1_hi = evaluate(pre.row1_ddq1_hi, p);
+  const auto separates = [&](const Interval& below, const Interval& above) {
+    return std::max(below.hi(), y1.lo()) <= std::min(above.lo(), y1.hi());
+  };
+  if (!separates(f1_lo, f1_hi) && !separates(f1_hi, f1_lo)) return false;
+  const Interval f2_lo = evaluate(pre.row2_ddq2_lo, p);
+  const Interval f2_hi = evaluate(pre.row2_ddq2_hi, p);
+  return (f2_lo.hi() <= 0 && f2_hi.lo() >= 0) || (f2_hi.hi() <= 0 && f2_lo.lo() >= 0);
+}
+
+// With q2, dq1, dq2 at the witness point and tau = c in [y1], both rows are M(p) ddq = r(p, c), a
+// 2x2 linear system. If its solution (Cramer's rule over the box) lies inside the acceleration
+// intervals for every p, that solution is the data point: the segment through the data box along
+// which the rows are continuous is the one traced by ddq(p). c is chosen to aim the solution at the
+// rectangle's centre for the box's midpoint.
+bool SampleConstraints::solved_inside(std::size_t i, const Precomputed& pre, const Box& p) const {
+  const IntervalSample& d = samples_[i];
+  const Interval a11 = evaluate(pre.a11, p), a12 = evaluate(pre.a12, p), a22 = evaluate(pre.a22, p),
+                 r1 = evaluate(pre.r1, p), r2 = evaluate(pre.r2, p);
+  const Interval det = a11 * a22 - interval::sqr(a12);
+  if (det.contains(0.0)) return false;
+  const double aim = a11.mid() * d.ddq1.mid() + a12.mid() * d.ddq2.mid() + r1.mid();
+  const double c = std::clamp(aim, d.tau.lo(), d.tau.hi());
+  const Interval b1 = Interval(c) - r1, b2 = -r2;
+  const Interval ddq1 = (a22 * b1 - a12 * b2) / det;
+  if (!ddq1.is_subset(d.ddq1)) return false;
+  const Interval ddq2 = (a11 * b2 - a12 * b1) / det;
+  return ddq2.is_subset(d.ddq2);
+}
+
+bool SampleConstraints::contract(std::size_t i, Box& p) const {
+  const Precomputed& pre = pre_[i];
+  return contract_linear(pre.row1, samples_[i].tau, p) &&
+         contract_linear(pre.row2, Interval(0.0), p);
+}
+
+Box paper_prior(const ParameterVector& mu_centre, const std::array<double, 5>& mu_percent,
+                double friction_limit) {
+  Box prior(kParameterCount);
+  for (int k = 0; k < 5; ++k) {
+    const double half = std::abs(mu_centre[k]) * mu_percent[k] / 100.0;
+    prior[k] = Interval(mu_centre[k]) + Interval(-half, half);
+  }
+  prior[5] = Interval(-friction_limit, friction_limit);
+  prior[6] = Interval(-friction_limit, friction_limit);
+  return prior;
+}
+
+GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
+                                           const GuaranteedOptions& options) {
+  if (options.prior.size() != static_cast<std::size_t>(kParameterCount)) {
+    throw std::invalid_argument("guaranteed identification: the prior box needs 7 components");
+  }
+  if (options.q < 0) throw std::invalid_argument("guaranteed identification: q must be >= 0");
+  const std::size_t n = constraints.size();
+  if (n == 0) throw std::invalid_argument("guaranteed identification: no samples");
+
+  // How often each sample was the one that proved a box outer: the culprits of an empty set.
+  auto outer_causes = std::make_unique<std::atomic<std::uint64_t>[]>(n);
+  const std::size_t q = static_cast<std::size_t>(options.q);
+
+  const interval::BoxTest test = [&](Box& box) -> interval::BoxDecision {
+    using interval::BoxVerdict;
+    if (q == 0) {
+      // Contract sample after sample; repeat the sweep while it still shrinks some unknown by more
+      // than a tenth (couplings between rows need a few sweeps), at most four times.
+      for (int sweep = 0; sweep < (options.contract ? 4 : 1); ++sweep) {
+        const Box before = box;
+        if (options.contract && !constraints.contract_all(box)) return {BoxVerdict::outer};
+        for (std::size_t i = 0; i < n; ++i) {
+          const bool out = options.contract ? !constraints.contract(i, box)
+                                            : constraints.proves_inconsistent(i, box);
+          if (out) {
+            outer_causes[i].fetch_add(1, std::memory_order_relaxed);
+            return {BoxVerdict::outer};
+          }
+        }
+        bool shrank = false;
+        for (int k = 0; k < kParameterCount; ++k) {
+          if (options.unknown[k] && box[k].width() < 0.9 * before[k].width()) shrank = true;
+        }
+        if (!shrank) break;
+      }
+      if (options.inner == InnerTest::none) return {BoxVerdict::undecided};
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!constraints.proves_consistent(i, box, options.inner)) return {BoxVerdict::undecided};
+      }
+      return {BoxVerdict::inner};
+    }
+    // q-relaxed: outer when more than q samples are proven inconsistent, inner when at most q are
+    // not proven consistent. (No contraction: one sample alone may be an outlier.)
+    std::size_t inconsistent = 0;
+    for (std::size_t i = 0; i < n && inconsistent <= q; ++i) {
+      if (constraints.proves_inconsistent(i, box)) ++inconsistent;
+    }
+    if (inconsistent > q) return {BoxVerdict::outer};
+    if (options.inner == InnerTest::none) return {BoxVerdict::undecided};
+    std::size_t unproven = 0;
+    for (std::size_t i = 0; i < n && unproven <= q; ++i) {
+      if (!constraints.proves_consistent(i, box, options.inner)) ++unproven;
+    }
+    return {unproven <= q ? BoxVerdict::inner : BoxVerdict::undecided};
+  };
+
+  interval::SiviaOptions sivia;
+  sivia.epsilon = options.epsilon;
+  sivia.threads = options.threads;
+  sivia.progress = options.progress;
+  sivia.max_boxes = options.max_boxes;
+  sivia.cancel = options.cancel;
+  sivia.scale.assign(kParameterCount, 0.0);
+  for (int k = 0; k < kParameterCount; ++k) {
+    if (options.unknown[k]) {
+      sivia.scale[k] = options.epsilon_relative ? options.prior[k].width() : 1.0;
+    }
+  }
+
+  GuaranteedResult result;
+  result.unknown = options.unknown;
+  result.samples = n;
+  result.q = options.q;
+  result.paving = interval::sivia(options.prior, test, sivia);
+
+  if (result.paving.empty_inner_and_boundary()) {
+    result.empty = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      Box prior = options.prior;
+      if (constraints.proves_inconsistent(i, prior) || !constraints.contract(i, prior)) {
+        result.excluding_samples.push_back(i);
+      }
+    }
+    if (result.excluding_samples.empty()) {
+      std::vector<std::size_t> order(n);
+      for (std::size_t i = 0; i < n; ++i) order[i] = i;
+      std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        return outer_causes[a].load() > outer_causes[b].load();
+      });
+      for (std::size_t k = 0; k < std::min<std::size_t>(10, n); ++k) {
+        if (outer_causes[order[k]].load() > 0) result.excluding_samples.push_back(order[k]);
+      }
+    }
+    std::ostringstream why;
+    why << "no parameter is consistent with the data: ";
+    if (result.excluding_samples.empty()) {
+      why << "no single sample excludes the prior box";
+    } else {
+      why << "samples ";
+      for (std::size_t k = 0; k < std::min<std::size_t>(result.excluding_samples.size(), 10); ++k) {
+        const IntervalSample& s = constraints.sample(result.excluding_samples[k]);
+        why << (k ? ", " : "") << s.experiment << "#" << s.index << " (t = " << s.t_s << " s)";
+      }
+      if (result.excluding_samples.size() > 10) why << " and more";
+      why << " exclude it";
+    }
+    why << "; the error bounds may be too tight, or the model incomplete (unmodelled friction, "
+           "a lag, a faulty sensor: try q-relaxation)";
+    result.finding = why.str();
+  } else {
+    const Box hull = result.paving.outer_hull();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (constraints.proves_inconsistent(i, hull)) result.inconsistent_samples.push_back(i);
+    }
+  }
+  return result;
+}
+
+}  // namespace furuta::identification

@@ -1,0 +1,178 @@
+// The guaranteed identification's outputs: JSON and the Fig. 4-style paving.
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "furuta/identification/guaranteed.hpp"
+
+namespace furuta::identification {
+
+namespace {
+
+std::string number(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+std::string interval_json(const Interval& x) {
+  if (x.is_empty()) return "null";
+  return "[" + number(x.lo()) + ", " + number(x.hi()) + "]";
+}
+
+std::string box_json(const Box& b) {
+  std::string out = "[";
+  for (std::size_t k = 0; k < b.size(); ++k) out += (k ? ", " : "") + interval_json(b[k]);
+  return out + "]";
+}
+
+std::string escape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
+    out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+double unknowns_volume(const std::vector<Box>& boxes,
+                       const std::array<bool, kParameterCount>& unknown) {
+  double total = 0;
+  for (const Box& b : boxes) {
+    double v = 1;
+    for (int k = 0; k < kParameterCount; ++k) {
+      if (unknown[k]) v *= b[k].width();
+    }
+    total += v;
+  }
+  return total;
+}
+
+std::string guaranteed_json(const GuaranteedResult& r, const SampleConstraints& constraints) {
+  std::ostringstream out;
+  const auto& p = r.paving;
+  out << "{\"unknowns\": [";
+  bool first = true;
+  for (int k = 0; k < kParameterCount; ++k) {
+    if (!r.unknown[k]) continue;
+    out << (first ? "" : ", ") << "\"" << kParameterNames[k] << "\"";
+    first = false;
+  }
+  out << "], \"parameters\": [";
+  for (int k = 0; k < kParameterCount; ++k)
+    out << (k ? ", " : "") << "\"" << kParameterNames[k] << "\"";
+  out << "], \"samples\": " << r.samples << ", \"q\": " << r.q
+      << ", \"prior\": " << box_json(p.prior) << ", \"boxes_tested\": " << p.boxes_tested
+      << ", \"bisections\": " << p.bisections << ", \"inner_count\": " << p.inner.size()
+      << ", \"boundary_count\": " << p.boundary.size() << ", \"outer_count\": " << p.outer_count
+      << ", \"truncated\": " << (p.truncated ? "true" : "false")
+      << ", \"seconds\": " << number(p.seconds) << ", \"empty\": " << (r.empty ? "true" : "false");
+  if (!r.empty) {
+    out << ", \"outer_hull\": " << box_json(p.outer_hull());
+    if (!p.inner.empty()) out << ", \"inner_hull\": " << box_json(p.inner_hull());
+  }
+  out << ", \"inner_measure\": " << number(unknowns_volume(p.inner, r.unknown))
+      << ", \"boundary_measure\": " << number(unknowns_volume(p.boundary, r.unknown));
+  out << ", \"finding\": \"" << escape(r.finding) << "\"";
+  const auto samples = [&](const char* key, const std::vector<std::size_t>& list) {
+    out << ", \"" << key << "\": [";
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      const IntervalSample& s = constraints.sample(list[k]);
+      out << (k ? ", " : "") << "{\"experiment\": \"" << escape(s.experiment)
+          << "\", \"index\": " << s.index << ", \"t_s\": " << number(s.t_s) << "}";
+    }
+    out << "]";
+  };
+  samples("inconsistent_samples", r.inconsistent_samples);
+  samples("excluding_samples", r.excluding_samples);
+  out << ", \"inner\": [";
+  for (std::size_t k = 0; k < p.inner.size(); ++k) out << (k ? ", " : "") << box_json(p.inner[k]);
+  out << "], \"boundary\": [";
+  for (std::size_t k = 0; k < p.boundary.size(); ++k) {
+    out << (k ? ", " : "") << box_json(p.boundary[k]);
+  }
+  out << "]}";
+  return out.str();
+}
+
+std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
+                       const std::vector<double>* reference) {
+  const auto& p = r.paving;
+  // The view: the outer hull with a margin (the prior if the set is empty).
+  Box view = r.empty ? p.prior : p.outer_hull();
+  const double W = 640, H = 480, left = 90, top = 40, pw = W - left - 30, ph = H - top - 70;
+  auto range = [&](int k) {
+    double lo = view[static_cast<std::size_t>(k)].lo(), hi = view[static_cast<std::size_t>(k)].hi();
+    const double margin = std::max(0.15 * (hi - lo), 1e-12);
+    return std::pair{lo - margin, hi + margin};
+  };
+  const auto [x_lo, x_hi] = range(xp);
+  const auto [y_lo, y_hi] = range(yp);
+  auto X = [&](double v) { return left + (v - x_lo) / (x_hi - x_lo) * pw; };
+  auto Y = [&](double v) { return top + ph - (v - y_lo) / (y_hi - y_lo) * ph; };
+  std::ostringstream s;
+  s << std::setprecision(6);
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << W << "\" height=\"" << H
+    << "\" viewBox=\"0 0 " << W << " " << H << "\" font-family=\"sans-serif\">\n";
+  s << "<text x=\"" << left << "\" y=\"24\" font-size=\"14\">SIVIA paving: " << p.inner.size()
+    << " inner, " << p.boundary.size() << " boundary, " << p.outer_count << " outer boxes ("
+    << p.boxes_tested << " tested, " << std::setprecision(3) << p.seconds << " s)</text>\n"
+    << std::setprecision(6);
+  s << "<clipPath id=\"plot\"><rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << pw
+    << "\" height=\"" << ph << "\"/></clipPath>\n<g clip-path=\"url(#plot)\">\n";
+  const auto draw = [&](const std::vector<Box>& boxes, const char* fill, const char* cls) {
+    for (const Box& b : boxes) {
+      const Interval& bx = b[static_cast<std::size_t>(xp)];
+      const Interval& by = b[static_cast<std::size_t>(yp)];
+      const double x0 = std::max(X(bx.lo()), left - 1), x1 = std::min(X(bx.hi()), left + pw + 1);
+      const double y0 = std::max(Y(by.hi()), top - 1), y1 = std::min(Y(by.lo()), top + ph + 1);
+      if (x1 < x0 || y1 < y0) continue;
+      s << "<rect class=\"" << cls << "\" x=\"" << x0 << "\" y=\"" << y0 << "\" width=\""
+        << std::max(x1 - x0, 0.5) << "\" height=\"" << std::max(y1 - y0, 0.5) << "\" fill=\""
+        << fill << "\" stroke=\"#333\" stroke-width=\"0.2\"/>\n";
+    }
+  };
+  draw(p.outer, "#6fa8dc", "outer");
+  draw(p.boundary, "#ffd966", "boundary");
+  draw(p.inner, "#e06666", "inner");
+  if (reference && reference->size() == static_cast<std::size_t>(kParameterCount)) {
+    s << "<circle cx=\"" << X((*reference)[static_cast<std::size_t>(xp)]) << "\" cy=\""
+      << Y((*reference)[static_cast<std::size_t>(yp)])
+      << "\" r=\"4\" fill=\"none\" stroke=\"black\" stroke-width=\"1.5\"/>\n";
+  }
+  s << "</g>\n<rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << pw << "\" height=\"" << ph
+    << "\" fill=\"none\" stroke=\"#000\"/>\n";
+  // Axes: ticks at the ends and the middle, names with units.
+  for (int i = 0; i <= 4; ++i) {
+    const double fx = x_lo + (x_hi - x_lo) * i / 4.0, fy = y_lo + (y_hi - y_lo) * i / 4.0;
+    s << "<text x=\"" << X(fx) << "\" y=\"" << top + ph + 16
+      << "\" font-size=\"10\" text-anchor=\"middle\">" << std::setprecision(4) << fx << "</text>\n";
+    s << "<text x=\"" << left - 4 << "\" y=\"" << Y(fy) + 4
+      << "\" font-size=\"10\" text-anchor=\"end\">" << fy << "</text>\n"
+      << std::setprecision(6);
+  }
+  s << "<text x=\"" << left + pw / 2 << "\" y=\"" << top + ph + 36
+    << "\" font-size=\"12\" text-anchor=\"middle\">"
+    << kParameterNames[static_cast<std::size_t>(xp)] << " ["
+    << kParameterUnits[static_cast<std::size_t>(xp)] << "]</text>\n";
+  s << "<text x=\"16\" y=\"" << top + ph / 2 << "\" font-size=\"12\" transform=\"rotate(-90 16 "
+    << top + ph / 2 << ")\" text-anchor=\"middle\">"
+    << kParameterNames[static_cast<std::size_t>(yp)] << " ["
+    << kParameterUnits[static_cast<std::size_t>(yp)] << "]</text>\n";
+  s << "<text x=\"" << left << "\" y=\"" << H - 10
+    << "\" font-size=\"11\"><tspan fill=\"#e06666\">inner</tspan>  <tspan "
+       "fill=\"#b8860b\">boundary</tspan>  <tspan fill=\"#6fa8dc\">outer</tspan>"
+    << (r.empty ? "  (empty: no parameter is consistent)" : "") << "</text>\n";
+  s << "</svg>\n";
+  return s.str();
+}
+
+}  // namespace furuta::identification

@@ -1,0 +1,198 @@
+// `furuta identify --csv FILE... --import-spec SPEC`: CSV recordings of a voltage-driven rig
+// (another rig, another logger) through the command, and the command's errors for CSV inputs.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include "commands.hpp"
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/identification/identify.hpp"
+#include "temp_dir.hpp"
+
+namespace furuta::app {
+namespace {
+
+namespace fs = std::filesystem;
+using furuta::testing::TempDir;
+constexpr double kPi = std::numbers::pi;
+
+// The rig of tests/identification/voltage_rig_test.cpp (arm time constant about 150 ms).
+bridge::ModelParameters truth() {
+  bridge::ModelParameters p;
+  p.mu1 = 3.0e-3;
+  p.mu2 = 2.56e-3;
+  p.mu3 = 1.2e-3;
+  p.mu4 = 1.32e-3;
+  p.mug = 7.4e-2;
+  p.fv1 = 1.5e-2;
+  p.fv2 = 6.4e-4;
+  return p;
+}
+constexpr double kTorquePerVolt = 4.0 * 0.9 * 0.03 / 3.0;  // gear eff k_t / R
+constexpr double kBackEmfDamping = 4.0 * 4.0 * 0.9 * 0.03 * 0.03 / 3.0;
+
+constexpr const char* kSpec =
+    "[csv]\n"                                                         // 1
+    "time = \"t\"\ntime_unit = \"s\"\n"                               // 2-3
+    "arm_angle = \"q1\"\npendulum_angle = \"q2\"\n"                   // 4-5
+    "angle_unit = \"rad\"\npendulum_zero = \"down\"\n"                // 6-7
+    "input = \"volts\"\ninput_kind = \"voltage\"\n"                   // 8-9
+    "\n[motor]\n"                                                     // 10-11
+    "torque_constant_nm_per_a = 0.03\nback_emf_v_s_per_rad = 0.03\n"  // 12-13
+    "resistance_ohm = 3\ngear_ratio = 4\nefficiency = 0.9\n";         // 14-16
+
+// 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms, in radians from hanging down.
+fs::path record(const fs::path& dir, const std::string& name, double phase) {
+  const fs::path path = dir / name;
+  std::ofstream out(path);
+  out << "t,q1,q2,volts\n" << std::setprecision(10);
+  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
+  const auto volts = [&](double t) {
+    double sum = 0;
+    for (std::size_t i = 0; i < hz.size(); ++i) {
+      sum += std::sin(2 * kPi * hz[i] * t + phase * static_cast<double>(i + 1));
+    }
+    return 3.5 * sum / std::sqrt(6.0);
+  };
+  const bridge::ModelParameters p = truth();
+  bridge::PendulumState x;
+  const double h = 5e-4;
+  for (int step = -4000; step < 20000; ++step) {  // 2 s of settling first
+    const double t = step * h;
+    if (step >= 0 && step % 20 == 0) {
+      out << t << "," << x.q1 << "," << x.q2 << "," << volts(t) << "\n";
+    }
+    const double v = volts(t + h / 2);
+    x = bridge::rk4_step(p, x, h, [&](const bridge::PendulumState& s) {
+      return kTorquePerVolt * v - kBackEmfDamping * s.dq1;
+    });
+  }
+  return path;
+}
+
+fs::path write(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string read(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The combined estimate of `name` in results.json.
+double combined_estimate(const std::string& json, const std::string& name) {
+  const auto combined = json.find("\"combined\": {\"estimate\": {");
+  if (combined == std::string::npos) return NAN;
+  const auto at = json.find("\"" + name + "\": ", combined);
+  return std::strtod(json.c_str() + at + name.size() + 4, nullptr);
+}
+
+class IdentifyCsv : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    a_ = record(dir_.path(), "a.csv", 0.0);
+    b_ = record(dir_.path(), "b.csv", 1.3);
+    c_ = record(dir_.path(), "c.csv", 2.9);
+    spec_ = write(dir_.path() / "import.toml", kSpec);
+    options_.csvs = {a_, b_};
+    options_.import_spec = spec_;
+    options_.output_dir = dir_.path() / "out";
+  }
+  int run() { return run_identify_command(options_, out_, err_); }
+
+  TempDir dir_;
+  fs::path a_, b_, c_, spec_;
+  IdentifyCommandOptions options_;
+  std::ostringstream out_, err_;
+};
+
+TEST_F(IdentifyCsv, VoltageRigWithoutAConfigurationWritesTableResultsAndFigures) {
+  options_.validate = c_;
+  ASSERT_EQ(run(), 0) << err_.str();
+  EXPECT_NE(out_.str().find("all experiments"), std::string::npos) << out_.str();
+  EXPECT_NE(out_.str().find("held-out torque on c.csv"), std::string::npos) << out_.str();
+  EXPECT_EQ(out_.str().find("truth"), std::string::npos);  // no simulation behind a CSV
+  for (const char* name :
+       {"results.json", "table.txt", "signals_1.svg", "signals_2.svg", "torque_validation.svg"}) {
+    EXPECT_TRUE(fs::exists(options_.output_dir / name)) << name;
+  }
+  const std::string json = read(options_.output_dir / "results.json");
+  for (const fs::path& input : {a_, b_, c_, spec_}) {
+    EXPECT_NE(json.find(identification::sha256_file(input.string())), std::string::npos) << input;
+  }
+  // The configuration's input lag is the daemon's; a CSV's defaults to none.
+  EXPECT_NE(json.find("\"input_lag_s\": 0,"), std::string::npos);
+  const identification::ParameterVector expected = identification::to_vector(truth());
+  for (int k = 0; k < identification::kParameterCount; ++k) {
+    const double estimate = combined_estimate(json, identification::kParameterNames[k]);
+    std::printf("[ measured ] command, 15 Hz default cut-off: %s %+.2f %%\n",
+                identification::kParameterNames[k], 100 * (estimate / expected[k] - 1));
+    EXPECT_NEAR(estimate / expected[k], 1.0, 0.05) << identification::kParameterNames[k];
+  }
+}
+
+TEST_F(IdentifyCsv, SpecWithoutResistanceNamesFileLineAndField) {
+  std::string spec = kSpec;
+  spec.erase(spec.find("resistance_ohm = 3\n"), 19);
+  write(spec_, spec);
+  EXPECT_EQ(run(), 2);
+  EXPECT_NE(err_.str().find(spec_.string() + ":11: motor.resistance_ohm: missing"),
+            std::string::npos)
+      << err_.str();
+  EXPECT_FALSE(fs::exists(options_.output_dir / "results.json"));
+}
+
+TEST_F(IdentifyCsv, DutyInputNeedsTheRigConfiguration) {
+  std::string spec = kSpec;
+  spec = spec.substr(0, spec.find("\n[motor]"));
+  spec.replace(spec.find("\"voltage\""), 9, "\"duty\"");
+  write(spec_, spec + "\n");
+  EXPECT_EQ(run(), 2);
+  EXPECT_NE(err_.str().find("pass --config"), std::string::npos) << err_.str();
+}
+
+TEST_F(IdentifyCsv, MistakesInTheCommandAreRefusedClearly) {
+  const auto refused = [&](const IdentifyCommandOptions& options, const std::string& expected) {
+    std::ostringstream out, err;
+    EXPECT_EQ(run_identify_command(options, out, err), 2) << expected;
+    EXPECT_NE(err.str().find(expected), std::string::npos) << err.str();
+  };
+  IdentifyCommandOptions no_spec = options_;
+  no_spec.import_spec.clear();
+  refused(no_spec, "--csv needs --import-spec");
+
+  IdentifyCommandOptions positional;
+  positional.logs = {a_};
+  refused(positional, "a.csv is a CSV file: pass it as --csv");
+
+  IdentifyCommandOptions mixed = options_;
+  mixed.logs = {dir_.path() / "session.lcmlog"};
+  refused(mixed, "give one kind");
+
+  IdentifyCommandOptions log_validation = options_;
+  log_validation.validate = dir_.path() / "session.lcmlog";
+  refused(log_validation, "validate on the same kind");
+
+  IdentifyCommandOptions fast = options_;
+  fast.cutoff_hz = 30.0;  // stop band 60 Hz, above the 50 Hz Nyquist frequency of 10 ms samples
+  refused(fast, "pass --cutoff below 25");
+
+  write(c_, "t,q1,q2,volts\n0,0,0,oops\n");
+  IdentifyCommandOptions bad_csv = options_;
+  bad_csv.csvs = {c_};
+  refused(bad_csv, "c.csv:2: volts: 'oops' is not a finite number");
+}
+
+}  // namespace
+}  // namespace furuta::app
