@@ -179,12 +179,12 @@ CsvColumn read_column(SpecTable& s, const std::string& key, bool has_header, boo
 // The [motor] table: the DC motor of a voltage-driven rig. Required with input_kind = "voltage"
 // (k_t, k_e and R have no sensible default) and refused with the other kinds, where it would be
 // silently ignored: duty input takes eq. 4's motor from the rig configuration, torque needs none.
-std::shared_ptr<const VoltageMotor> parse_motor_table(const toml::table& root, SpecTable& csv,
-                                                      const std::string& input_kind,
-                                                      const std::string& file) {
+std::optional<VoltageMotor> parse_motor_table(const toml::table& root, SpecTable& csv,
+                                              const std::string& input_kind,
+                                              const std::string& file) {
   const toml::node* node = root.get("motor");  // a table, if there (checked by the caller)
   if (input_kind != "voltage") {
-    if (!node) return nullptr;
+    if (!node) return std::nullopt;
     throw ConfigError(
         file, line_of(node), "motor",
         "only applies when csv.input_kind = \"voltage\" (it is \"" + input_kind + "\"; " +
@@ -213,7 +213,7 @@ std::shared_ptr<const VoltageMotor> parse_motor_table(const toml::table& root, S
     m.fail("efficiency", m.node("efficiency"), "must be in (0, 1]");
   }
   m.reject_unknown_keys();
-  return std::make_shared<const VoltageMotor>(motor);
+  return motor;
 }
 
 }  // namespace

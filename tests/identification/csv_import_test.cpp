@@ -359,7 +359,8 @@ TEST(CsvImportSpec, ParsesDefaultsAndLoadsFromAFile) {
   EXPECT_EQ(spec.angle_unit, AngleUnit::rad);
   EXPECT_EQ(spec.pendulum_zero, PendulumZero::down);
   EXPECT_EQ(spec.input_kind, InputKind::duty);
-  EXPECT_EQ(spec.voltage_motor, nullptr);  // duty input: eq. 4's motor comes from the rig config
+  EXPECT_FALSE(
+      spec.voltage_motor.has_value());  // duty input: eq. 4's motor comes from the rig config
   EXPECT_THROW(load_csv_import_spec(dir.path() / "absent.toml"), ConfigError);
 }
 
@@ -454,7 +455,7 @@ TEST(CsvImportSpec, VoltageInputReadsTheMotorTable) {
       voltage_spec(std::string(kMotorConstants) + "gear_ratio = 4\nefficiency = 0.85\n"),
       "spec.toml");
   EXPECT_EQ(spec.input_kind, InputKind::voltage);
-  ASSERT_NE(spec.voltage_motor, nullptr);
+  ASSERT_TRUE(spec.voltage_motor.has_value());
   EXPECT_DOUBLE_EQ(spec.voltage_motor->torque_constant_nm_per_a, 0.05);
   EXPECT_DOUBLE_EQ(spec.voltage_motor->back_emf_v_s_per_rad, 0.06);
   EXPECT_DOUBLE_EQ(spec.voltage_motor->resistance_ohm, 2.5);
@@ -462,7 +463,7 @@ TEST(CsvImportSpec, VoltageInputReadsTheMotorTable) {
   EXPECT_DOUBLE_EQ(spec.voltage_motor->efficiency, 0.85);
 
   const CsvImportSpec defaults = parse_csv_import_spec(voltage_spec(kMotorConstants), "spec.toml");
-  ASSERT_NE(defaults.voltage_motor, nullptr);
+  ASSERT_TRUE(defaults.voltage_motor.has_value());
   EXPECT_DOUBLE_EQ(defaults.voltage_motor->gear_ratio, 1.0);
   EXPECT_DOUBLE_EQ(defaults.voltage_motor->efficiency, 1.0);
   EXPECT_DOUBLE_EQ(parse_csv_import_spec(voltage_spec("resistance_ohm = 3\n"

@@ -250,11 +250,16 @@ ParameterVector GuaranteedOnOneSession::centre_;
 TEST_F(GuaranteedOnOneSession, InnerBoxPointsHaveDataAndTheForAllTestProvesNothing) {
   GuaranteedOptions o = two_unknowns(centre_);
   const GuaranteedResult witness = guaranteed_identification(*constraints_, o);
+  o.inner = InnerTest::intermediate_value;
+  const GuaranteedResult faces = guaranteed_identification(*constraints_, o);
   o.inner = InnerTest::for_all_data;
   const GuaranteedResult for_all = guaranteed_identification(*constraints_, o);
-  std::printf("[ measured ] inner boxes: witness %zu (area %.3g), for-all-data %zu\n",
-              witness.paving.inner.size(), witness.paving.inner_volume(),
-              for_all.paving.inner.size());
+  std::printf(
+      "[ measured ] inner boxes: witness (solved or faces) %zu (area %.3g), faces alone %zu, "
+      "for-all-data %zu\n",
+      witness.paving.inner.size(), unknowns_volume(witness.paving.inner, o.unknown),
+      faces.paving.inner.size(), for_all.paving.inner.size());
+  EXPECT_GE(witness.paving.inner.size(), faces.paving.inner.size());
   ASSERT_FALSE(witness.paving.inner.empty());
   EXPECT_TRUE(for_all.paving.inner.empty());  // row 2's output is exactly 0
   // Points of inner boxes: every sample has data meeting both rows.

@@ -166,7 +166,7 @@ TEST(VoltageRig, CsvFromAnotherLoggerRecoversTheParameters) {
   }
 
   const CsvImportSpec spec = load_csv_import_spec(write_spec(dir.path()));
-  ASSERT_NE(spec.voltage_motor, nullptr);
+  ASSERT_TRUE(spec.voltage_motor.has_value());
   EXPECT_DOUBLE_EQ(spec.voltage_motor->resistance_ohm, motor().resistance_ohm);
   EXPECT_DOUBLE_EQ(spec.voltage_motor->gear_ratio, motor().gear_ratio);
 

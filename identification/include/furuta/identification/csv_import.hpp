@@ -4,13 +4,21 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace furuta::identification {
 
-struct VoltageMotor;  // preprocessing.hpp (which includes this header)
+// A voltage-driven motor (other rigs): tau = ratio * efficiency * k_t (V - k_e omega_motor) / R.
+struct VoltageMotor {
+  double torque_constant_nm_per_a = 0;
+  double back_emf_v_s_per_rad = 0;
+  double resistance_ohm = 0;
+  double gear_ratio = 1;
+  double efficiency = 1;
+};
 
 enum class AngleUnit { rad, deg, counts };
 enum class InputKind { duty, voltage, torque };
@@ -42,9 +50,8 @@ struct CsvImportSpec {
   PendulumZero pendulum_zero = PendulumZero::down;
   InputKind input_kind = InputKind::duty;
   // The [motor] table: set exactly when input_kind = voltage (pass *voltage_motor to preprocess or
-  // identify). Held by pointer only because VoltageMotor is defined in preprocessing.hpp, which
-  // includes this header; include preprocessing.hpp to use it.
-  std::shared_ptr<const VoltageMotor> voltage_motor;
+  // identify).
+  std::optional<VoltageMotor> voltage_motor;
 };
 
 // Parses the [csv] and [motor] tables of an import spec file; errors name file, line and field

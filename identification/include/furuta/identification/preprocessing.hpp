@@ -31,15 +31,6 @@ struct RawExperiment {
 RawExperiment experiment_from_log(const session_log::SessionLog& log);
 RawExperiment experiment_from_csv(const ImportedSeries& series, const std::string& name);
 
-// A voltage-driven motor (other rigs): tau = ratio * efficiency * k_t (V - k_e omega_motor) / R.
-struct VoltageMotor {
-  double torque_constant_nm_per_a = 0;
-  double back_emf_v_s_per_rad = 0;
-  double resistance_ohm = 0;
-  double gear_ratio = 1;
-  double efficiency = 1;
-};
-
 struct PreprocessOptions {
   int butterworth_order = 8;
   double cutoff_hz = 5.0;
