@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -49,6 +50,65 @@ bool contract_linear(const LinearRow& row, const Interval& y, Box& p) {
     interval::bwd_mul(t, coefficient, parameter);
     if (parameter.is_empty()) return false;
     p[row.index[j]] = parameter;
+  }
+  return true;
+}
+
+// The range of constant + sum_j a_j p_idx(j) in plain round-to-nearest floating point: an estimate
+// without outward rounding, used only to decide to skip work, never for a verdict.
+struct RowEstimate {
+  double lo, hi;
+};
+RowEstimate estimate(const LinearRow& row, const Box& p) {
+  RowEstimate e{row.constant.lo(), row.constant.hi()};
+  for (int j = 0; j < row.terms; ++j) {
+    const Interval& a = row.coefficient[j];
+    const Interval& x = p[row.index[j]];
+    const double ll = a.lo() * x.lo(), lh = a.lo() * x.hi(), hl = a.hi() * x.lo(),
+                 hh = a.hi() * x.hi();
+    e.lo += std::min(std::min(ll, lh), std::min(hl, hh));
+    e.hi += std::max(std::max(ll, lh), std::max(hl, hh));
+  }
+  return e;
+}
+
+// Whether contract_linear(row, y, p) would leave p as it is, decided in plain floating point. With
+// the image [L, H] and S = [L, H] & y, term j's range t_j is cut to c_j = t_j & (S - R_j), R_j the
+// other terms' range [L - t_j.lo, H - t_j.hi]; p_j then keeps exactly its points x for which some
+// a in a_j gives a x in c_j. That set is connected within p_j (or its hull is p_j), so p_j stays
+// whole when both its bounds qualify: a_j x_lo and a_j x_hi (the products already formed for t_j)
+// both meet c_j. The rigorous revise encloses that set, so it would not contract either (beyond
+// rounding). Skipping a contraction is always sound (it only contracts less), so this decision need
+// not be rigorous (a NaN image says "not idle", and the rigorous revise runs).
+bool contraction_is_idle(const LinearRow& row, const Interval& y, const Box& p) {
+  const int n = row.terms;
+  // Per term: the products a_lo x_lo, a_hi x_lo (the bound x_lo) and a_lo x_hi, a_hi x_hi.
+  std::array<double, kParameterCount> lo_min, lo_max, hi_min, hi_max, tl, th;
+  double lo = row.constant.lo(), hi = row.constant.hi();
+  for (int j = 0; j < n; ++j) {
+    const Interval& a = row.coefficient[j];
+    const Interval& x = p[row.index[j]];
+    const double ll = a.lo() * x.lo(), hl = a.hi() * x.lo(), lh = a.lo() * x.hi(),
+                 hh = a.hi() * x.hi();
+    lo_min[j] = std::min(ll, hl);
+    lo_max[j] = std::max(ll, hl);
+    hi_min[j] = std::min(lh, hh);
+    hi_max[j] = std::max(lh, hh);
+    tl[j] = std::min(lo_min[j], hi_min[j]);
+    th[j] = std::max(lo_max[j], hi_max[j]);
+    lo += tl[j];
+    hi += th[j];
+  }
+  const double s_lo = std::max(lo, y.lo()), s_hi = std::min(hi, y.hi());
+  if (!(s_lo <= s_hi)) return false;
+  for (int j = 0; j < n; ++j) {
+    const double cut_lo = std::max(tl[j], s_lo - (hi - th[j]));
+    const double cut_hi = std::min(th[j], s_hi - (lo - tl[j]));
+    if (cut_lo <= tl[j] && cut_hi >= th[j]) continue;  // the term keeps its range
+    if (!(lo_min[j] <= cut_hi && lo_max[j] >= cut_lo && hi_min[j] <= cut_hi &&
+          hi_max[j] >= cut_lo)) {
+      return false;
+    }
   }
   return true;
 }
@@ -204,8 +264,11 @@ void SampleConstraints::build_preconditioned_system(
     Interval cy(0.0);
     std::vector<Interval> ca(static_cast<std::size_t>(n), Interval(0.0));
     for (Eigen::Index r = 0; r < rows; ++r) {
+      // Any C is sound, so an entry the pseudo-inverse left non-finite (a column of subnormal
+      // coefficients scaled by 1e300) is taken as 0: Interval(inf) would be empty and empty the
+      // box.
       const double ckr = c(k, r);
-      if (ckr == 0) continue;
+      if (ckr == 0 || !std::isfinite(ckr)) continue;
       const Interval ck(ckr);
       cy += ck * y[static_cast<std::size_t>(r)];
       for (Eigen::Index j = 0; j < n; ++j) {
@@ -245,6 +308,13 @@ bool SampleConstraints::contract_all(Box& p) const {
 
 bool SampleConstraints::proves_inconsistent(std::size_t i, const Box& p) const {
   const Precomputed& pre = pre_[i];
+  // Most samples are plainly consistent with the box: the floating-point estimates of both rows'
+  // ranges meet their outputs. Answering "not proven" is always sound; when an estimate misses (or
+  // is NaN), the outward-rounded evaluation decides.
+  const RowEstimate e1 = estimate(pre.row1, p), e2 = estimate(pre.row2, p);
+  if (e1.lo <= samples_[i].tau.hi() && e1.hi >= samples_[i].tau.lo() && e2.lo <= 0 && e2.hi >= 0) {
+    return false;
+  }
   if (evaluate(pre.row1, p).is_disjoint(samples_[i].tau)) return true;
   return !evaluate(pre.row2, p).contains(0.0);
 }
@@ -302,10 +372,21 @@ bool SampleConstraints::solved_inside(std::size_t i, const Precomputed& pre, con
   return ddq2.is_subset(d.ddq2);
 }
 
+// HC4-revise of both rows, each skipped when the floating-point check says it would leave the box
+// as it is: most rows, once the box is near the set's hull, so a sweep costs about one estimate per
+// row instead of a rigorous revise.
 bool SampleConstraints::contract(std::size_t i, Box& p) const {
+  // Sweeps go through the samples in order, and a sample's precomputed rows are far apart (the
+  // witness rows sit between them): fetch the next sample's two rows ahead.
+  if (i + 2 < pre_.size()) {
+    const char* next = reinterpret_cast<const char*>(&pre_[i + 2]);
+    for (std::size_t at = 0; at < 2 * sizeof(LinearRow); at += 64) __builtin_prefetch(next + at);
+  }
   const Precomputed& pre = pre_[i];
-  return contract_linear(pre.row1, samples_[i].tau, p) &&
-         contract_linear(pre.row2, Interval(0.0), p);
+  const Interval& tau = samples_[i].tau;
+  if (!contraction_is_idle(pre.row1, tau, p) && !contract_linear(pre.row1, tau, p)) return false;
+  const Interval zero(0.0);
+  return contraction_is_idle(pre.row2, zero, p) || contract_linear(pre.row2, zero, p);
 }
 
 Box paper_prior(const ParameterVector& mu_centre, const std::array<double, 5>& mu_percent,
@@ -333,6 +414,7 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
   auto outer_causes = std::make_unique<std::atomic<std::uint64_t>[]>(n);
   const std::size_t q = static_cast<std::size_t>(options.q);
 
+  std::atomic<std::size_t> inner_hint{0};
   const interval::BoxTest test = [&](Box& box) -> interval::BoxDecision {
     using interval::BoxVerdict;
     if (q == 0) {
@@ -356,8 +438,16 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
         if (!shrank) break;
       }
       if (options.inner == InnerTest::none) return {BoxVerdict::undecided};
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!constraints.proves_consistent(i, box, options.inner)) return {BoxVerdict::undecided};
+      // Inner needs every sample: the verdict does not depend on the order they are tried in, so
+      // start at the sample that last failed (in any thread; neighbouring boxes tend to fail at the
+      // same samples), and go on round the circle.
+      const std::size_t start = inner_hint.load(std::memory_order_relaxed);
+      for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t i = start + k < n ? start + k : start + k - n;
+        if (!constraints.proves_consistent(i, box, options.inner)) {
+          inner_hint.store(i, std::memory_order_relaxed);
+          return {BoxVerdict::undecided};
+        }
       }
       return {BoxVerdict::inner};
     }

@@ -1,0 +1,271 @@
+// Guaranteed identification (SIVIA over the model's rows, identification/src/guaranteed.cpp) on two
+// simulated 10 s sessions at 16 ms (1,094 samples after trimming): the paper's two-unknown problem
+// (fv1, fv2; the mu's carried as Table II intervals) with and without the contractors, and all
+// seven parameters unknown; some also on the first 625 or 312 samples, the IBEX reference's counts.
+// Each with 1 thread and with all cores (threads:0). Counters: inner / boundary / outer boxes,
+// boxes tested, truncated (1 when max_boxes stopped the paver), the outer hull's width per unknown
+// (w_<name>), the inner and boundary boxes' measure over the unknowns, whether the truth is in the
+// outer approximation, and the process's CPU seconds per run (all threads).
+// Run: build/release/bench/sivia_bench (see bench/README.md).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <ctime>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/identification/guaranteed.hpp"
+#include "furuta/identification/preprocessing.hpp"
+
+namespace {
+
+using namespace furuta;
+using namespace furuta::identification;
+
+// A 10 s session of the model under a smooth multisine duty (the seed picks the phases), RK4 at
+// 1 ms, sampled every 16 ms with the encoders' quantisation, preprocessed at 5 Hz; plus the true
+// signals at the samples (tests/identification/guaranteed_test.cpp's generator).
+struct SimulatedSession {
+  JointSeries processed;
+  JointSeries truth;
+};
+
+PreprocessOptions preprocess_options() {
+  PreprocessOptions options;
+  options.cutoff_hz = 5;
+  options.differentiator_passband_hz = 5;
+  options.differentiator_stopband_hz = 10;
+  return options;
+}
+
+SimulatedSession simulate(std::uint64_t seed, double seconds = 10.0) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const bridge::MotorData motor;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> phase(0, 2 * std::numbers::pi);
+  const std::array<double, 5> freq_hz = {0.3, 0.7, 1.1, 1.7, 2.3};
+  std::array<double, 5> ph{};
+  for (double& x : ph) x = phase(rng);
+  const auto duty = [&](double t) {
+    double d = 0;
+    for (int k = 0; k < 5; ++k) d += 0.03 * std::sin(2 * std::numbers::pi * freq_hz[k] * t + ph[k]);
+    return d;
+  };
+  const double dt = 1e-3, period = 0.016;
+  const double pendulum_resolution = 2 * std::numbers::pi / 4096;
+  const double arm_resolution = 2 * std::numbers::pi / (512 * 26.0);
+  RawExperiment raw;
+  raw.name = "seed" + std::to_string(seed);
+  raw.sample_period_s = period;
+  raw.input_kind = InputKind::duty;
+  SimulatedSession out;
+  out.truth.name = raw.name;
+  out.truth.sample_period_s = period;
+  bridge::PendulumState x{0, 0, 0.05, 0};
+  double t = 0;
+  const int steps_per_sample = static_cast<int>(std::lround(period / dt));
+  for (int k = 0; t < seconds; ++k) {
+    const double d = duty(t);
+    const double tau = motor.arm_torque_nm(d, x.dq1);
+    const bridge::JointAccelerations a = bridge::forward_dynamics(p, x, tau);
+    raw.t_s.push_back(t);
+    raw.q1.push_back(std::round(x.q1 / arm_resolution) * arm_resolution);
+    raw.q2.push_back(std::round(x.q2 / pendulum_resolution) * pendulum_resolution);
+    raw.input.push_back(d);
+    out.truth.t_s.push_back(t);
+    out.truth.q2.push_back(x.q2);
+    out.truth.dq1.push_back(x.dq1);
+    out.truth.dq2.push_back(x.dq2);
+    out.truth.ddq1.push_back(a.ddq1);
+    out.truth.ddq2.push_back(a.ddq2);
+    out.truth.tau.push_back(tau);
+    for (int s = 0; s < steps_per_sample; ++s) {
+      const double ts = t + s * dt;
+      x = bridge::rk4_step(p, x, dt, [&](const bridge::PendulumState& st) {
+        return motor.arm_torque_nm(duty(ts), st.dq1);
+      });
+    }
+    t = (k + 1) * period;
+  }
+  out.processed = preprocess(raw, preprocess_options(), motor);
+  return out;
+}
+
+std::size_t trim() {
+  return edge_samples(preprocess_options());
+}
+
+// Bounds that hold by construction: the largest true error per channel over both sessions, x1.5.
+DataErrorBounds bounds_covering(const std::vector<SimulatedSession>& sessions,
+                                double margin = 1.5) {
+  DataErrorBounds b;
+  const auto worst = [&](auto member) {
+    double m = 0;
+    for (const SimulatedSession& s : sessions) {
+      const std::vector<double>& measured = s.processed.*member;
+      const std::vector<double>& truth = s.truth.*member;
+      for (std::size_t i = trim(); i + trim() < measured.size(); ++i) {
+        m = std::max(m, std::abs(measured[i] - truth[i]));
+      }
+    }
+    return margin * m + 1e-12;
+  };
+  b.q2.absolute = worst(&JointSeries::q2);
+  b.dq1.absolute = worst(&JointSeries::dq1);
+  b.dq2.absolute = worst(&JointSeries::dq2);
+  b.ddq1.absolute = worst(&JointSeries::ddq1);
+  b.ddq2.absolute = worst(&JointSeries::ddq2);
+  b.tau.absolute = worst(&JointSeries::tau);
+  return b;
+}
+
+struct Data {
+  std::vector<SimulatedSession> sessions;
+  std::vector<IntervalSample> samples;
+  ParameterVector truth{};
+};
+const Data& data() {
+  static const Data d = [] {
+    Data out;
+    out.sessions = {simulate(1), simulate(2)};
+    out.samples = interval_samples({&out.sessions[0].processed, &out.sessions[1].processed},
+                                   bounds_covering(out.sessions), trim());
+    out.truth = to_vector(bridge::ModelParameters::paper_run1());
+    return out;
+  }();
+  return d;
+}
+
+GuaranteedOptions two_unknowns(double epsilon, bool contract) {
+  GuaranteedOptions o;
+  o.prior = paper_prior(data().truth);
+  o.epsilon = epsilon;
+  o.contract = contract;
+  return o;
+}
+
+GuaranteedOptions seven_unknowns(double epsilon, bool relative) {
+  GuaranteedOptions o;
+  o.prior = paper_prior(data().truth, {12, 12, 10, 12, 15}, 0.2);
+  o.unknown.fill(true);
+  o.epsilon = epsilon;
+  o.epsilon_relative = relative;
+  o.max_boxes = 2'000'000;
+  return o;
+}
+
+// The first n samples (0: all; the first session has 547 after trimming, the second as many).
+std::vector<IntervalSample> first_samples(std::int64_t n) {
+  const std::vector<IntervalSample>& all = data().samples;
+  if (n <= 0 || static_cast<std::size_t>(n) >= all.size()) return all;
+  return {all.begin(), all.begin() + n};
+}
+
+// state.range(0): log10 epsilon; range(1): threads (0 = all cores); range(2): samples (0 = all).
+void run(benchmark::State& state, GuaranteedOptions o) {
+  o.threads = static_cast<int>(state.range(1));
+  const SampleConstraints constraints(first_samples(state.range(2)), o.prior, o.unknown);
+  GuaranteedResult r;
+  // The process's CPU time (every thread's; Google Benchmark's CPU column is the main thread's).
+  const std::clock_t cpu_start = std::clock();
+  for (auto _ : state) {
+    r = guaranteed_identification(constraints, o);
+    benchmark::DoNotOptimize(r.paving.boxes_tested);
+  }
+  state.counters["process_cpu_s"] = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC /
+                                    static_cast<double>(state.iterations());
+  const interval::SubPaving& p = r.paving;
+  state.counters["samples"] = static_cast<double>(constraints.size());
+  state.counters["inner"] = static_cast<double>(p.inner.size());
+  state.counters["boundary"] = static_cast<double>(p.boundary.size());
+  state.counters["outer"] = static_cast<double>(p.outer_count);
+  state.counters["tested"] = static_cast<double>(p.boxes_tested);
+  state.counters["truncated"] = p.truncated ? 1 : 0;
+  const Box hull = p.outer_hull();
+  for (int k = 0; k < kParameterCount; ++k) {
+    if (o.unknown[k]) state.counters[std::string("w_") + kParameterNames[k]] = hull[k].width();
+  }
+  state.counters["inner_measure"] = unknowns_volume(p.inner, o.unknown);
+  state.counters["boundary_measure"] = unknowns_volume(p.boundary, o.unknown);
+  const std::vector<double> truth(data().truth.begin(), data().truth.end());
+  const auto contains_truth = [&](const std::vector<Box>& boxes) {
+    return std::any_of(boxes.begin(), boxes.end(), [&](const Box& b) { return b.contains(truth); });
+  };
+  state.counters["truth_inside"] = contains_truth(p.inner) || contains_truth(p.boundary) ? 1 : 0;
+}
+
+double epsilon(const benchmark::State& state) {
+  return std::pow(10.0, static_cast<double>(state.range(0)));
+}
+
+// (a) The paper's problem with the contractors, on both sessions and on the first 625 samples (the
+// IBEX reference's count).
+void BM_TwoUnknowns(benchmark::State& state) {
+  run(state, two_unknowns(epsilon(state), true));
+}
+BENCHMARK(BM_TwoUnknowns)
+    ->ArgNames({"log10_eps", "threads", "samples"})
+    ->ArgsProduct({{-2, -3, -4}, {1, 0}, {0}})
+    ->ArgsProduct({{-2, -3}, {1, 0}, {625}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+// Finer: the inner approximation grows.
+BENCHMARK(BM_TwoUnknowns)
+    ->ArgNames({"log10_eps", "threads", "samples"})
+    ->ArgsProduct({{-5}, {1, 0}, {0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+// (b) The same without the contractors (plain SIVIA: a box is outer when one sample's rows miss).
+void BM_TwoUnknownsPlainSivia(benchmark::State& state) {
+  run(state, two_unknowns(epsilon(state), false));
+}
+BENCHMARK(BM_TwoUnknownsPlainSivia)
+    ->ArgNames({"log10_eps", "threads", "samples"})
+    ->ArgsProduct({{-2, -3, -4}, {1, 0}, {0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// (c) All seven parameters unknown, epsilon absolute 1e-3, on both sessions and on the first 312
+// samples (the IBEX reference's count).
+void BM_SevenUnknownsAbsolute(benchmark::State& state) {
+  run(state, seven_unknowns(epsilon(state), false));
+}
+BENCHMARK(BM_SevenUnknownsAbsolute)
+    ->ArgNames({"log10_eps_abs", "threads", "samples"})
+    ->ArgsProduct({{-3}, {1, 0}, {0, 312}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// ... and epsilon relative 1e-3 (of each prior width): far more boxes than max_boxes (2,000,000)
+// allows; the paving is truncated (the untested boxes stay boundary: sound, coarser).
+void BM_SevenUnknownsRelative(benchmark::State& state) {
+  run(state, seven_unknowns(epsilon(state), true));
+}
+BENCHMARK(BM_SevenUnknownsRelative)
+    ->ArgNames({"log10_eps", "threads", "samples"})
+    ->ArgsProduct({{-3}, {1, 0}, {0, 312}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+// Building the per-sample constraints (regressor enclosures, witness faces, the preconditioned
+// system) is done once per problem, outside the timings above.
+void BM_BuildConstraints(benchmark::State& state) {
+  const GuaranteedOptions o =
+      state.range(0) == 2 ? two_unknowns(0.01, true) : seven_unknowns(1e-3, false);
+  for (auto _ : state) {
+    const SampleConstraints c(data().samples, o.prior, o.unknown);
+    benchmark::DoNotOptimize(c.size());
+  }
+}
+BENCHMARK(BM_BuildConstraints)->ArgName("unknowns")->Arg(2)->Arg(7)->Unit(benchmark::kMillisecond);
+
+}  // namespace
