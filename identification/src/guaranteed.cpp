@@ -365,6 +365,9 @@ bool SampleConstraints::solved_inside(std::size_t i, const Precomputed& pre, con
   if (det.contains(0.0)) return false;
   const double aim = a11.mid() * d.ddq1.mid() + a12.mid() * d.ddq2.mid() + r1.mid();
   const double c = std::clamp(aim, d.tau.lo(), d.tau.hi());
+  // A NaN aim (overflowing data) would make Interval(c) empty, and the empty set is a subset of
+  // anything: no proof then.
+  if (!std::isfinite(c)) return false;
   const Interval b1 = Interval(c) - r1, b2 = -r2;
   const Interval ddq1 = (a22 * b1 - a12 * b2) / det;
   if (!ddq1.is_subset(d.ddq1)) return false;
