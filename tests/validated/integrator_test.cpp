@@ -1,0 +1,348 @@
+// The validated integrator: closed-form solutions (harmonic and damped oscillators) inside the
+// enclosures, soundness against long double point simulations from thousands of initial points
+// (pendulum, Furuta with interval parameters and a piecewise constant torque), the DynIbex
+// pendulum benchmark's figures, failure reporting and the tube's queries.
+#include "furuta/validated/integrator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <span>
+#include <vector>
+
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "reference.hpp"
+
+namespace furuta::validated {
+namespace {
+
+using testing::Point;
+
+// x'' = -w^2 x: x(t) = x0 cos wt + v0/w sin wt.
+Point<2> harmonic(double omega, long double x0, long double v0, long double t) {
+  const long double w = omega;
+  return {x0 * std::cos(w * t) + v0 / w * std::sin(w * t),
+          -x0 * w * std::sin(w * t) + v0 * std::cos(w * t)};
+}
+
+// x'' + 2 zeta w x' + w^2 x = 0, underdamped.
+Point<2> damped(double omega, double zeta, long double x0, long double v0, long double t) {
+  const long double w = omega;
+  const long double z = zeta;
+  const long double wd = w * std::sqrt(1 - z * z);
+  const long double a = x0;
+  const long double b = (v0 + z * w * x0) / wd;
+  const long double e = std::exp(-z * w * t);
+  const long double c = std::cos(wd * t);
+  const long double s = std::sin(wd * t);
+  return {e * (a * c + b * s), e * (-z * w * (a * c + b * s) + (-a * wd * s + b * wd * c))};
+}
+
+bool contains(const Box& box, const Point<2>& x, long double slack = 0) {
+  return x[0] >= box[0].lo() - slack && x[0] <= box[0].hi() + slack &&
+         x[1] >= box[1].lo() - slack && x[1] <= box[1].hi() + slack;
+}
+
+TEST(Integrator, HarmonicOscillatorPointInitialState) {
+  const HarmonicOscillator osc{3.0};
+  IntegratorOptions options;
+  options.t_end = 4.0;
+  const IntegrationResult r = integrate(osc, Box{Interval(1.0), Interval(0.5)}, options);
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_EQ(r.tube.t_end(), 4.0);
+  // The closed form (long double, error ~1e-18) at every step end and inside every step.
+  for (const TubeStep& s : r.tube.steps) {
+    EXPECT_TRUE(contains(s.end, harmonic(3.0, 1.0L, 0.5L, s.t1))) << s.t1 << " " << s.end;
+    const double tm = s.t0 + (s.t1 - s.t0) / 3;
+    EXPECT_TRUE(contains(r.tube.enclosure_at(tm), harmonic(3.0, 1.0L, 0.5L, tm))) << tm;
+  }
+  const Box end = r.tube.enclosure_at(4.0);
+  EXPECT_LT(end.max_width(), 1e-6);
+  std::printf("[ measured ] harmonic oscillator w = 3, point x0, 4 s: %zu steps, width %.3g\n",
+              r.steps, end.max_width());
+}
+
+TEST(Integrator, HarmonicOscillatorBoxInitialState) {
+  const HarmonicOscillator osc{3.0};
+  IntegratorOptions options;
+  options.t_end = 4.0;
+  const Box x0{Interval(0.9, 1.1), Interval(0.4, 0.6)};
+  const IntegrationResult r = integrate(osc, x0, options);
+  ASSERT_TRUE(r.ok()) << r.reason;
+  std::mt19937_64 rng(11);
+  std::size_t checks = 0;
+  std::size_t violations = 0;
+  for (const Point<2>& p : testing::sample_box<2>(x0, 200, rng)) {
+    for (const TubeStep& s : r.tube.steps) {
+      ++checks;
+      violations += !contains(s.end, harmonic(3.0, p[0], p[1], s.t1));
+    }
+  }
+  EXPECT_EQ(violations, 0U);
+  // A linear flow is carried exactly: the box is the exact image (a rotation of a box), up to
+  // rounding. Its x width at t is 0.2 |cos 3t| + 0.2/3 |sin 3t|.
+  const double exact = 0.2 * std::abs(std::cos(12.0)) + 0.2 / 3 * std::abs(std::sin(12.0));
+  EXPECT_NEAR(r.tube.enclosure_at(4.0)[0].width(), exact, 1e-9);
+  std::printf("[ measured ] harmonic oscillator, box x0: %zu checks, %zu violations\n", checks,
+              violations);
+}
+
+TEST(Integrator, DampedOscillatorPointAndBox) {
+  const DampedOscillator osc{2.0, 0.15};
+  IntegratorOptions options;
+  options.t_end = 4.0;
+  const IntegrationResult point = integrate(osc, Box{Interval(1.0), Interval(-0.5)}, options);
+  ASSERT_TRUE(point.ok()) << point.reason;
+  for (const TubeStep& s : point.tube.steps) {
+    EXPECT_TRUE(contains(s.end, damped(2.0, 0.15, 1.0L, -0.5L, s.t1))) << s.t1 << " " << s.end;
+  }
+  EXPECT_LT(point.tube.enclosure_at(4.0).max_width(), 1e-6);
+
+  const Box x0{Interval(0.95, 1.05), Interval(-0.55, -0.45)};
+  const IntegrationResult box = integrate(osc, x0, options);
+  ASSERT_TRUE(box.ok()) << box.reason;
+  std::mt19937_64 rng(12);
+  std::size_t checks = 0;
+  std::size_t violations = 0;
+  for (const Point<2>& p : testing::sample_box<2>(x0, 200, rng)) {
+    for (const TubeStep& s : box.tube.steps) {
+      ++checks;
+      violations += !contains(s.end, damped(2.0, 0.15, p[0], p[1], s.t1));
+    }
+  }
+  EXPECT_EQ(violations, 0U);
+  std::printf(
+      "[ measured ] damped oscillator: point x0 width %.3g at 4 s (%zu steps); box x0: %zu "
+      "checks, %zu violations\n",
+      point.tube.enclosure_at(4.0).max_width(), point.steps, checks, violations);
+}
+
+// The DynIbex benchmark: x1' = x2, x2' = -56 sin x1 - 0.5 x2 from [-1.745 +- 0.01, 0 +- 0.01].
+TEST(Integrator, SimplePendulumSoundnessAndFigures) {
+  const SimplePendulum pendulum;
+  const Box x0{Interval(-1.755, -1.735), Interval(-0.01, 0.01)};
+  IntegratorOptions options;
+  options.t_end = 4.0;
+  const IntegrationResult r = integrate(pendulum, x0, options);
+  ASSERT_TRUE(r.ok()) << r.reason;
+
+  std::mt19937_64 rng(2024);
+  const auto points = testing::sample_box<2>(x0, 2000, rng);
+  const testing::SoundnessCount count = testing::check_tube(pendulum, r.tube, points, 8);
+  EXPECT_EQ(count.violations, 0U);
+
+  // The true range of x1 at 1, 2, 3, 4 s from 1000 points (on the box's boundary, where the
+  // extremes are, and inside), against the enclosure's width.
+  std::vector<Point<2>> boundary;
+  for (int i = 0; i < 250; ++i) {
+    const double s = -1.0 + 2.0 * i / 250;
+    boundary.push_back({-1.745L + 0.01L * s, -0.01L});
+    boundary.push_back({-1.735L, 0.01L * s});
+    boundary.push_back({-1.745L - 0.01L * s, 0.01L});
+    boundary.push_back({-1.755L, -0.01L * s});
+  }
+  double ratio_4s = 0.0;
+  std::printf("[ measured ] pendulum 4 s: %.3f s wall, %zu steps (%zu rejected)\n", r.seconds,
+              r.steps, r.rejected);
+  std::vector<Point<2>> state = boundary;
+  for (int second = 1; second <= 4; ++second) {
+    long double lo = 1e9;
+    long double hi = -1e9;
+    for (Point<2>& x : state) {
+      x = testing::simulate(pendulum, x, second - 1.0, second, 1e-3);
+      lo = std::min(lo, x[0]);
+      hi = std::max(hi, x[0]);
+    }
+    const Interval e = r.tube.enclosure_at(second)[0];
+    EXPECT_LE(e.lo(), lo);
+    EXPECT_GE(e.hi(), hi);
+    const double ratio = e.width() / static_cast<double>(hi - lo);
+    if (second == 4) ratio_4s = ratio;
+    std::printf("[ measured ]   x1 at %d s: width %.4f rad, true range %.4f, ratio %.2f\n", second,
+                e.width(), static_cast<double>(hi - lo), ratio);
+  }
+  EXPECT_LT(ratio_4s, 1.5);
+  EXPECT_LT(r.steps, 400U);
+  std::printf("[ measured ] pendulum soundness: %zu points, %zu checks, %zu violations\n",
+              count.points, count.checks, count.violations);
+}
+
+TEST(Integrator, ReferenceSimulationIsAccurate) {
+  // The RK4 reference with the checks' step (about h / 8 <= 2.5 ms) against one with 1e-5 s.
+  const SimplePendulum pendulum;
+  const Point<2> p{-1.755L, 0.01L};
+  const Point<2> coarse = testing::simulate(pendulum, p, 0.0, 4.0, 2.5e-3);
+  const Point<2> fine = testing::simulate(pendulum, p, 0.0, 4.0, 1e-5);
+  EXPECT_LT(std::abs(static_cast<double>(coarse[0] - fine[0])), 1e-8);
+  EXPECT_LT(std::abs(static_cast<double>(coarse[1] - fine[1])), 1e-7);
+}
+
+TEST(Integrator, FurutaFieldMatchesThePointModel) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const FurutaDynamics furuta(Interval(0.07));
+  const bridge::PendulumState s{0.3, -1.2, 2.1, 4.5};
+  const std::vector<double> x{s.q1,  s.dq1, s.q2,  s.dq2, p.mu1, p.mu2,
+                              p.mu3, p.mu4, p.mug, p.fv1, p.fv2};
+  std::vector<double> dx(11);
+  furuta(0, std::span<const double>(x), std::span<double>(dx));
+  const bridge::JointAccelerations a = bridge::forward_dynamics(p, s, 0.07);
+  EXPECT_DOUBLE_EQ(dx[0], s.dq1);
+  EXPECT_NEAR(dx[1], a.ddq1, 1e-12 * std::abs(a.ddq1));
+  EXPECT_DOUBLE_EQ(dx[2], s.dq2);
+  EXPECT_NEAR(dx[3], a.ddq2, 1e-12 * std::abs(a.ddq2));
+  for (std::size_t i = 4; i < 11; ++i) EXPECT_EQ(dx[i], 0.0);
+  // The interval field encloses the point one.
+  const Box box = FurutaDynamics::initial_box(
+      Box{Interval(s.q1), Interval(s.dq1), Interval(s.q2), Interval(s.dq2)},
+      FurutaParameters::point(p));
+  const std::vector<Interval> xi(box.begin(), box.end());
+  std::vector<Interval> dxi(11);
+  furuta(0, std::span<const Interval>(xi), std::span<Interval>(dxi));
+  EXPECT_TRUE(dxi[1].contains(dx[1]));
+  EXPECT_TRUE(dxi[3].contains(dx[3]));
+}
+
+// The paper's scenario shape: the pendulum released from -90 deg, interval parameters (carried as
+// state), a piecewise constant torque with an interval piece. (Wider boxes or longer horizons: see
+// validated/README.md, "Limits".)
+TEST(Integrator, FurutaSoundnessWithIntervalParametersAndTorquePieces) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const std::vector<InputPiece> pieces{InputPiece{0.0, Interval(0.0)},
+                                       InputPiece{0.25, Interval(0.05)},
+                                       InputPiece{0.45, Interval(-0.0301, -0.03)}};
+  const FurutaDynamics furuta(pieces);
+  const Box state{Interval(-5e-4, 5e-4), Interval(-5e-4, 5e-4), Interval(-1.5705, -1.5695),
+                  Interval(-5e-4, 5e-4)};
+  const Box x0 = FurutaDynamics::initial_box(state, FurutaParameters::around(p, 1e-4));
+  IntegratorOptions options;
+  options.t_end = 0.6;
+  const IntegrationResult r = integrate(furuta, x0, options);
+  ASSERT_TRUE(r.ok()) << r.reason;
+  // Steps end exactly on the switches.
+  for (double t : {0.25, 0.45}) {
+    EXPECT_TRUE(std::any_of(r.tube.steps.begin(), r.tube.steps.end(), [&](const TubeStep& s) {
+      return s.t1 == t;
+    })) << t;
+  }
+  // Points in the box (parameters included), and a torque drawn in the interval piece for each
+  // batch of 100 points.
+  std::mt19937_64 rng(7);
+  const auto points = testing::sample_box<11>(x0, 600, rng);
+  std::uniform_real_distribution<double> u(-0.0301, -0.03);
+  testing::SoundnessCount total;
+  for (std::size_t i = 0; i < points.size(); i += 100) {
+    std::vector<InputPiece> drawn = pieces;
+    drawn[2].tau = Interval(u(rng));
+    const std::vector<Point<11>> batch(
+        points.begin() + static_cast<std::ptrdiff_t>(i),
+        points.begin() + static_cast<std::ptrdiff_t>(std::min(points.size(), i + 100)));
+    const testing::SoundnessCount c = testing::check_tube(FurutaDynamics(drawn), r.tube, batch, 8);
+    total.points += c.points;
+    total.checks += c.checks;
+    total.violations += c.violations;
+  }
+  EXPECT_EQ(total.violations, 0U);
+  const Box end = r.tube.enclosure_at(0.6);
+  std::printf(
+      "[ measured ] Furuta 0.6 s (state +-5e-4, params +-0.01 %%, 3 torque pieces): %.3f s wall, "
+      "%zu steps, widths at 0.6 s q1 %.2g dq1 %.2g q2 %.2g dq2 %.2g; %zu points, %zu checks, %zu "
+      "violations\n",
+      r.seconds, r.steps, end[0].width(), end[1].width(), end[2].width(), end[3].width(),
+      total.points, total.checks, total.violations);
+}
+
+// x' = x^2, x(0) = 1 blows up at t = 1: the run must stop before, with a status.
+struct BlowUp {
+  static constexpr std::size_t dimension = 1;
+  template <class S>
+  void operator()(std::span<const S> x, std::span<S> dx) const {
+    dx[0] = x[0] * x[0];
+  }
+};
+
+TEST(Integrator, FailuresAreReportedWithTimeAndReason) {
+  IntegratorOptions options;
+  options.t_end = 2.0;
+  const IntegrationResult blow = integrate(BlowUp{}, Box{Interval(1.0)}, options);
+  EXPECT_FALSE(blow.ok());
+  EXPECT_NE(blow.status, IntegrationResult::Status::ok);
+  EXPECT_GT(blow.t_failed, 0.5);
+  EXPECT_LT(blow.t_failed, 1.0);
+  EXPECT_FALSE(blow.reason.empty());
+  EXPECT_LE(blow.tube.t_end(), blow.t_failed);
+  // Every solution is inside up to where the run stopped: x(t) = 1 / (1 - t).
+  for (const TubeStep& s : blow.tube.steps) {
+    EXPECT_TRUE(s.end[0].contains(1.0 / (1.0 - s.t1)) || s.end[0].width() > 1e-9) << s.t1;
+  }
+
+  options.max_width = 1e-3;
+  const IntegrationResult wide =
+      integrate(SimplePendulum{}, Box{Interval(-1.755, -1.735), Interval(-0.01, 0.01)}, options);
+  EXPECT_EQ(wide.status, IntegrationResult::Status::width_exceeded);
+  EXPECT_EQ(std::string(to_string(wide.status)), "width_exceeded");
+  EXPECT_EQ(wide.t_failed, wide.tube.t_end());
+  EXPECT_GT(wide.tube.steps.back().end.max_width(), 1e-3);
+  EXPECT_NE(wide.reason.find("max_width"), std::string::npos);
+
+  // No box B with 1 + [0, 0.5] B^2 inside B: Picard's test cannot pass with h >= h_min = 0.5.
+  options.max_width = 1e3;
+  options.h_min = 0.5;
+  options.h_initial = 0.5;
+  const IntegrationResult coarse = integrate(BlowUp{}, Box{Interval(1.0)}, options);
+  EXPECT_EQ(coarse.status, IntegrationResult::Status::step_not_validated);
+  EXPECT_EQ(coarse.t_failed, 0.0);
+  EXPECT_NE(coarse.reason.find("Picard"), std::string::npos);
+}
+
+TEST(Integrator, TubeQueries) {
+  const Box x0{Interval(-1.755, -1.735), Interval(-0.01, 0.01)};
+  IntegratorOptions options;
+  options.t_start = 1.0;
+  options.t_end = 2.0;
+  const IntegrationResult r = integrate(SimplePendulum{}, x0, options);
+  ASSERT_TRUE(r.ok());
+  const Tube& tube = r.tube;
+  EXPECT_EQ(tube.enclosure_at(1.0), x0);
+  EXPECT_TRUE(tube.enclosure_at(0.5).is_empty());
+  EXPECT_TRUE(tube.enclosure_at(2.5).is_empty());
+  EXPECT_TRUE(tube.enclosure_over(2.5, 3.0).is_empty());
+  EXPECT_TRUE(tube.enclosure_over(1.6, 1.5).is_empty());
+  for (std::size_t i = 0; i < tube.steps.size(); i += 7) {
+    const TubeStep& s = tube.steps[i];
+    EXPECT_EQ(tube.enclosure_at(s.t1), s.end);
+    EXPECT_TRUE(s.end.is_subset(s.over));
+    EXPECT_TRUE(s.over.is_subset(s.apriori));
+    const double tm = 0.5 * (s.t0 + s.t1);
+    const Box at = tube.enclosure_at(tm);
+    EXPECT_TRUE(at.is_subset(s.over));
+    EXPECT_TRUE(at.is_subset(tube.enclosure_over(s.t0, s.t1)));
+    EXPECT_TRUE(at.is_subset(tube.enclosure_over(tm - 0.05, tm + 0.05)));
+  }
+  // Over the whole tube: the hull of everything.
+  const Box all = tube.enclosure_over(0.0, 10.0);
+  EXPECT_TRUE(x0.is_subset(all));
+  for (const TubeStep& s : tube.steps) EXPECT_TRUE(s.over.is_subset(all));
+}
+
+TEST(Integrator, InvalidArgumentsThrow) {
+  const SimplePendulum p;
+  IntegratorOptions options;
+  EXPECT_THROW((void)integrate(p, Box{Interval(0.0)}, options), std::invalid_argument);
+  EXPECT_THROW((void)integrate(p, Box{Interval(0.0), Interval()}, options), std::invalid_argument);
+  options.order = 0;
+  EXPECT_THROW((void)integrate(p, Box{Interval(0.0), Interval(0.0)}, options),
+               std::invalid_argument);
+  options = IntegratorOptions{};
+  options.t_end = -1.0;
+  EXPECT_THROW((void)integrate(p, Box{Interval(0.0), Interval(0.0)}, options),
+               std::invalid_argument);
+  EXPECT_THROW(FurutaDynamics(std::vector<InputPiece>{}), std::invalid_argument);
+  EXPECT_THROW(FurutaDynamics({InputPiece{1.0, Interval(0.0)}, InputPiece{0.5, Interval(0.0)}}),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace furuta::validated

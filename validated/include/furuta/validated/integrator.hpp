@@ -1,0 +1,121 @@
+#pragma once
+// The validated (guaranteed) ODE integrator: interval Taylor series with a Picard-Lindelof a priori
+// enclosure, the set carried in Lohner's doubleton form (parallelepiped or QR frame) with a
+// second-order term against the wrapping effect (see validated/README.md).
+//
+//   IntegrationResult r = integrate(SimplePendulum{}, x0, options);
+//   if (r.status != IntegrationResult::Status::ok) ... r.t_failed, r.reason
+//   Box at_1s = r.tube.enclosure_at(1.0);
+//
+// Every solution starting in x0 (for every parameter in its box) is inside the tube at every
+// time it covers. A failure (a step that cannot be validated, an enclosure past max_width) ends
+// the run with a status, its time and the reason; the tube then covers [t_start, t_failed].
+
+#include <cstddef>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "furuta/interval/box.hpp"
+#include "furuta/interval/interval.hpp"
+#include "furuta/validated/ode.hpp"
+#include "furuta/validated/taylor.hpp"
+
+namespace furuta::validated {
+
+struct IntegratorOptions {
+  int order = 10;            // Taylor order k (1..40)
+  double tolerance = 1e-13;  // wanted width of each step's Lagrange remainder (absolute)
+  double h_min = 1e-6;       // below this a step that cannot be validated ends the run
+  double h_max = 0.5;        // the largest step
+  double h_initial = 0.01;   // the first step tried
+  double max_width = 1e3;    // an enclosure wider than this (any component) ends the run
+  double t_start = 0.0;
+  double t_end = 1.0;
+};
+
+// One step of the tube, over [t0, t1].
+struct TubeStep {
+  double t0 = 0.0;
+  double t1 = 0.0;
+  Interval h;   // t1 - t0 (enclosed: the step is evaluated at every h in it)
+  Box apriori;  // the Picard a priori enclosure over [t0, t1]
+  Box over;     // a tighter enclosure over [t0, t1] (the Taylor form below over s in [0, h])
+  Box end;      // the tight (Lohner) enclosure at t1
+  // The Lohner set at t0: every solution is in m + C r0 + B r (doubleton form: r0 = the initial
+  // box minus its midpoint, carried by the point matrix C without wrapping; B the frame of r,
+  // the errors gathered so far), m = the centre (row 0 of `centre`).
+  std::vector<double> c;  // n x n, row-major
+  std::vector<double> b;  // n x n, row-major
+  std::vector<Interval> r;
+  // The Taylor form of the step: for s in [0, h], with V(s) = sum_i s^i V_i,
+  //   x(t0 + s) in sum_i s^i (c_i + q_i) + V(s) C r0 + V(s) B r + s^(k+1) R   (i = 0..k),
+  // c_i the Taylor coefficients at m, V_i their Jacobian there, q_i the second-order term (half
+  // the second derivative of coefficient i along C r0 + B r, over the set) and R coefficient k+1
+  // over the a priori box.
+  std::vector<Interval> centre;     // (k+1) x n, row i = c_i
+  std::vector<Interval> jacobian;   // (k+1) x n x n, block i = V_i (row-major)
+  std::vector<Interval> second;     // (k+1) x n, row i = q_i
+  std::vector<Interval> remainder;  // n
+};
+
+class Tube {
+ public:
+  std::size_t dimension = 0;
+  int order = 0;
+  double t_start = 0.0;
+  Box initial;
+  std::vector<Interval> r0;  // initial minus its midpoint (the doubleton's fixed box)
+  std::vector<TubeStep> steps;
+
+  // The last time covered (t_start if no step).
+  double t_end() const { return steps.empty() ? t_start : steps.back().t1; }
+  // An enclosure of every solution at time t: the tight enclosure at a step's end, the step's
+  // Taylor form inside it. A box of empty intervals outside [t_start, t_end()].
+  Box enclosure_at(double t) const;
+  // An enclosure of every solution over [ta, tb] (the hull of the steps' enclosures over their
+  // parts of it). Empty outside [t_start, t_end()] or when ta > tb.
+  Box enclosure_over(double ta, double tb) const;
+  // The Taylor form of step i over s (a part of [0, h]), not intersected with anything.
+  Box step_form(std::size_t i, const Interval& s) const;
+};
+
+struct IntegrationResult {
+  enum class Status { ok, step_not_validated, width_exceeded };
+
+  Tube tube;
+  Status status = Status::ok;
+  double t_failed = std::numeric_limits<double>::quiet_NaN();  // where the run ended, on failure
+  std::string reason;                                          // why, on failure
+  std::size_t steps = 0;                                       // accepted steps
+  std::size_t rejected = 0;  // attempts rejected (Picard not validated, remainder too wide)
+  std::size_t qr_steps = 0;  // steps that used the QR frame (the others: the parallelepiped)
+  double seconds = 0.0;      // wall time of the integration
+
+  bool ok() const { return status == Status::ok; }
+};
+
+const char* to_string(IntegrationResult::Status status);
+
+// The integrator on recorded fields: tapes[k] is the field of piece k (switches.size() + 1 of
+// them; see ode.hpp for pieces). x0 has tapes' dimension (1..16), bounded non-empty components.
+// Invalid arguments throw std::invalid_argument; integration failures are a status.
+IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
+                                  const std::vector<double>& switches, const Box& x0,
+                                  const IntegratorOptions& options);
+
+// Validated integration of a system (ode.hpp) from the box x0 over [t_start, t_end].
+template <class System>
+IntegrationResult integrate(const System& system, const Box& x0, const IntegratorOptions& options) {
+  const std::vector<double> switches = switch_times(system);
+  std::vector<Tape> tapes;
+  for (std::size_t piece = 0; piece <= switches.size(); ++piece) {
+    tapes.push_back(record([&](std::span<const Recorder> x,
+                               std::span<Recorder> dx) { evaluate_field(system, piece, x, dx); },
+                           System::dimension));
+  }
+  return integrate_tapes(tapes, switches, x0, options);
+}
+
+}  // namespace furuta::validated

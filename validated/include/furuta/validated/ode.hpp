@@ -1,0 +1,181 @@
+#pragma once
+// Vector fields for the validated integrator (see validated/README.md).
+//
+// A system is a type with `static constexpr std::size_t dimension` and a field written once as a
+// template over the scalar S (Interval, Recorder, double, long double):
+//
+//   template <class S> void operator()(std::span<const S> x, std::span<S> dx) const;
+//
+// A system whose field changes at given times (a piecewise constant input) also has
+// `std::vector<double> switch_times() const` (sorted) and takes the piece number first:
+//
+//   template <class S> void operator()(std::size_t piece, std::span<const S> x, std::span<S> dx)
+//
+// where piece k holds on [switch_times()[k - 1], switch_times()[k]) (piece 0 before the first
+// switch, the last piece after the last one). Use `sin`/`cos` unqualified after
+// `using std::sin; using std::cos;`, and `constant_as<S>(interval)` for interval constants.
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/interval/box.hpp"
+#include "furuta/interval/interval.hpp"
+#include "furuta/validated/taylor.hpp"
+
+namespace furuta::validated {
+
+using interval::Box;
+
+template <class System>
+concept PiecewiseSystem = requires(const System& s) {
+  { s.switch_times() } -> std::convertible_to<std::vector<double>>;
+};
+
+// The times where the field changes (none for an autonomous system).
+template <class System>
+std::vector<double> switch_times(const System& system) {
+  if constexpr (PiecewiseSystem<System>) {
+    return system.switch_times();
+  } else {
+    (void)system;
+    return {};
+  }
+}
+
+// The piece that holds at time t: the number of switch times <= t.
+inline std::size_t piece_at(const std::vector<double>& switches, double t) {
+  return static_cast<std::size_t>(std::upper_bound(switches.begin(), switches.end(), t) -
+                                  switches.begin());
+}
+
+// Evaluates the field of `piece` (ignored by autonomous systems).
+template <class System, class S>
+void evaluate_field(const System& system, std::size_t piece, std::span<const S> x,
+                    std::span<S> dx) {
+  if constexpr (PiecewiseSystem<System>) {
+    system(piece, x, dx);
+  } else {
+    (void)piece;
+    system(x, dx);
+  }
+}
+
+// x1' = x2, x2' = -a sin x1 - b x2 (the DynIbex benchmark: a = 56, b = 0.5).
+struct SimplePendulum {
+  static constexpr std::size_t dimension = 2;
+  double a = 56.0;
+  double b = 0.5;
+
+  template <class S>
+  void operator()(std::span<const S> x, std::span<S> dx) const {
+    using std::sin;
+    dx[0] = x[1];
+    dx[1] = -(S(a) * sin(x[0])) - S(b) * x[1];
+  }
+};
+
+// x'' = -omega^2 x as x1' = x2, x2' = -omega^2 x1; x1(t) = x1(0) cos wt + x2(0)/w sin wt.
+struct HarmonicOscillator {
+  static constexpr std::size_t dimension = 2;
+  double omega = 1.0;
+
+  template <class S>
+  void operator()(std::span<const S> x, std::span<S> dx) const {
+    const S w(omega);
+    dx[0] = x[1];
+    dx[1] = -(w * w) * x[0];
+  }
+};
+
+// x'' + 2 zeta omega x' + omega^2 x = 0 (underdamped for 0 <= zeta < 1).
+struct DampedOscillator {
+  static constexpr std::size_t dimension = 2;
+  double omega = 1.0;
+  double zeta = 0.1;
+
+  template <class S>
+  void operator()(std::span<const S> x, std::span<S> dx) const {
+    const S w(omega);
+    const S z(zeta);
+    dx[0] = x[1];
+    dx[1] = -(w * w) * x[0] - (S(2.0) * z * w) * x[1];
+  }
+};
+
+// The Furuta model's parameters as intervals (DESIGN.md).
+struct FurutaParameters {
+  Interval mu1 = 0.0, mu2 = 0.0, mu3 = 0.0, mu4 = 0.0;  // kg m^2
+  Interval mug = 0.0;                                   // kg m^2 s^-2
+  Interval fv1 = 0.0, fv2 = 0.0;                        // N m s
+
+  // The point parameters p.
+  static FurutaParameters point(const bridge::ModelParameters& p);
+  // p with each parameter widened by +-relative * |value| (an enclosure of it).
+  static FurutaParameters around(const bridge::ModelParameters& p, double relative);
+};
+
+// A piece of piecewise constant arm torque: tau from t_start on (until the next piece).
+struct InputPiece {
+  double t_start = 0.0;
+  Interval tau = 0.0;  // N m
+};
+
+// The Furuta pendulum, M(q) ddq + B(q, dq) + Q(q) = Gamma (DESIGN.md), with the parameters carried
+// as state of zero derivative, so that the integrator tracks their correlation with the motion:
+// x = [q1, dq1, q2, dq2, mu1, mu2, mu3, mu4, mug, fv1, fv2]. ddq = M^-1 (Gamma - B - Q) with the
+// 2x2 inverse written out, det M = (mu1 + mu2 s^2) mu4 - mu3^2 c^2 (s = sin q2, c = cos q2).
+class FurutaDynamics {
+ public:
+  static constexpr std::size_t dimension = 11;
+  enum Component : std::size_t { q1, dq1, q2, dq2, mu1, mu2, mu3, mu4, mug, fv1, fv2 };
+
+  // Constant torque.
+  explicit FurutaDynamics(const Interval& tau = Interval(0.0));
+  // Piecewise constant torque; pieces sorted by strictly increasing t_start, at least one. The
+  // first piece also holds before its t_start.
+  explicit FurutaDynamics(std::vector<InputPiece> pieces);
+
+  const std::vector<InputPiece>& pieces() const { return pieces_; }
+  std::vector<double> switch_times() const;
+
+  // The 11-dimensional initial box from the state [q1, dq1, q2, dq2] and the parameters.
+  static Box initial_box(const Box& state, const FurutaParameters& p);
+
+  template <class S>
+  void operator()(std::size_t piece, std::span<const S> x, std::span<S> dx) const {
+    using std::cos;
+    using std::sin;
+    const S& dq1v = x[dq1];
+    const S& dq2v = x[dq2];
+    const S& m1 = x[mu1];
+    const S& m2 = x[mu2];
+    const S& m3 = x[mu3];
+    const S& m4 = x[mu4];
+    const S s = sin(x[q2]);
+    const S c = cos(x[q2]);
+    const S tau = constant_as<S>(pieces_[std::min(piece, pieces_.size() - 1)].tau);
+    const S m11 = m1 + m2 * s * s;
+    const S m12 = m3 * c;
+    const S sc = s * c;
+    const S b1 = S(2.0) * m2 * sc * dq1v * dq2v - m3 * s * dq2v * dq2v;
+    const S b2 = -(m2 * sc * dq1v * dq1v);
+    const S rhs1 = tau - x[fv1] * dq1v - b1;
+    const S rhs2 = -(x[fv2] * dq2v) - b2 - x[mug] * s;
+    const S det = m11 * m4 - m12 * m12;
+    dx[q1] = dq1v;
+    dx[dq1] = (m4 * rhs1 - m12 * rhs2) / det;
+    dx[q2] = dq2v;
+    dx[dq2] = (m11 * rhs2 - m12 * rhs1) / det;
+    for (std::size_t i = mu1; i <= fv2; ++i) dx[i] = S(0.0);
+  }
+
+ private:
+  std::vector<InputPiece> pieces_;
+};
+
+}  // namespace furuta::validated

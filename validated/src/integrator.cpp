@@ -1,0 +1,633 @@
+// The validated integrator (see validated/README.md). The set of solutions at t is kept as a
+// doubleton m + C r0 + B r (m a point, C and B point matrices, r0 = x0 - mid(x0) fixed, r an
+// interval vector). One step from t to t + h:
+//
+//  1. a priori enclosure A of every solution over [t, t + h] (Picard-Lindelof: X + [0, h] f(A~)
+//     inside the interior of A~, A~ inflated from the previous Picard image; h halved until it
+//     validates; X the box of the set);
+//  2. Lagrange remainder R = h^(k+1) x_[k+1](A) (Taylor coefficient k+1 over A);
+//  3. the Taylor map at the centre, T(m) = sum_i h^i x_[i](m), and its Jacobian J = sum_i h^i
+//     V_[i](m) (forward-mode gradients of the coefficients; thin, m is a point);
+//  4. the second-order term q = sum_i h^i q_i, q_i = half the second derivative of x_[i] along
+//     delta = C rho + e (rho in r0, e in B r) over X (second-order jets, the direction carried as
+//     a linear form in rho), so that T(x0) is in T(m) + J (C rho + B r) + q;
+//  5. Lohner: z = T(m) + q + R, m' = mid(z), C' = mid(J C), B' = mid(J B) (parallelepiped) while
+//     its condition number is small, else Q of the QR factorisation of mid(J B) (columns pivoted
+//     by length times the width of r); r' = (B'^-1 J B) r + B'^-1 (z - m' + (J C - C') r0), with
+//     an interval enclosure of B'^-1. The tight enclosure is m' + C' r0 + B' r' intersected with
+//     z + J C r0 + J B r.
+
+#include "furuta/validated/integrator.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <optional>
+#include <sstream>
+#include <utility>
+
+namespace furuta::validated {
+namespace {
+
+using Matrix = Eigen::MatrixXd;
+constexpr std::size_t kMaxDimension = 16;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// The parallelepiped frame is kept while it inflates the new errors at most this much (else the
+// QR frame): it carries r without wrapping, but maps the errors through an ill-conditioned
+// frame when the flow contracts some directions much faster than others (stiff parts).
+constexpr double kMaxInflation = 20.0;
+
+// A square interval matrix, row-major.
+struct IMatrix {
+  std::size_t n = 0;
+  std::vector<Interval> v;
+
+  explicit IMatrix(std::size_t size = 0) : n(size), v(size * size, Interval(0.0)) {}
+  Interval& operator()(std::size_t i, std::size_t j) { return v[i * n + j]; }
+  const Interval& operator()(std::size_t i, std::size_t j) const { return v[i * n + j]; }
+};
+
+IMatrix from_point(const Matrix& a) {
+  const auto n = static_cast<std::size_t>(a.rows());
+  IMatrix m(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      m(i, j) = Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
+    }
+  }
+  return m;
+}
+
+IMatrix from_point(std::size_t n, const std::vector<double>& row_major) {
+  IMatrix m(n);
+  for (std::size_t e = 0; e < n * n; ++e) m.v[e] = Interval(row_major[e]);
+  return m;
+}
+
+IMatrix operator*(const IMatrix& a, const IMatrix& b) {
+  IMatrix c(a.n);
+  for (std::size_t i = 0; i < a.n; ++i) {
+    for (std::size_t l = 0; l < a.n; ++l) {
+      const Interval& ail = a(i, l);
+      for (std::size_t j = 0; j < a.n; ++j) c(i, j) += ail * b(l, j);
+    }
+  }
+  return c;
+}
+
+std::vector<Interval> operator*(const IMatrix& a, const std::vector<Interval>& x) {
+  std::vector<Interval> y(a.n, Interval(0.0));
+  for (std::size_t i = 0; i < a.n; ++i) {
+    for (std::size_t j = 0; j < a.n; ++j) y[i] += a(i, j) * x[j];
+  }
+  return y;
+}
+
+Matrix mid(const IMatrix& a) {
+  const auto n = static_cast<Eigen::Index>(a.n);
+  Matrix m(n, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) {
+      m(i, j) = a(static_cast<std::size_t>(i), static_cast<std::size_t>(j)).mid();
+    }
+  }
+  return m;
+}
+
+// An interval matrix containing the inverse of the point matrix q, from an approximate inverse
+// x: with E = I - x q, q^-1 = (I - E)^-1 x, so |q^-1 - x| <= ||E|| ||x|| / (1 - ||E||)
+// entrywise (infinity norms). Nothing when ||E|| > max_error (< 1).
+std::optional<IMatrix> inverse_enclosure(const Matrix& q, const Matrix& x, double max_error) {
+  const auto n = static_cast<std::size_t>(q.rows());
+  const IMatrix qi = from_point(q);
+  const IMatrix b = from_point(x);
+  const IMatrix bq = b * qi;
+  double e_norm = 0.0;
+  double b_norm = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    Interval e_row(0.0);
+    Interval b_row(0.0);
+    for (std::size_t j = 0; j < n; ++j) {
+      const Interval eij = Interval(i == j ? 1.0 : 0.0) - bq(i, j);
+      e_row += Interval(eij.mag());
+      b_row += Interval(b(i, j).mag());
+    }
+    e_norm = std::max(e_norm, e_row.hi());
+    b_norm = std::max(b_norm, b_row.hi());
+  }
+  if (!(e_norm <= max_error && e_norm < 1.0)) return std::nullopt;
+  const double delta =
+      (Interval(e_norm) * Interval(b_norm) / (Interval(1.0) - Interval(e_norm))).hi();
+  IMatrix inv = b;
+  for (Interval& x : inv.v) x += Interval(-delta, delta);
+  return inv;
+}
+
+// A candidate frame B' for the r part of the doubleton, r' and the box B' r'.
+struct Lohner {
+  Matrix b;
+  std::vector<Interval> r;
+  std::vector<Interval> box;
+  bool valid = false;
+};
+
+// r' = (B'^-1 J B) r + B'^-1 rest for the frame b (approximate inverse b_inv; empty: b^T).
+Lohner lohner_candidate(const Matrix& b, const Matrix& b_inv, const IMatrix& jb,
+                        const std::vector<Interval>& r, const std::vector<Interval>& rest) {
+  Lohner out;
+  const std::optional<IMatrix> inv = b_inv.size() == 0 ? inverse_enclosure(b, b.transpose(), 0.5)
+                                                       : inverse_enclosure(b, b_inv, 1e-6);
+  if (!inv) return out;
+  out.b = b;
+  out.r = (*inv * jb) * r;
+  const std::vector<Interval> inv_rest = *inv * rest;
+  for (std::size_t v = 0; v < r.size(); ++v) out.r[v] += inv_rest[v];
+  out.box = from_point(b) * out.r;
+  out.valid =
+      std::all_of(out.box.begin(), out.box.end(), [](const Interval& x) { return x.is_bounded(); });
+  return out;
+}
+
+// How much the parallelepiped frame p can inflate a box that goes through it: the Skeel
+// condition number || |p| |p^-1| || (infinity norm) bounds w(p (p^-1 e)) / w(e) for a box e.
+double inflation(const Matrix& p, const Matrix& p_inv) {
+  return (p.cwiseAbs() * p_inv.cwiseAbs()).rowwise().sum().maxCoeff();
+}
+
+// Q of the QR factorisation of p with its columns pivoted by length times the width of r.
+Matrix qr_frame(const Matrix& p, const std::vector<Interval>& r) {
+  const std::size_t n = r.size();
+  std::vector<std::size_t> columns(n);
+  std::iota(columns.begin(), columns.end(), std::size_t{0});
+  std::vector<double> score(n);
+  for (std::size_t col = 0; col < n; ++col) {
+    score[col] = p.col(static_cast<Eigen::Index>(col)).norm() * r[col].width();
+  }
+  std::stable_sort(columns.begin(), columns.end(),
+                   [&](std::size_t c1, std::size_t c2) { return score[c1] > score[c2]; });
+  Matrix pivoted(p.rows(), p.cols());
+  for (std::size_t col = 0; col < n; ++col) {
+    pivoted.col(static_cast<Eigen::Index>(col)) = p.col(static_cast<Eigen::Index>(columns[col]));
+  }
+  return Eigen::HouseholderQR<Matrix>(pivoted).householderQ();
+}
+
+bool is_bounded(const Box& b) {
+  return std::all_of(b.begin(), b.end(), [](const Interval& x) { return x.is_bounded(); });
+}
+
+// ---- Jacobian of the Taylor coefficients --------------------------------------------------------
+
+// The Taylor coefficients at the point m (values[i n + v] = x_[i]_v) and their derivatives with
+// respect to the initial state (jac[(i n + v) n + c] = d x_[i]_v / d x0_c), i = 0..order.
+template <std::size_t N>
+void centre_coefficients_n(const Tape& tape, const std::vector<double>& m, int order,
+                           std::vector<Interval>& values, std::vector<Interval>& jac) {
+  std::vector<Grad<N>> x0;
+  x0.reserve(N);
+  for (std::size_t c = 0; c < N; ++c) x0.push_back(Grad<N>::variable(Interval(m[c]), c));
+  TaylorRunner<Grad<N>> runner;
+  runner.run(tape, std::span<const Grad<N>>(x0), order);
+  const auto count = static_cast<std::size_t>(order) + 1;
+  values.resize(count * N);
+  jac.resize(count * N * N);
+  for (std::size_t i = 0; i < count; ++i) {
+    for (std::size_t v = 0; v < N; ++v) {
+      const Grad<N>& g = runner.coefficient(v, static_cast<int>(i));
+      values[i * N + v] = g.v;
+      std::copy(g.d.begin(), g.d.end(), jac.begin() + static_cast<std::ptrdiff_t>((i * N + v) * N));
+    }
+  }
+}
+
+template <std::size_t... Is>
+void centre_dispatch(std::index_sequence<Is...>, const Tape& tape, const std::vector<double>& m,
+                     int order, std::vector<Interval>& values, std::vector<Interval>& jac) {
+  const std::size_t n = m.size();
+  (void)((n == Is + 1 ? (centre_coefficients_n<Is + 1>(tape, m, order, values, jac), true)
+                      : false) ||
+         ...);
+}
+
+void centre_coefficients(const Tape& tape, const std::vector<double>& m, int order,
+                         std::vector<Interval>& values, std::vector<Interval>& jac) {
+  centre_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, m, order, values, jac);
+}
+
+// The second-order term over the set m + C r0 + B r inside the box y: second[i n + v] = half the
+// second derivative of x_[i]_v along delta = C rho + e (rho in r0, e in B r) over y, i = 0..order.
+template <std::size_t N>
+void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
+                    const std::vector<Interval>& r0, const std::vector<Interval>& br, int order,
+                    std::vector<Interval>& second) {
+  std::vector<Jet2<N>> x0(N);
+  for (std::size_t v = 0; v < N; ++v) {
+    x0[v] = Jet2<N>(y[v]);
+    for (std::size_t a = 0; a < N; ++a) {
+      x0[v].g[a] = Interval(c(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(a)));
+    }
+    x0[v].e = br[v];
+    x0[v].rho = r0.data();
+    x0[v].changed();
+  }
+  TaylorRunner<Jet2<N>> runner;
+  runner.run(tape, std::span<const Jet2<N>>(x0), order);
+  const auto count = static_cast<std::size_t>(order) + 1;
+  second.resize(count * N);
+  for (std::size_t i = 0; i < count; ++i) {
+    for (std::size_t v = 0; v < N; ++v)
+      second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
+  }
+}
+
+template <std::size_t... Is>
+void second_order_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
+                           const Matrix& c, const std::vector<Interval>& r0,
+                           const std::vector<Interval>& br, int order,
+                           std::vector<Interval>& second) {
+  const std::size_t n = y.size();
+  (void)((n == Is + 1 ? (second_order_n<Is + 1>(tape, y, c, r0, br, order, second), true)
+                      : false) ||
+         ...);
+}
+
+void second_order_coefficients(const Tape& tape, const Box& y, const Matrix& c,
+                               const std::vector<Interval>& r0, const std::vector<Interval>& br,
+                               int order, std::vector<Interval>& second) {
+  second_order_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, y, c, r0, br, order,
+                        second);
+}
+
+// ---- A priori enclosure -------------------------------------------------------------------------
+
+Box field(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x) {
+  const std::vector<Interval> xs(x.begin(), x.end());
+  runner.run(tape, std::span<const Interval>(xs), 1);
+  Box f(x.size());
+  for (std::size_t v = 0; v < x.size(); ++v) f[v] = runner.coefficient(v, 1);
+  return f;
+}
+
+// A box containing every solution from x over [0, h], or nothing if Picard's test fails.
+std::optional<Box> a_priori(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x,
+                            double h) {
+  const Interval span(0.0, h);
+  const std::size_t n = x.size();
+  Box f = field(runner, tape, x);
+  Box b(n);
+  for (std::size_t v = 0; v < n; ++v) b[v] = x[v] + span * f[v];
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    Box inflated(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      if (!b[v].is_bounded()) return std::nullopt;
+      const double d = 0.1 * b[v].width() + 1e-13 * b[v].mag() + 1e-300;
+      inflated[v] = b[v] + Interval(-d, d);
+    }
+    f = field(runner, tape, inflated);
+    bool inside = true;
+    for (std::size_t v = 0; v < n; ++v) {
+      if (!f[v].is_bounded()) return std::nullopt;
+      b[v] = x[v] + span * f[v];
+      inside = inside && b[v].is_interior_subset(inflated[v]);
+    }
+    // Every solution stays in `inflated`, hence in x + [0, h] f(inflated) = b.
+    if (inside) return b;
+  }
+  return std::nullopt;
+}
+
+Interval horner(const std::vector<Interval>& c, std::size_t stride, std::size_t offset, int order,
+                const Interval& s) {
+  Interval y = c[static_cast<std::size_t>(order) * stride + offset];
+  for (int i = order - 1; i >= 0; --i) y = y * s + c[static_cast<std::size_t>(i) * stride + offset];
+  return y;
+}
+
+std::string describe(double value) {
+  std::ostringstream out;
+  out.precision(17);
+  out << value;
+  return out.str();
+}
+
+void validate(const std::vector<Tape>& tapes, const std::vector<double>& switches, const Box& x0,
+              const IntegratorOptions& o) {
+  const std::size_t n = x0.size();
+  if (n == 0 || n > kMaxDimension) throw std::invalid_argument("x0: dimension must be 1..16");
+  if (x0.is_empty() || !is_bounded(x0)) throw std::invalid_argument("x0: empty or unbounded");
+  if (tapes.size() != switches.size() + 1) throw std::invalid_argument("tapes: one per piece");
+  for (const Tape& t : tapes) {
+    if (t.dimension != n) throw std::invalid_argument("tapes: dimension differs from x0");
+  }
+  if (!std::is_sorted(switches.begin(), switches.end())) {
+    throw std::invalid_argument("switches: not sorted");
+  }
+  if (o.order < 1 || o.order > 40) throw std::invalid_argument("options.order: 1..40");
+  if (!(o.tolerance > 0.0)) throw std::invalid_argument("options.tolerance: > 0");
+  if (!(o.h_min > 0.0) || !(o.h_max >= o.h_min) || !(o.h_initial >= o.h_min)) {
+    throw std::invalid_argument("options.h_min, h_max, h_initial: 0 < h_min <= h_initial, h_max");
+  }
+  if (!(o.max_width > 0.0)) throw std::invalid_argument("options.max_width: > 0");
+  if (!std::isfinite(o.t_start) || !std::isfinite(o.t_end) || o.t_end < o.t_start) {
+    throw std::invalid_argument("options.t_start, t_end: finite, t_start <= t_end");
+  }
+}
+
+}  // namespace
+
+const char* to_string(IntegrationResult::Status status) {
+  switch (status) {
+    case IntegrationResult::Status::ok:
+      return "ok";
+    case IntegrationResult::Status::step_not_validated:
+      return "step_not_validated";
+    case IntegrationResult::Status::width_exceeded:
+      return "width_exceeded";
+  }
+  return "unknown";
+}
+
+Box Tube::step_form(std::size_t index, const Interval& s) const {
+  const TubeStep& step = steps.at(index);
+  const std::size_t n = dimension;
+  const auto k = static_cast<std::size_t>(order);
+  // V(s) = sum_i s^i V_i by Horner.
+  IMatrix v(n);
+  std::copy(step.jacobian.begin() + static_cast<std::ptrdiff_t>(k * n * n),
+            step.jacobian.begin() + static_cast<std::ptrdiff_t>((k + 1) * n * n), v.v.begin());
+  for (std::size_t i = k; i-- > 0;) {
+    for (std::size_t e = 0; e < n * n; ++e) v.v[e] = v.v[e] * s + step.jacobian[i * n * n + e];
+  }
+  const std::vector<Interval> linear0 = (v * from_point(n, step.c)) * r0;
+  const std::vector<Interval> linear = (v * from_point(n, step.b)) * step.r;
+  const Interval s_k1 = pow(s, order + 1);
+  Box out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = horner(step.centre, n, i, order, s) + horner(step.second, n, i, order, s) +
+             linear0[i] + linear[i] + s_k1 * step.remainder[i];
+  }
+  return out;
+}
+
+Box Tube::enclosure_at(double t) const {
+  if (!(t >= t_start && t <= t_end())) return Box(dimension, Interval::empty());
+  if (t == t_start) return initial;
+  const auto it = std::lower_bound(steps.begin(), steps.end(), t,
+                                   [](const TubeStep& s, double time) { return s.t1 < time; });
+  if (it->t1 == t) return it->end;
+  const Interval s = (Interval(t) - Interval(it->t0)) & Interval(0.0, it->h.hi());
+  return intersect(step_form(static_cast<std::size_t>(it - steps.begin()), s), it->over);
+}
+
+Box Tube::enclosure_over(double ta, double tb) const {
+  if (!(ta <= tb)) return Box(dimension, Interval::empty());
+  ta = std::max(ta, t_start);
+  tb = std::min(tb, t_end());
+  if (!(ta <= tb)) return Box(dimension, Interval::empty());
+  if (ta == tb) return enclosure_at(ta);
+  Box hull_box = ta == t_start ? initial : Box(dimension, Interval::empty());
+  auto it = std::lower_bound(steps.begin(), steps.end(), ta,
+                             [](const TubeStep& s, double time) { return s.t1 < time; });
+  for (; it != steps.end() && it->t0 < tb; ++it) {
+    const double a = std::max(ta, it->t0);
+    const double b = std::min(tb, it->t1);
+    Box part;
+    if (a == it->t1) {
+      part = it->end;
+    } else {
+      const Interval s = ((Interval(a) - Interval(it->t0)) | (Interval(b) - Interval(it->t0))) &
+                         Interval(0.0, it->h.hi());
+      part = intersect(step_form(static_cast<std::size_t>(it - steps.begin()), s), it->over);
+    }
+    hull_box = hull(hull_box, part);
+  }
+  return hull_box;
+}
+
+IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
+                                  const std::vector<double>& switches, const Box& x0,
+                                  const IntegratorOptions& options) {
+  validate(tapes, switches, x0, options);
+  const auto started = std::chrono::steady_clock::now();
+  const std::size_t n = x0.size();
+  const auto en = static_cast<Eigen::Index>(n);
+  const int k = options.order;
+  const auto uk = static_cast<std::size_t>(k);
+  const double root = 1.0 / (k + 1);
+
+  IntegrationResult result;
+  Tube& tube = result.tube;
+  tube.dimension = n;
+  tube.order = k;
+  tube.t_start = options.t_start;
+  tube.initial = x0;
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
+  auto finish = [&](IntegrationResult::Status status, double t, std::string reason) {
+    result.status = status;
+    result.t_failed = t;
+    result.reason = std::move(reason);
+    result.seconds = elapsed();
+    return result;
+  };
+
+  // The doubleton: every solution at t is in m + C r0 + B r, and in the box x.
+  std::vector<double> m = x0.mid();
+  tube.r0.resize(n);
+  for (std::size_t v = 0; v < n; ++v) tube.r0[v] = x0[v] - Interval(m[v]);
+  const std::vector<Interval>& r0 = tube.r0;
+  Matrix c = Matrix::Identity(en, en);
+  Matrix b = Matrix::Identity(en, en);
+  std::vector<Interval> r(n, Interval(0.0));
+  Box x = x0;
+
+  TaylorRunner<Interval> runner;
+  std::vector<Interval> jac;
+  double t = options.t_start;
+  double h_next = std::min(options.h_initial, options.h_max);
+  while (t < options.t_end) {
+    const std::size_t piece = piece_at(switches, t);
+    const Tape& tape = tapes[piece];
+    const double t_limit =
+        std::min(options.t_end, piece < switches.size() ? switches[piece] : kInf);
+
+    // 1-2. A priori enclosure and remainder; the step shrinks until both are acceptable.
+    double h = std::min(h_next, t_limit - t);
+    bool capped = h_next >= t_limit - t;  // the step ends at t_limit, not where h_next says
+    double t1 = t_limit;
+    Interval hi;
+    Box apriori;
+    std::vector<Interval> remainder_coefficient(n);
+    Box remainder(n);
+    double remainder_width = 0.0;
+    for (;;) {
+      t1 = h >= t_limit - t ? t_limit : t + h;
+      if (!(t1 > t)) {
+        return finish(IntegrationResult::Status::step_not_validated, t,
+                      "step below the time resolution at t = " + describe(t));
+      }
+      hi = Interval(t1) - Interval(t);
+      std::optional<Box> enclosure = a_priori(runner, tape, x, hi.hi());
+      bool bounded = false;
+      if (enclosure) {
+        const std::vector<Interval> bs(enclosure->begin(), enclosure->end());
+        runner.run(tape, std::span<const Interval>(bs), k + 1);
+        const Interval h_k1 = pow(hi, k + 1);
+        remainder_width = 0.0;
+        bounded = true;
+        for (std::size_t v = 0; v < n; ++v) {
+          remainder_coefficient[v] = runner.coefficient(v, k + 1);
+          remainder[v] = h_k1 * remainder_coefficient[v];
+          bounded = bounded && remainder[v].is_bounded();
+          remainder_width = std::max(remainder_width, remainder[v].width());
+        }
+        if (bounded && (remainder_width <= options.tolerance || h <= options.h_min)) {
+          apriori = std::move(*enclosure);
+          break;
+        }
+      }
+      ++result.rejected;
+      if (h <= options.h_min) {
+        return finish(IntegrationResult::Status::step_not_validated, t,
+                      "no a priori enclosure (Picard) at t = " + describe(t) +
+                          " with h = " + describe(h) + " (h_min)");
+      }
+      double shrink = 0.5;
+      if (bounded) {
+        shrink = std::clamp(0.9 * std::pow(options.tolerance / remainder_width, root), 0.1, 0.9);
+      }
+      h = std::max(options.h_min, h * shrink);
+      capped = false;
+    }
+
+    TubeStep step;
+    step.t0 = t;
+    step.t1 = t1;
+    step.h = hi;
+    {
+      const Matrix ct = c.transpose();
+      const Matrix bt = b.transpose();
+      step.c.assign(ct.data(), ct.data() + n * n);
+      step.b.assign(bt.data(), bt.data() + n * n);
+    }
+    step.r = r;
+    step.remainder = remainder_coefficient;
+
+    // 3. Taylor coefficients at the centre m and their Jacobian V_[i](m) (thin: m is a point).
+    centre_coefficients(tape, m, k, step.centre, step.jacobian);
+    // 4. The second-order term over the set: coefficient s^2 of x_[i](y + s delta) over y in the
+    // box (with the centre) and delta in C r0 + B r.
+    const IMatrix ci = from_point(c);
+    const IMatrix bi = from_point(b);
+    {
+      Box y = x;
+      for (std::size_t v = 0; v < n; ++v) y[v] = y[v] | Interval(m[v]);
+      second_order_coefficients(tape, y, c, r0, bi * r, k, step.second);
+    }
+    // z: the image of the centre, with the second-order term and the remainder.
+    std::vector<Interval> z(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      z[v] = horner(step.centre, n, v, k, hi) + horner(step.second, n, v, k, hi) + remainder[v];
+    }
+    // J = sum_i h^i V_[i](m).
+    IMatrix j(n);
+    std::copy(step.jacobian.begin() + static_cast<std::ptrdiff_t>(uk * n * n), step.jacobian.end(),
+              j.v.begin());
+    for (std::size_t i = uk; i-- > 0;) {
+      for (std::size_t e = 0; e < n * n; ++e) j.v[e] = j.v[e] * hi + step.jacobian[i * n * n + e];
+    }
+
+    // 5. Lohner's step on the doubleton.
+    const IMatrix jc = j * ci;
+    const IMatrix jb = j * bi;
+    const Matrix c_next = mid(jc);
+    // m' = mid(z); the rest of z, with the rounding of C' = mid(J C), goes to the r part.
+    std::vector<double> m_next(n);
+    std::vector<Interval> rest(n);
+    IMatrix jc_error = jc;
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t col = 0; col < n; ++col) {
+        jc_error(i, col) -=
+            Interval(c_next(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(col)));
+      }
+    }
+    const std::vector<Interval> jc_error_r0 = jc_error * r0;
+    for (std::size_t v = 0; v < n; ++v) {
+      m_next[v] = z[v].mid();
+      rest[v] = z[v] - Interval(m_next[v]) + jc_error_r0[v];
+    }
+    // B' = mid(J B) (the parallelepiped method: r is not wrapped, only the rest is, through
+    // B'^-1) while it is well conditioned, else Q of the QR of mid(J B) with columns pivoted by
+    // their length times the width of r (Lohner's QR method); r' = (B'^-1 J B) r + B'^-1 rest.
+    const Matrix p = mid(jb);
+    const Matrix p_inv = p.partialPivLu().inverse();
+    const double kappa = inflation(p, p_inv);
+    Lohner parallelepiped;
+    Lohner qr;
+    Lohner* chosen = nullptr;
+    if (kappa <= kMaxInflation) {
+      parallelepiped = lohner_candidate(p, p_inv, jb, r, rest);
+      if (parallelepiped.valid) chosen = &parallelepiped;
+    }
+    if (chosen == nullptr) {
+      qr = lohner_candidate(qr_frame(p, r), Matrix(), jb, r, rest);
+      if (qr.valid) chosen = &qr;
+    }
+    Lohner identity_frame;
+    if (chosen == nullptr) {  // never seen; B' = I keeps the step sound (only wider)
+      identity_frame =
+          lohner_candidate(Matrix::Identity(en, en), Matrix::Identity(en, en), jb, r, rest);
+      chosen = &identity_frame;
+    }
+    if (chosen == &qr) ++result.qr_steps;
+    Matrix b_next = chosen->b;
+    std::vector<Interval> r_next = chosen->r;
+    // The tight enclosure: the new doubleton, intersected with the direct image.
+    const std::vector<Interval> new0 = from_point(c_next) * r0;
+    const std::vector<Interval>& new1 = chosen->box;
+    const std::vector<Interval> old0 = jc * r0;
+    const std::vector<Interval> old1 = jb * r;
+    Box end(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      end[v] = (Interval(m_next[v]) + new0[v] + new1[v]) & (z[v] + old0[v] + old1[v]);
+    }
+
+    step.apriori = apriori;
+    step.end = end;
+    tube.steps.push_back(std::move(step));
+    TubeStep& stored = tube.steps.back();
+    stored.over = intersect(tube.step_form(tube.steps.size() - 1, Interval(0.0, hi.hi())), apriori);
+    ++result.steps;
+    m = std::move(m_next);
+    c = c_next;
+    b = std::move(b_next);
+    r = std::move(r_next);
+    x = std::move(end);
+    t = t1;
+
+    if (x.is_empty()) {  // both forms contain every solution: cannot happen unless a bug
+      return finish(IntegrationResult::Status::step_not_validated, t,
+                    "empty enclosure at t = " + describe(t) + " (internal error)");
+    }
+    const double width = is_bounded(x) ? x.max_width() : kInf;
+    if (!(width <= options.max_width)) {
+      return finish(IntegrationResult::Status::width_exceeded, t,
+                    "enclosure width " + describe(width) + " > max_width " +
+                        describe(options.max_width) + " at t = " + describe(t));
+    }
+    if (!capped) {
+      const double grow =
+          remainder_width > 0.0
+              ? std::clamp(0.9 * std::pow(options.tolerance / remainder_width, root), 0.25, 2.0)
+              : 2.0;
+      h_next = std::min(options.h_max, std::max(options.h_min, h * grow));
+    }
+  }
+  result.seconds = elapsed();
+  return result;
+}
+
+}  // namespace furuta::validated

@@ -1,0 +1,55 @@
+#include "furuta/validated/ode.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+namespace furuta::validated {
+
+FurutaParameters FurutaParameters::point(const bridge::ModelParameters& p) {
+  return around(p, 0.0);
+}
+
+FurutaParameters FurutaParameters::around(const bridge::ModelParameters& p, double relative) {
+  if (!(relative >= 0.0)) throw std::invalid_argument("FurutaParameters::around: relative < 0");
+  const Interval factor = Interval(1.0) + Interval(-relative, relative);
+  auto widen = [&](double v) { return relative == 0.0 ? Interval(v) : Interval(v) * factor; };
+  FurutaParameters q;
+  q.mu1 = widen(p.mu1);
+  q.mu2 = widen(p.mu2);
+  q.mu3 = widen(p.mu3);
+  q.mu4 = widen(p.mu4);
+  q.mug = widen(p.mug);
+  q.fv1 = widen(p.fv1);
+  q.fv2 = widen(p.fv2);
+  return q;
+}
+
+FurutaDynamics::FurutaDynamics(const Interval& tau) : pieces_{InputPiece{0.0, tau}} {}
+
+FurutaDynamics::FurutaDynamics(std::vector<InputPiece> pieces) : pieces_(std::move(pieces)) {
+  if (pieces_.empty()) throw std::invalid_argument("FurutaDynamics: no input piece");
+  for (std::size_t i = 0; i < pieces_.size(); ++i) {
+    if (!std::isfinite(pieces_[i].t_start) || pieces_[i].tau.is_empty() ||
+        !pieces_[i].tau.is_bounded()) {
+      throw std::invalid_argument("FurutaDynamics: piece with a non-finite time or torque");
+    }
+    if (i > 0 && !(pieces_[i].t_start > pieces_[i - 1].t_start)) {
+      throw std::invalid_argument("FurutaDynamics: pieces not in increasing time order");
+    }
+  }
+}
+
+std::vector<double> FurutaDynamics::switch_times() const {
+  std::vector<double> times;
+  for (std::size_t i = 1; i < pieces_.size(); ++i) times.push_back(pieces_[i].t_start);
+  return times;
+}
+
+Box FurutaDynamics::initial_box(const Box& state, const FurutaParameters& p) {
+  if (state.size() != 4) throw std::invalid_argument("FurutaDynamics::initial_box: state size 4");
+  return Box{state[0], state[1], state[2], state[3], p.mu1, p.mu2,
+             p.mu3,    p.mu4,    p.mug,    p.fv1,    p.fv2};
+}
+
+}  // namespace furuta::validated
