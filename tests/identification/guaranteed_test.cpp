@@ -15,97 +15,19 @@
 
 #include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/preprocessing.hpp"
+#include "simulated_sessions.hpp"
 
 namespace furuta::identification {
 namespace {
 
 namespace bridge = furuta::bridge;
 
-// A 10 s session of the model under a smooth multisine duty (the seed picks the phases), sampled
-// every 16 ms with the pendulum encoder's quantisation; plus the true signals at the samples.
-struct SimulatedSession {
-  JointSeries processed;
-  JointSeries truth;  // q2, dq1, dq2, ddq1, ddq2, tau without error
-};
+using furuta::testing::simulate;
+using furuta::testing::SimulatedSession;
+using furuta::testing::trim;
 
-SimulatedSession simulate(std::uint64_t seed, double seconds = 10.0) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
-  const bridge::MotorData motor;
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> phase(0, 2 * M_PI);
-  const std::array<double, 5> freq_hz = {0.3, 0.7, 1.1, 1.7, 2.3};
-  std::array<double, 5> ph{};
-  for (double& x : ph) x = phase(rng);
-  const auto duty = [&](double t) {
-    double d = 0;
-    for (int k = 0; k < 5; ++k) d += 0.03 * std::sin(2 * M_PI * freq_hz[k] * t + ph[k]);
-    return d;
-  };
-  const double dt = 1e-3, period = 0.016;
-  const double pendulum_resolution = 2 * M_PI / 4096, arm_resolution = 2 * M_PI / (512 * 26.0);
-  RawExperiment raw;
-  raw.name = "seed" + std::to_string(seed);
-  raw.sample_period_s = period;
-  raw.input_kind = InputKind::duty;
-  SimulatedSession out;
-  out.truth.name = raw.name;
-  out.truth.sample_period_s = period;
-  bridge::PendulumState x{0, 0, 0.05, 0};
-  double t = 0;
-  const int steps_per_sample = static_cast<int>(std::lround(period / dt));
-  for (int k = 0; t < seconds; ++k) {
-    const double d = duty(t);
-    const double tau = motor.arm_torque_nm(d, x.dq1);
-    const bridge::JointAccelerations a = bridge::forward_dynamics(p, x, tau);
-    raw.t_s.push_back(t);
-    raw.q1.push_back(std::round(x.q1 / arm_resolution) * arm_resolution);
-    raw.q2.push_back(std::round(x.q2 / pendulum_resolution) * pendulum_resolution);
-    raw.input.push_back(d);
-    out.truth.t_s.push_back(t);
-    out.truth.q2.push_back(x.q2);
-    out.truth.dq1.push_back(x.dq1);
-    out.truth.dq2.push_back(x.dq2);
-    out.truth.ddq1.push_back(a.ddq1);
-    out.truth.ddq2.push_back(a.ddq2);
-    out.truth.tau.push_back(tau);
-    for (int s = 0; s < steps_per_sample; ++s) {
-      const double ts = t + s * dt;
-      x = bridge::rk4_step(p, x, dt, [&](const bridge::PendulumState& st) {
-        return motor.arm_torque_nm(duty(ts), st.dq1);
-      });
-    }
-    t = (k + 1) * period;
-  }
-  PreprocessOptions options;
-  options.cutoff_hz = 5;
-  options.differentiator_passband_hz = 5;
-  options.differentiator_stopband_hz = 10;
-  out.processed = preprocess(raw, options, motor);
-  return out;
-}
-
-std::size_t trim() {
-  PreprocessOptions options;
-  return edge_samples(options);
-}
-
-// Bounds that hold by construction: the largest true error per channel, with a margin.
 DataErrorBounds bounds_covering(const SimulatedSession& s, double margin = 1.5) {
-  DataErrorBounds b;
-  const auto worst = [&](const std::vector<double>& measured, const std::vector<double>& truth) {
-    double m = 0;
-    for (std::size_t i = trim(); i + trim() < measured.size(); ++i) {
-      m = std::max(m, std::abs(measured[i] - truth[i]));
-    }
-    return margin * m + 1e-12;
-  };
-  b.q2.absolute = worst(s.processed.q2, s.truth.q2);
-  b.dq1.absolute = worst(s.processed.dq1, s.truth.dq1);
-  b.dq2.absolute = worst(s.processed.dq2, s.truth.dq2);
-  b.ddq1.absolute = worst(s.processed.ddq1, s.truth.ddq1);
-  b.ddq2.absolute = worst(s.processed.ddq2, s.truth.ddq2);
-  b.tau.absolute = worst(s.processed.tau, s.truth.tau);
-  return b;
+  return furuta::testing::bounds_covering({s}, margin);
 }
 
 std::vector<double> truth_vector() {
