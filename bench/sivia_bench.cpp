@@ -95,6 +95,7 @@ void run(benchmark::State& state, GuaranteedOptions o) {
   state.counters["boundary"] = static_cast<double>(p.boundary.size());
   state.counters["outer"] = static_cast<double>(p.outer_count);
   state.counters["tested"] = static_cast<double>(p.boxes_tested);
+  state.counters["probed_inner"] = static_cast<double>(p.probed_inner);
   state.counters["truncated"] = p.truncated ? 1 : 0;
   const Box hull = p.outer_hull();
   for (int k = 0; k < kParameterCount; ++k) {
@@ -131,6 +132,18 @@ BENCHMARK(BM_TwoUnknowns)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);
+
+// ... and without the inner probe (bisection alone decides inner boxes, as IBEX's paver does).
+void BM_TwoUnknownsNoProbe(benchmark::State& state) {
+  GuaranteedOptions o = two_unknowns(epsilon(state), true);
+  o.probe_inner = false;
+  run(state, o);
+}
+BENCHMARK(BM_TwoUnknownsNoProbe)
+    ->ArgNames({"log10_eps", "threads", "samples"})
+    ->ArgsProduct({{-2, -3}, {1}, {0, 625}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // (b) The same without the contractors (plain SIVIA: a box is outer when one sample's rows miss).
 void BM_TwoUnknownsPlainSivia(benchmark::State& state) {

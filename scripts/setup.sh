@@ -14,11 +14,13 @@ packages=(
   # numerics
   libeigen3-dev libboost-dev libliquid-dev libmpfr-dev libgmp-dev libtbb-dev
   # configuration, CLI, service
-  libtomlplusplus-dev libcli11-dev libsystemd-dev systemd
+  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libsystemd-dev systemd
   # tests: network namespaces for LCM over UDP multicast
   iproute2
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # benchmarks: the LP bound of the seven-unknown problem (bench/sivia_lp_hull)
+  libglpk-dev
 )
 
 if [ "$(id -u)" -eq 0 ]; then

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -418,6 +419,22 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
   const std::size_t q = static_cast<std::size_t>(options.q);
 
   std::atomic<std::size_t> inner_hint{0};
+  // Whether every parameter of the box is consistent with all samples but q (the inner verdict).
+  // The verdict does not depend on the order the samples are tried in, so start at the sample that
+  // last failed (in any thread; neighbouring boxes tend to fail at the same samples) and go round.
+  const auto proven_inner = [&](const Box& box) {
+    const std::size_t start = inner_hint.load(std::memory_order_relaxed);
+    std::size_t unproven = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::size_t i = start + k < n ? start + k : start + k - n;
+      if (!constraints.proves_consistent(i, box, options.inner)) {
+        inner_hint.store(i, std::memory_order_relaxed);
+        if (++unproven > q) return false;
+      }
+    }
+    return true;
+  };
+
   const interval::BoxTest test = [&](Box& box) -> interval::BoxDecision {
     using interval::BoxVerdict;
     if (q == 0) {
@@ -441,18 +458,7 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
         if (!shrank) break;
       }
       if (options.inner == InnerTest::none) return {BoxVerdict::undecided};
-      // Inner needs every sample: the verdict does not depend on the order they are tried in, so
-      // start at the sample that last failed (in any thread; neighbouring boxes tend to fail at the
-      // same samples), and go on round the circle.
-      const std::size_t start = inner_hint.load(std::memory_order_relaxed);
-      for (std::size_t k = 0; k < n; ++k) {
-        const std::size_t i = start + k < n ? start + k : start + k - n;
-        if (!constraints.proves_consistent(i, box, options.inner)) {
-          inner_hint.store(i, std::memory_order_relaxed);
-          return {BoxVerdict::undecided};
-        }
-      }
-      return {BoxVerdict::inner};
+      return {proven_inner(box) ? BoxVerdict::inner : BoxVerdict::undecided};
     }
     // q-relaxed: outer when more than q samples are proven inconsistent, inner when at most q are
     // not proven consistent. (No contraction: one sample alone may be an outlier.)
@@ -462,14 +468,50 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
     }
     if (inconsistent > q) return {BoxVerdict::outer};
     if (options.inner == InnerTest::none) return {BoxVerdict::undecided};
-    std::size_t unproven = 0;
-    for (std::size_t i = 0; i < n && unproven <= q; ++i) {
-      if (!constraints.proves_consistent(i, box, options.inner)) ++unproven;
-    }
-    return {unproven <= q ? BoxVerdict::inner : BoxVerdict::undecided};
+    return {proven_inner(box) ? BoxVerdict::inner : BoxVerdict::undecided};
   };
 
   interval::SiviaOptions sivia;
+  if (options.probe_inner && options.inner != InnerTest::none) {
+    // Sub-boxes of a fraction of the box's unknowns' widths around its centre; carried components
+    // keep their whole interval. The inner test is inclusion-monotone (a box proven inner proves
+    // its sub-boxes), so the smallest is tried first and, once proven, grown; when it fails no
+    // larger one around that centre can succeed. With few unknowns, centres a quarter-width away
+    // along each unknown are tried too (the set's interior need not be at the box's centre).
+    const int unknowns =
+        static_cast<int>(std::count(options.unknown.begin(), options.unknown.end(), true));
+    sivia.inner_probe = [&, unknowns](const Box& box) -> std::optional<Box> {
+      const auto sub_box = [&](double fraction, int shifted, double shift) {
+        Box sub = box;
+        for (int k = 0; k < kParameterCount; ++k) {
+          if (!options.unknown[k]) continue;
+          const double w = box[k].width();
+          const double c = box[k].mid() + (k == shifted ? shift * w : 0.0);
+          sub[k] = intersect(Interval(c - 0.5 * fraction * w, c + 0.5 * fraction * w), box[k]);
+        }
+        return sub;
+      };
+      const auto grown_from = [&](int shifted, double shift) -> std::optional<Box> {
+        Box proven = sub_box(0.1, shifted, shift);
+        if (proven.is_empty() || !proven_inner(proven)) return std::nullopt;
+        for (const double fraction : {0.25, 0.5}) {
+          Box larger = sub_box(fraction, shifted, shift);
+          if (!proven_inner(larger)) break;
+          proven = std::move(larger);
+        }
+        return proven;
+      };
+      if (auto found = grown_from(-1, 0)) return found;
+      if (unknowns > 3) return std::nullopt;
+      for (int k = 0; k < kParameterCount; ++k) {
+        if (!options.unknown[k]) continue;
+        for (const double shift : {-0.25, 0.25}) {
+          if (auto found = grown_from(k, shift)) return found;
+        }
+      }
+      return std::nullopt;
+    };
+  }
   sivia.epsilon = options.epsilon;
   sivia.threads = options.threads;
   sivia.progress = options.progress;

@@ -72,12 +72,21 @@ std::string guaranteed_json(const GuaranteedResult& r, const SampleConstraints& 
   out << "], \"samples\": " << r.samples << ", \"q\": " << r.q
       << ", \"prior\": " << box_json(p.prior) << ", \"boxes_tested\": " << p.boxes_tested
       << ", \"bisections\": " << p.bisections << ", \"inner_count\": " << p.inner.size()
+      << ", \"probed_inner_count\": " << p.probed_inner
       << ", \"boundary_count\": " << p.boundary.size() << ", \"outer_count\": " << p.outer_count
       << ", \"truncated\": " << (p.truncated ? "true" : "false")
       << ", \"seconds\": " << number(p.seconds) << ", \"empty\": " << (r.empty ? "true" : "false");
   if (!r.empty) {
     out << ", \"outer_hull\": " << box_json(p.outer_hull());
-    if (!p.inner.empty()) out << ", \"inner_hull\": " << box_json(p.inner_hull());
+    if (!p.inner.empty()) {
+      out << ", \"inner_hull\": " << box_json(p.inner_hull());
+      // The largest inner box: parameters every one of which is proven consistent with the data.
+      const auto largest =
+          std::max_element(p.inner.begin(), p.inner.end(), [&](const Box& a, const Box& b) {
+            return unknowns_volume({a}, r.unknown) < unknowns_volume({b}, r.unknown);
+          });
+      out << ", \"central_feasible_box\": " << box_json(*largest);
+    }
   }
   out << ", \"inner_measure\": " << number(unknowns_volume(p.inner, r.unknown))
       << ", \"boundary_measure\": " << number(unknowns_volume(p.boundary, r.unknown));

@@ -141,4 +141,31 @@ std::ostream& operator<<(std::ostream& out, const Box& b) {
   return out << ')';
 }
 
+std::vector<Box> difference(const Box& outer, const Box& inner) {
+  if (outer.size() != inner.size()) {
+    throw std::invalid_argument("difference: boxes of different sizes");
+  }
+  std::vector<Box> pieces;
+  if (outer.is_empty()) return pieces;
+  if (inner.is_empty()) return {outer};
+  if (!inner.is_subset(outer)) {
+    throw std::invalid_argument("difference: inner is not inside outer");
+  }
+  Box rest = outer;  // shrinks to inner, one component at a time
+  for (std::size_t i = 0; i < outer.size(); ++i) {
+    if (rest[i].lo() < inner[i].lo()) {
+      Box below = rest;
+      below[i] = Interval(rest[i].lo(), inner[i].lo());
+      pieces.push_back(std::move(below));
+    }
+    if (inner[i].hi() < rest[i].hi()) {
+      Box above = rest;
+      above[i] = Interval(inner[i].hi(), rest[i].hi());
+      pieces.push_back(std::move(above));
+    }
+    rest[i] = inner[i];
+  }
+  return pieces;
+}
+
 }  // namespace furuta::interval

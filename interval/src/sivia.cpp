@@ -23,7 +23,7 @@ namespace furuta::interval {
 namespace {
 
 // What became of one pending box in a generation.
-enum class Outcome : unsigned char { inner, outer, boundary, split, skipped };
+enum class Outcome : unsigned char { inner, outer, boundary, split, skipped, carved };
 
 void validate(const Box& prior, const SiviaOptions& options) {
   if (prior.size() == 0) {
@@ -78,10 +78,26 @@ bool small_enough(const Box& b, const std::vector<double>& scale, double epsilon
   return true;
 }
 
+// A box that epsilon stops: boundary, or carved into an inner sub-box (left in `slot`) and the
+// boundary rest (in `rest`) when the probe proves one.
+Outcome stop(const SiviaOptions& options, Box&& work, Box& slot, std::vector<Box>& rest) {
+  if (options.inner_probe) {
+    std::optional<Box> inner = options.inner_probe(work);
+    if (inner && !inner->is_empty() && inner->size() == work.size() && inner->is_subset(work)) {
+      rest = difference(work, *inner);
+      slot = std::move(*inner);
+      return Outcome::carved;
+    }
+  }
+  slot = std::move(work);
+  return Outcome::boundary;
+}
+
 // Tests box `slot` (in place: it ends as the box to keep, contracted unless outer) and, when it is
 // to be bisected, leaves the lower half in `slot` and the upper one in `upper`.
-Outcome process(const BoxTest& test, const std::vector<double>& scale, double epsilon, Box& slot,
-                Box& upper) {
+Outcome process(const BoxTest& test, const std::vector<double>& scale, const SiviaOptions& options,
+                Box& slot, Box& upper, std::vector<Box>& rest) {
+  const double epsilon = options.epsilon;
   Box work = slot;
   const BoxDecision decision = test(work);
   if (work.size() != slot.size()) {
@@ -102,14 +118,12 @@ Outcome process(const BoxTest& test, const std::vector<double>& scale, double ep
     return Outcome::inner;
   }
   if (small_enough(work, scale, epsilon)) {
-    slot = std::move(work);
-    return Outcome::boundary;
+    return stop(options, std::move(work), slot, rest);
   }
   auto halves = work.bisect(work.widest_relative_index(scale), 0.5);
   if (halves.first == work || halves.second == work) {
     // The component is down to adjacent doubles (only with a tiny epsilon): cannot split further.
-    slot = std::move(work);
-    return Outcome::boundary;
+    return stop(options, std::move(work), slot, rest);
   }
   slot = std::move(halves.first);
   upper = std::move(halves.second);
@@ -176,7 +190,6 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
     throw std::invalid_argument("sivia: test is empty");
   }
   const std::vector<double> scale = effective_scale(prior, options);
-  const double epsilon = options.epsilon;
   auto cancelled = [&] {
     return options.cancel != nullptr && options.cancel->load(std::memory_order_relaxed);
   };
@@ -190,6 +203,7 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
 
   std::vector<Box> current{prior};
   std::vector<Box> upper;
+  std::vector<std::vector<Box>> rests;  // the boundary rests of carved boxes
   std::vector<Outcome> outcomes;
   std::vector<Box> next;
   while (!current.empty()) {
@@ -203,6 +217,8 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
     const std::size_t n = current.size();
     upper.clear();
     upper.resize(n);
+    rests.clear();
+    rests.resize(n);
     outcomes.assign(n, Outcome::skipped);
 
     // The first exception thrown by a test stops the generation; it is rethrown below.
@@ -211,24 +227,24 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
     std::exception_ptr error;
     std::size_t error_index = n;
     arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                            if (failed.load(std::memory_order_relaxed) || cancelled()) {
-                              continue;  // skipped: stays pending, goes to boundary
-                            }
-                            try {
-                              outcomes[i] = process(test, scale, epsilon, current[i], upper[i]);
-                            } catch (...) {
-                              failed.store(true, std::memory_order_relaxed);
-                              const std::lock_guard<std::mutex> lock(error_mutex);
-                              if (i < error_index) {
-                                error_index = i;
-                                error = std::current_exception();
-                              }
-                            }
-                          }
-                        });
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+              if (failed.load(std::memory_order_relaxed) || cancelled()) {
+                continue;  // skipped: stays pending, goes to boundary
+              }
+              try {
+                outcomes[i] = process(test, scale, options, current[i], upper[i], rests[i]);
+              } catch (...) {
+                failed.store(true, std::memory_order_relaxed);
+                const std::lock_guard<std::mutex> lock(error_mutex);
+                if (i < error_index) {
+                  error_index = i;
+                  error = std::current_exception();
+                }
+              }
+            }
+          });
     });
     if (error) {
       std::rethrow_exception(error);
@@ -248,6 +264,13 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
           break;
         case Outcome::boundary:
           result.boundary.push_back(std::move(current[i]));
+          break;
+        case Outcome::carved:
+          ++result.probed_inner;
+          result.inner.push_back(std::move(current[i]));
+          for (Box& b : rests[i]) {
+            result.boundary.push_back(std::move(b));
+          }
           break;
         case Outcome::split:
           ++result.bisections;

@@ -213,6 +213,40 @@ TEST_F(GuaranteedOnOneSession, InnerBoxPointsHaveDataAndTheForAllTestProvesNothi
   }
 }
 
+// At the paper's epsilon (0.01) the feasible set is smaller than one epsilon box, so bisection
+// alone proves no box inner; the probe around a stopped box's centre does, soundly.
+TEST_F(GuaranteedOnOneSession, InnerProbeGivesAnInnerPartAtACoarseEpsilon) {
+  GuaranteedOptions o = two_unknowns(centre_, 0.01);
+  o.probe_inner = false;
+  const GuaranteedResult bisection_only = guaranteed_identification(*constraints_, o);
+  o.probe_inner = true;
+  const GuaranteedResult probed = guaranteed_identification(*constraints_, o);
+  EXPECT_TRUE(bisection_only.paving.inner.empty());
+  ASSERT_FALSE(probed.paving.inner.empty());
+  EXPECT_EQ(probed.paving.probed_inner, probed.paving.inner.size());
+  // Same outer approximation: the probe only moves area from boundary to inner.
+  EXPECT_EQ(probed.paving.outer_hull(), bisection_only.paving.outer_hull());
+  EXPECT_NEAR(unknowns_volume(probed.paving.inner, o.unknown) +
+                  unknowns_volume(probed.paving.boundary, o.unknown),
+              unknowns_volume(bisection_only.paving.boundary, o.unknown), 1e-15);
+  std::printf("[ measured ] epsilon 0.01: inner part %.3g of outer %.3g (N m s)^2\n",
+              unknowns_volume(probed.paving.inner, o.unknown),
+              unknowns_volume(bisection_only.paving.boundary, o.unknown));
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Box& b = probed.paving.inner[rng() % probed.paving.inner.size()];
+    std::vector<double> p(kParameterCount);
+    for (int k = 0; k < kParameterCount; ++k) {
+      p[k] = o.unknown[k] ? b[k].lo() + u(rng) * (b[k].hi() - b[k].lo()) : o.prior[k].mid();
+    }
+    for (std::size_t i = 0; i < constraints_->size(); i += 5) {
+      ASSERT_TRUE(brute_force_consistent(constraints_->sample(i), p, rng, 30))
+          << "probed inner point without data at sample " << i;
+    }
+  }
+}
+
 TEST_F(GuaranteedOnOneSession, PlainAndContractedSiviaAgreeAndContractionTestsFewerBoxes) {
   // At the paper's epsilon the contractor reaches the hull in one test.
   GuaranteedOptions o = two_unknowns(centre_, 0.01);

@@ -127,6 +127,40 @@ TEST(Box, HullAndIntersect) {
   EXPECT_THROW(intersect(a, Box(1)), std::invalid_argument);
 }
 
+TEST(Box, DifferenceTilesTheOuterBoxWithoutTheInner) {
+  const Box outer{Interval(0, 4), Interval(-1, 1), Interval(2, 3)};
+  const Box inner{Interval(1, 2), Interval(-1, 0.5), Interval(2.25, 2.75)};
+  const std::vector<Box> pieces = difference(outer, inner);
+  EXPECT_EQ(pieces.size(), 5u);  // below and above in components 0 and 2, above in 1
+  const auto volume = [](const Box& b) {
+    double v = 1;
+    for (const Interval& x : b) v *= x.width();
+    return v;
+  };
+  double total = volume(inner);
+  for (const Box& b : pieces) {
+    EXPECT_TRUE(b.is_subset(outer)) << b;
+    total += volume(b);
+  }
+  EXPECT_DOUBLE_EQ(total, volume(outer));
+  // Each point of the outer box lies in the inner box or a piece (interiors are disjoint).
+  for (double x0 = 0.05; x0 < 4; x0 += 0.3) {
+    for (double x1 = -0.95; x1 < 1; x1 += 0.3) {
+      for (double x2 = 2.05; x2 < 3; x2 += 0.2) {
+        const std::vector<double> x = {x0, x1, x2};
+        int in = inner.contains(x) ? 1 : 0;
+        for (const Box& b : pieces) in += b.contains(x) ? 1 : 0;
+        EXPECT_GE(in, 1);
+      }
+    }
+  }
+  EXPECT_TRUE(difference(outer, outer).empty());
+  EXPECT_EQ(difference(outer, Box(3, Interval::empty())), std::vector<Box>{outer});
+  EXPECT_THROW(difference(outer, Box{Interval(0, 5), Interval(0, 1), Interval(2, 3)}),
+               std::invalid_argument);
+  EXPECT_THROW(difference(outer, Box{Interval(0, 1)}), std::invalid_argument);
+}
+
 TEST(Box, Prints) {
   std::ostringstream s;
   s << Box{Interval(1.0, 2.0), Interval::empty()};

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -179,6 +180,54 @@ TEST(Sivia, RingInnerOuterBoundaryAreSoundAndTileThePrior) {
       "%.4f < 3pi %.4f < %.4f, %.4f s\n",
       p.boxes_tested, p.inner.size(), p.boundary.size(), p.outer.size(), p.inner_volume(), 3 * kPi,
       p.inner_volume() + p.boundary_volume(), p.seconds);
+}
+
+// A probe carves a proven sub-box out of the boxes epsilon stops: at a coarse epsilon the ring's
+// boundary boxes gain inner parts, and inner, boundary and outer still tile the prior.
+TEST(Sivia, InnerProbeCarvesInnerPartsOutOfStoppedBoxes) {
+  const Box prior = ring_prior();
+  SiviaOptions o = ring_options();
+  o.epsilon = 0.2;
+  const SubPaving plain = sivia(prior, ring_test, o);
+  std::atomic<int> probes{0};
+  o.inner_probe = [&](const Box& b) -> std::optional<Box> {
+    ++probes;
+    Box sub = b;
+    for (std::size_t i = 0; i < 2; ++i) {
+      const double c = b[i].mid(), h = b[i].width() / 4;
+      sub[i] = Interval(c - h, c + h);
+    }
+    Box tested = sub;
+    if (ring_test(tested).verdict == BoxVerdict::inner) return sub;
+    return std::nullopt;
+  };
+  const SubPaving p = sivia(prior, ring_test, o);
+  EXPECT_EQ(static_cast<std::size_t>(probes.load()), plain.boundary.size());
+  ASSERT_GT(p.probed_inner, 0u);
+  EXPECT_EQ(p.inner.size(), plain.inner.size() + p.probed_inner);
+  EXPECT_GT(p.inner_volume(), plain.inner_volume());
+  EXPECT_LT(p.boundary_volume(), plain.boundary_volume());
+  // The probe moves area from boundary to inner and nowhere else.
+  EXPECT_NEAR(p.inner_volume() + p.boundary_volume(),
+              plain.inner_volume() + plain.boundary_volume(), 1e-9);
+  EXPECT_EQ(p.outer.size(), plain.outer.size());
+  std::mt19937_64 rng(5);
+  for (const Box& b : p.inner) {
+    for (const auto& x : samples(b, 4, rng)) {
+      ASSERT_TRUE(in_ring(x[0], x[1])) << "inner box " << b;
+    }
+  }
+  EXPECT_LT(p.inner_volume(), 3 * kPi);
+  EXPECT_GT(p.inner_volume() + p.boundary_volume(), 3 * kPi);
+  // A probe that answers a box outside the stopped box is ignored (the paving stays plain).
+  o.inner_probe = [](const Box& b) -> std::optional<Box> {
+    Box away = b;
+    away[0] = Interval(b[0].hi() + 1, b[0].hi() + 2);
+    return away;
+  };
+  const SubPaving ignored = sivia(prior, ring_test, o);
+  EXPECT_EQ(ignored.probed_inner, 0u);
+  EXPECT_EQ(ignored.inner.size(), plain.inner.size());
 }
 
 TEST(Sivia, PavingIsIdenticalForEveryThreadCount) {

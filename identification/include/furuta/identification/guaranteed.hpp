@@ -131,6 +131,10 @@ struct GuaranteedOptions {
   bool epsilon_relative = true;
   bool contract = true;
   InnerTest inner = InnerTest::witness;
+  // On each box epsilon stops undecided, try the inner test on sub-boxes around its centre (half,
+  // a quarter, a tenth of its unknowns' widths) and carve the first proven one out as inner: a
+  // feasible set smaller than an epsilon box still gets an inner part (the central feasible box).
+  bool probe_inner = true;
   int q = 0;  // samples allowed to be inconsistent (q-relaxed intersection)
   int threads = 0;
   std::function<void(std::size_t tested, std::size_t pending)> progress;

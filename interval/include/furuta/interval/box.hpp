@@ -55,6 +55,9 @@ class Box {
 // intersection comes back with every component empty.
 Box hull(const Box& a, const Box& b);
 Box intersect(const Box& a, const Box& b);
+// outer minus inner (inner a subset of outer, same size): at most 2 n disjoint boxes (sharing
+// only faces) whose union with inner is outer, sliced one component after the other.
+std::vector<Box> difference(const Box& outer, const Box& inner);
 
 std::ostream& operator<<(std::ostream& out, const Box& b);
 

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,11 @@ struct SiviaOptions {
   std::function<void(std::size_t tested, std::size_t pending)> progress;
   // Set to true from another thread to stop early (the result is then truncated).
   const std::atomic<bool>* cancel = nullptr;
+  // Optional, called concurrently on each box that epsilon stops undecided: a sub-box proven inside
+  // the set, or nothing. The sub-box goes to inner and the rest of the box (difference()) to
+  // boundary. Bisection alone never proves a set inner when it is smaller than an epsilon box;
+  // a probe around the contracted box's centre does.
+  std::function<std::optional<Box>(const Box&)> inner_probe;
 };
 
 struct SubPaving {
@@ -54,7 +60,8 @@ struct SubPaving {
   std::vector<Box> inner, boundary, outer;
   std::size_t boxes_tested = 0;
   std::size_t bisections = 0;
-  std::size_t outer_count = 0;  // also counted when not kept
+  std::size_t outer_count = 0;   // also counted when not kept
+  std::size_t probed_inner = 0;  // inner boxes found by options.inner_probe
   bool truncated = false;
   double seconds = 0;
 
