@@ -161,6 +161,24 @@ class GuaranteedOnOneSession : public ::testing::Test {
     constraints_.reset();
     session_.reset();
   }
+  // Random points of random boxes (unknowns anywhere in the box, carried mu's at their prior's
+  // midpoint: the witness) have data meeting both rows at every stride-th sample.
+  static void expect_points_have_data(const std::vector<Box>& boxes, const GuaranteedOptions& o,
+                                      int trials, std::size_t stride, std::mt19937_64& rng) {
+    ASSERT_FALSE(boxes.empty());
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int trial = 0; trial < trials; ++trial) {
+      const Box& b = boxes[rng() % boxes.size()];
+      std::vector<double> p(kParameterCount);
+      for (int k = 0; k < kParameterCount; ++k) {
+        p[k] = o.unknown[k] ? b[k].lo() + u(rng) * (b[k].hi() - b[k].lo()) : o.prior[k].mid();
+      }
+      for (std::size_t i = 0; i < constraints_->size(); i += stride) {
+        ASSERT_TRUE(brute_force_consistent(constraints_->sample(i), p, rng, 30))
+            << "point " << trial << " of " << b << " has no data at sample " << i;
+      }
+    }
+  }
   static std::unique_ptr<SimulatedSession> session_;
   static std::unique_ptr<SampleConstraints> constraints_;
   static ParameterVector centre_;
@@ -186,20 +204,7 @@ TEST_F(GuaranteedOnOneSession, InnerBoxPointsHaveDataAndTheForAllTestProvesNothi
   EXPECT_TRUE(for_all.paving.inner.empty());  // row 2's output is exactly 0
   // Points of inner boxes: every sample has data meeting both rows.
   std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> u(0, 1);
-  for (int trial = 0; trial < 20; ++trial) {
-    const Box& b = witness.paving.inner[rng() % witness.paving.inner.size()];
-    std::vector<double> p(kParameterCount);
-    // Unknowns anywhere in the box; the carried mu's at their prior's midpoint (the witness).
-    const GuaranteedOptions o = two_unknowns(centre_);
-    for (int k = 0; k < kParameterCount; ++k) {
-      p[k] = o.unknown[k] ? b[k].lo() + u(rng) * (b[k].hi() - b[k].lo()) : o.prior[k].mid();
-    }
-    for (std::size_t i = 0; i < constraints_->size(); i += 7) {
-      ASSERT_TRUE(brute_force_consistent(constraints_->sample(i), p, rng, 30))
-          << "inner point without data at sample " << i;
-    }
-  }
+  expect_points_have_data(witness.paving.inner, two_unknowns(centre_), 20, 7, rng);
   // Points of outer boxes: some sample has no data for them.
   int checked = 0;
   for (const Box& b : witness.paving.outer) {
@@ -233,18 +238,7 @@ TEST_F(GuaranteedOnOneSession, InnerProbeGivesAnInnerPartAtACoarseEpsilon) {
               unknowns_volume(probed.paving.inner, o.unknown),
               unknowns_volume(bisection_only.paving.boundary, o.unknown));
   std::mt19937_64 rng(12);
-  std::uniform_real_distribution<double> u(0, 1);
-  for (int trial = 0; trial < 10; ++trial) {
-    const Box& b = probed.paving.inner[rng() % probed.paving.inner.size()];
-    std::vector<double> p(kParameterCount);
-    for (int k = 0; k < kParameterCount; ++k) {
-      p[k] = o.unknown[k] ? b[k].lo() + u(rng) * (b[k].hi() - b[k].lo()) : o.prior[k].mid();
-    }
-    for (std::size_t i = 0; i < constraints_->size(); i += 5) {
-      ASSERT_TRUE(brute_force_consistent(constraints_->sample(i), p, rng, 30))
-          << "probed inner point without data at sample " << i;
-    }
-  }
+  expect_points_have_data(probed.paving.inner, o, 10, 5, rng);
 }
 
 TEST_F(GuaranteedOnOneSession, PlainAndContractedSiviaAgreeAndContractionTestsFewerBoxes) {
