@@ -8,6 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/validated/scenarios.hpp"
+
 namespace furuta::app {
 
 struct DevicesOptions {
@@ -78,6 +81,11 @@ struct IdentifyCommandOptions {
   bool estimate_input_lag = false;  // estimate it even when the configuration gives it
   bool sivia = false;               // guaranteed identification after the LSMI ([sivia])
   std::optional<int> threads;       // SIVIA threads (default: the configuration's)
+  // The paper's scenarios after the fit (Table III, Fig. 6), with the LSMI estimate and, with
+  // --sivia, SIVIA's hull; measured on the simulated rig (its truth, or the configuration's
+  // simulated-rig parameters). Each scenario's duration, if given (else the paper's 4 s).
+  bool simulate = false;
+  std::optional<double> simulate_seconds;
 };
 }  // namespace furuta::app
 namespace furuta::config {
@@ -94,5 +102,46 @@ identification::IdentifyOptions identify_options_for(const config::RigConfig& ri
 // Prints Table I (and the held-out RMSE), writes results.json, table.txt and SVG figures.
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err);
+
+// --- validation by guaranteed simulation (the paper's section IV.B) ---
+struct SimulateCommandOptions {
+  std::vector<int> scenarios;     // 1..4; empty: all four
+  std::filesystem::path results;  // a results.json of `furuta identify`: LSMI and SIVIA parameters
+  bool truth =
+      false;  // the simulated rig's truth as point parameters (the default without results)
+  std::optional<double> relative_pct;  // with the truth: also the truth +- this % as intervals
+  std::optional<double> seconds;       // each scenario's duration (default: the paper's 4 s)
+  std::filesystem::path output_dir = "simulation";
+};
+// Writes simulate.json, table3.txt and scenario_<n>_<parameters>.svg; prints Table III.
+// 0 on success (whatever the tubes reached: failures are reported in the table), 2 on bad input.
+int run_simulate_command(const SimulateCommandOptions& options, std::ostream& out,
+                         std::ostream& err);
+
+struct SimulationReport {
+  std::string json;   // {"truth", "measurement", "integrator", "figures", "results": [...]}
+  std::string table;  // Table III
+  std::vector<std::string> figures;  // file names written
+  std::vector<validated::ScenarioResult> results;
+};
+// Each scenario measured on the simulated rig with `truth`, then tubes for every parameter set,
+// figures written to figures_dir. Shared by `furuta simulate` and `furuta identify --simulate`.
+SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>& scenarios,
+                                          const std::vector<validated::ParameterSet>& sets,
+                                          const bridge::ModelParameters& truth,
+                                          const std::filesystem::path& figures_dir,
+                                          const std::string& truth_source);
+
+// --- the identification trigger (log_processor.hpp) ---
+struct ProcessLogsOptions {
+  std::filesystem::path logs_dir;             // empty: the configuration's [daemon] logs_dir
+  std::filesystem::path config_path;          // its [automation] says what to identify
+  std::filesystem::path identifications_dir;  // empty: [automation] identifications_dir
+  bool watch = false;  // pass again whenever a log lands, until SIGINT or SIGTERM
+};
+// One pass over the logs directory (or, with watch, a pass per landing log). 0: every log was
+// identified or waits for its batch; 1: some went to failed/ (each with a .reason.txt).
+int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& out,
+                             std::ostream& err);
 
 }  // namespace furuta::app

@@ -16,6 +16,7 @@
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/report/report.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::app {
@@ -44,12 +45,39 @@ struct FitInputs {
   config::RigConfig settings;  // [identification] and the motor for eq. 4
   std::optional<bridge::ModelParameters> nominal, truth;
   identification::VoltageMotor voltage_motor;
-  double angle_resolution_rad = 0;  // the signals figures' quantisation band
+  double angle_resolution_rad = 0;               // the signals figures' quantisation band
+  std::vector<report::SessionSummary> sessions;  // session logs only, for the report
 };
 
 struct GuaranteedRun {
   std::string json, svg, summary;
+  std::optional<interval::Box> outer_hull;  // absent when the set is empty
+  identification::GuaranteedResult result;
 };
+
+// A configuration without [sivia] bounds leaves them all 0: no data boxes to draw.
+bool has_bounds(const config::SiviaConfig& cfg) {
+  for (const auto* b : {&cfg.q2_bound, &cfg.dq1_bound, &cfg.dq2_bound, &cfg.ddq1_bound,
+                        &cfg.ddq2_bound, &cfg.tau_bound}) {
+    if ((*b)[0] > 0 || (*b)[1] > 0) return true;
+  }
+  return false;
+}
+
+// [sivia]'s bounds on the preprocessed data: SIVIA's data boxes, and the bands of Fig. 2/3.
+identification::DataErrorBounds data_error_bounds(const config::SiviaConfig& cfg) {
+  const auto bound = [](const std::array<double, 2>& b) {
+    return identification::ChannelErrorBound{b[0], b[1]};
+  };
+  identification::DataErrorBounds bounds;
+  bounds.q2 = bound(cfg.q2_bound);
+  bounds.dq1 = bound(cfg.dq1_bound);
+  bounds.dq2 = bound(cfg.dq2_bound);
+  bounds.ddq1 = bound(cfg.ddq1_bound);
+  bounds.ddq2 = bound(cfg.ddq2_bound);
+  bounds.tau = bound(cfg.tau_bound);
+  return bounds;
+}
 
 // SIVIA over the fitted sessions: the mu's around the combined LSMI estimate (Table II style), the
 // frictions' priors, the data bounds and the paver settings from [sivia].
@@ -86,14 +114,7 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
       std::fflush(stderr);
     };
   }
-  DataErrorBounds bounds;
-  const auto bound = [](const std::array<double, 2>& b) { return ChannelErrorBound{b[0], b[1]}; };
-  bounds.q2 = bound(cfg.q2_bound);
-  bounds.dq1 = bound(cfg.dq1_bound);
-  bounds.dq2 = bound(cfg.dq2_bound);
-  bounds.ddq1 = bound(cfg.ddq1_bound);
-  bounds.ddq2 = bound(cfg.ddq2_bound);
-  bounds.tau = bound(cfg.tau_bound);
+  const DataErrorBounds bounds = data_error_bounds(cfg);
   std::vector<const JointSeries*> series;
   for (const JointSeries& s : id.processed) series.push_back(&s);
   const std::size_t trim = identify_options.lsmi.trim_samples != 0
@@ -111,6 +132,7 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
     reference.assign(t.begin(), t.end());
   }
   run.svg = svg_paving(r, 5, 6, truth ? &reference : nullptr);
+  if (!r.empty) run.outer_hull = r.paving.outer_hull();
   std::ostringstream s;
   s << "\nSIVIA (" << r.samples << " samples, q = " << r.q << "): " << r.paving.inner.size()
     << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
@@ -136,7 +158,84 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
     }
   }
   run.summary = s.str();
+  run.result = r;
   return run;
+}
+
+struct SimulationRun {
+  std::string json, summary;
+  std::string source;  // of the measurements
+  std::vector<validated::ScenarioResult> results;
+};
+
+// The paper's scenarios with the fitted parameters: the LSMI estimate as points and, when SIVIA
+// ran and found a set, its outer hull (the carried mu's as their Table II intervals). The
+// measurements come from the simulated rig: the truth when the sessions were simulated, else the
+// configuration's simulated-rig parameters.
+SimulationRun run_simulation(const identification::Identification& id,
+                             const std::optional<interval::Box>& sivia_hull,
+                             const IdentifyCommandOptions& options, const FitInputs& fit) {
+  std::vector<validated::ParameterSet> sets;
+  if (sivia_hull) {
+    const interval::Box& h = *sivia_hull;
+    sets.push_back(
+        {"SIVIA", validated::FurutaParameters{h[0], h[1], h[2], h[3], h[4], h[5], h[6]}});
+  }
+  sets.push_back(
+      validated::point_parameters("LSMI", identification::to_parameters(id.combined.estimate)));
+  std::vector<validated::Scenario> scenarios = validated::paper_scenarios();
+  if (options.simulate_seconds) {
+    for (validated::Scenario& s : scenarios) s.duration_s = *options.simulate_seconds;
+  }
+  const bridge::ModelParameters truth = fit.truth.value_or(fit.settings.simulation.parameters);
+  const std::string source = fit.truth ? "the simulated sessions' truth"
+                                       : "the configuration's simulated rig (the sessions carry "
+                                         "no truth)";
+  const SimulationReport report =
+      run_scenario_simulations(scenarios, sets, truth, options.output_dir, source);
+  write_file(options.output_dir / "table3.txt", report.table);
+  SimulationRun run;
+  run.json = report.json;
+  run.source = source;
+  run.results = report.results;
+  std::string sivia_note;
+  if (options.sivia && !sivia_hull) sivia_note = "(SIVIA's set is empty: no SIVIA tubes)\n";
+  run.summary = "\nValidation by guaranteed simulation, measurements from " + source + ":\n" +
+                sivia_note + report.table;
+  return run;
+}
+
+// The HTML report's content: what this run computed, and what it did not (null: not run).
+report::ReportInput report_page(const identification::Identification& id, const FitInputs& fit,
+                                const identification::IdentifyOptions& identify_options,
+                                const std::vector<identification::InputFile>& inputs,
+                                const std::vector<std::string>& signals_svg, bool bounds_configured,
+                                const GuaranteedRun* guaranteed, const SimulationRun* simulation) {
+  report::ReportInput page = report::report_input(id);
+  page.software_version = daemon::kSoftwareVersion;
+  const auto number = [](double v, const char* unit) {
+    std::ostringstream s;
+    s << v << " " << unit;
+    return s.str();
+  };
+  page.rig = {{"configuration", fit.settings.name.empty() ? "-" : fit.settings.name},
+              {"inputs", fit.sessions.empty() ? "CSV recordings" : "session logs"},
+              {"sample period", number(id.processed.front().sample_period_s * 1e3, "ms")},
+              {"low-pass cut-off", number(identify_options.preprocess.cutoff_hz, "Hz")}};
+  if (fit.truth) page.rig.push_back({"rig", "simulated (its true parameters are known)"});
+  page.sessions = fit.sessions;
+  for (const auto& file : inputs) page.inputs.push_back(file.path);
+  page.signals_svg = signals_svg;
+  page.signals_bands = bounds_configured
+                           ? "the bands are the data error bounds of [sivia] (SIVIA's data boxes)"
+                           : "the band is the pendulum encoder's quantisation";
+  page.table_two = report::table_two(id.combined.estimate, fit.settings.sivia,
+                                     guaranteed ? &guaranteed->result : nullptr);
+  if (guaranteed) page.sivia = report::sivia_summary(guaranteed->result, guaranteed->svg);
+  if (simulation) {
+    page.simulation = report::SimulationSummary{simulation->source, simulation->results};
+  }
+  return page;
 }
 
 // Session logs: the rig is the one the first log carries, unless --config gives one.
@@ -155,10 +254,14 @@ std::optional<FitInputs> inputs_from_logs(const IdentifyCommandOptions& options,
           ? config::parse_rig_config(logs.front().start->rig_config_toml,
                                      options.logs.front().string() + " (rig configuration)")
           : config::load_rig_config(options.config_path);
-  for (const auto& log : logs) in.experiments.push_back(identification::experiment_from_log(log));
+  for (const auto& log : logs) {
+    in.experiments.push_back(identification::experiment_from_log(log));
+    in.sessions.push_back(report::summarize_session(log, "fit"));
+  }
   if (!options.validate.empty()) {
-    in.validation =
-        identification::experiment_from_log(session_log::load_session_log(options.validate));
+    const session_log::SessionLog held_out = session_log::load_session_log(options.validate);
+    in.validation = identification::experiment_from_log(held_out);
+    in.sessions.push_back(report::summarize_session(held_out, "held out"));
   }
   in.nominal = in.settings.nominal;
   if (in.settings.backend == config::UsbBackend::simulated) {
@@ -304,27 +407,49 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   write_file(options.output_dir / "table.txt", table);
   std::string sivia_json;
   std::string sivia_summary;
+  std::optional<interval::Box> guaranteed_hull;
+  std::optional<GuaranteedRun> guaranteed;
   if (options.sivia) {
-    const GuaranteedRun run =
-        run_guaranteed(fit->settings.sivia, id, identify_options, options, fit->truth);
+    guaranteed = run_guaranteed(fit->settings.sivia, id, identify_options, options, fit->truth);
+    const GuaranteedRun& run = *guaranteed;
     sivia_json = "\"sivia\": " + run.json;
     sivia_summary = run.summary;
+    guaranteed_hull = run.outer_hull;
     write_file(options.output_dir / "sivia.json", run.json + "\n");
     write_file(options.output_dir / "sivia.svg", run.svg);
   }
+  std::string more = sivia_json;
+  std::string simulation_summary;
+  std::optional<SimulationRun> simulation;
+  if (options.simulate) {
+    simulation = run_simulation(id, guaranteed_hull, options, *fit);
+    more += (more.empty() ? "" : ",\n  ") + ("\"simulation\": " + simulation->json);
+    simulation_summary = simulation->summary;
+  }
   write_file(options.output_dir / "results.json",
-             identification::results_json(id, inputs, daemon::kSoftwareVersion, sivia_json));
+             identification::results_json(id, inputs, daemon::kSoftwareVersion, more));
+  const identification::DataErrorBounds bounds = data_error_bounds(fit->settings.sivia);
+  const bool bounds_configured = has_bounds(fit->settings.sivia);
+  std::vector<std::string> signals;
   for (std::size_t i = 0; i < id.processed.size(); ++i) {
-    write_file(options.output_dir / ("signals_" + std::to_string(i + 1) + ".svg"),
-               identification::svg_signals(id.raw[i], id.processed[i], fit->angle_resolution_rad));
+    signals.push_back(identification::svg_signals(id.raw[i], id.processed[i],
+                                                  fit->angle_resolution_rad,
+                                                  bounds_configured ? &bounds : nullptr));
+    write_file(options.output_dir / ("signals_" + std::to_string(i + 1) + ".svg"), signals.back());
   }
   if (id.validation) {
     write_file(options.output_dir / "torque_validation.svg",
                identification::svg_torque_validation(*id.validation));
   }
-  out << table << sivia_summary;
+  const report::ReportInput page =
+      report_page(id, *fit, identify_options, inputs, signals, bounds_configured,
+                  guaranteed ? &*guaranteed : nullptr, simulation ? &*simulation : nullptr);
+  const std::filesystem::path report_path = options.output_dir / "report.html";
+  write_file(report_path, report::render_html(page));
+  out << table << sivia_summary << simulation_summary;
   out << "wrote " << (options.output_dir / "results.json").string() << " and figures in "
       << options.output_dir.string() << "\n";
+  out << "report: " << report_path.string() << "\n";
   return 0;
 }
 

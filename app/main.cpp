@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
@@ -108,6 +109,52 @@ int main(int argc, char** argv) {
   identify_cmd->add_option("--threads", identify.threads, "SIVIA threads (0: all cores)")
       ->check(CLI::Range(0, 1024));
 
+  identify_cmd->add_flag("--simulate", identify.simulate,
+                         "After the fit, the paper's four scenarios by guaranteed simulation "
+                         "(Table III, Fig. 6), with the LSMI and (with --sivia) SIVIA parameters");
+  identify_cmd
+      ->add_option("--simulate-seconds", identify.simulate_seconds,
+                   "Each scenario's duration [s] (default: the paper's 4)")
+      ->check(CLI::Range(0.01, 60.0));
+
+  furuta::app::SimulateCommandOptions simulate;
+  CLI::App* simulate_cmd = app.add_subcommand(
+      "simulate",
+      "The paper's validation scenarios by guaranteed simulation: coverage rates (Table III) and "
+      "tubes (Fig. 6)");
+  std::string scenario_choice = "all";
+  simulate_cmd->add_option("--scenario", scenario_choice, "1, 2, 3, 4 or all (default: all)");
+  auto* results_option = simulate_cmd->add_option(
+      "--results", simulate.results,
+      "results.json of furuta identify: its LSMI estimate and SIVIA hull as the parameters");
+  results_option->check(CLI::ExistingFile);
+  simulate_cmd
+      ->add_flag("--truth", simulate.truth,
+                 "The simulated rig's truth as point parameters (the default without --results)")
+      ->excludes(results_option);
+  simulate_cmd->add_option("--relative", simulate.relative_pct,
+                           "With the truth: also the truth +- this percent as interval parameters");
+  simulate_cmd->add_option("--seconds", simulate.seconds,
+                           "Each scenario's duration [s] (default: the paper's 4)");
+  simulate_cmd->add_option("-o,--output", simulate.output_dir, "Directory for results and figures");
+
+  furuta::app::ProcessLogsOptions process_logs;
+  process_logs.config_path = furuta::config::default_rig_config_path();
+  CLI::App* process_logs_cmd = app.add_subcommand(
+      "process-logs",
+      "Identify the complete session logs in a directory as [automation] groups them; move each "
+      "to done/ or failed/ (what furuta-identify.service runs)");
+  process_logs_cmd->add_option("DIR", process_logs.logs_dir,
+                               "Logs directory (default: the configuration's [daemon] logs_dir)");
+  process_logs_cmd->add_option("--config", process_logs.config_path, "Rig configuration (TOML)")
+      ->check(CLI::ExistingFile);
+  process_logs_cmd->add_option(
+      "-o,--identifications", process_logs.identifications_dir,
+      "Where identifications go (default: [automation] identifications_dir)");
+  process_logs_cmd->add_flag("--watch", process_logs.watch,
+                             "Keep watching: a pass whenever a log lands (machines without "
+                             "systemd)");
+
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -138,7 +185,28 @@ int main(int argc, char** argv) {
       return furuta::app::run_replay_command(log_path, replay_config, std::cout, std::cerr);
     }
     if (*devices_cmd) return furuta::app::run_devices_command(devices, std::cout, std::cerr);
+    if (*process_logs_cmd) {
+      return furuta::app::run_process_logs_command(process_logs, std::cout, std::cerr);
+    }
     if (*identify_cmd) return furuta::app::run_identify_command(identify, std::cout, std::cerr);
+    if (*simulate_cmd) {
+      if (scenario_choice != "all") {
+        std::size_t used = 0;
+        int n = 0;
+        try {
+          n = std::stoi(scenario_choice, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used != scenario_choice.size() || scenario_choice.empty()) {
+          std::cerr << "furuta simulate: --scenario " << scenario_choice
+                    << ": expected 1, 2, 3, 4 or all\n";
+          return 2;
+        }
+        simulate.scenarios.push_back(n);
+      }
+      return furuta::app::run_simulate_command(simulate, std::cout, std::cerr);
+    }
   } catch (const furuta::config::ConfigError& e) {
     std::cerr << "furuta: " << e.what() << "\n";
     return 2;

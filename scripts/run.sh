@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Installs what is needed, builds, and runs the main job on the simulated rig: a bang-bang session
-# through the daemon's loop (virtual time), its log summarised, and its USB traffic replayed.
+# Installs what is needed, builds, and runs the main job on the simulated rig: two bang-bang
+# sessions and one validation session through the daemon's loop (virtual time), then the pass the
+# identification trigger runs when logs land (furuta-identify.path -> furuta process-logs), which
+# identifies them as config/rig.toml's [automation] says and writes the report.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -9,14 +11,26 @@ cmake --preset release
 cmake --build --preset release --parallel "$(nproc)"
 
 furuta=./build/release/app/furuta
-logs="${FURUTA_OUT:-out}/logs"
+# A directory of its own per run: the trigger takes the oldest pending logs first, and the report
+# must come from the sessions just run, not from a batch left over by an earlier run.
+run="${FURUTA_OUT:-out}/$(date -u +%Y-%m-%dT%H-%M-%SZ)"
+logs="$run/logs"
 mkdir -p "$logs"
-count_logs() { find "$logs" -maxdepth 1 -name '*.lcmlog' | wc -l; }
-before=$(count_logs)
-"$furuta" run --config config/rig.toml --sim --virtual-time --logs-dir "$logs" --lcm-url memq:// \
-  --label bang-bang "$@"
-[ "$(count_logs)" -gt "$before" ] || { echo "run.sh: no new log" >&2; exit 1; }
-log=$(ls -t "$logs"/*.lcmlog | head -n 1)
-"$furuta" log info "$log"
-"$furuta" replay "$log"
-"$furuta" log export-csv "$log" -o "${log%.lcmlog}.csv"
+session() {
+  "$furuta" run --config config/rig.toml --sim --virtual-time --logs-dir "$logs" \
+    --lcm-url memq:// "$@"
+}
+session --label bang-bang --seed 1
+session --label bang-bang --seed 2
+session --label validation --seed 3
+
+"$furuta" process-logs "$logs" --config config/rig.toml -o "$run/identifications" |
+  tee "$run/process-logs.txt"
+report=$(sed -n 's/^report: //p' "$run/process-logs.txt" | tail -n 1)
+if [ -z "$report" ] || [ ! -f "$report" ]; then
+  echo "run.sh: the trigger wrote no report (see $run/process-logs.txt)" >&2
+  exit 1
+fi
+ln -sfn "$(basename "$run")" "${FURUTA_OUT:-out}/latest"
+echo
+echo "report: $(realpath "$report")"

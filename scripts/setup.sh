@@ -17,6 +17,10 @@ packages=(
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libsystemd-dev systemd
   # tests: network namespaces for LCM over UDP multicast
   iproute2
+  # tests: the HTML report is opened in headless Chromium (tests/report)
+  chromium
+  # packaging: cpack -G DEB, dpkg-shlibdeps for the package's dependencies (scripts/build_deb.sh)
+  dpkg-dev file
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # benchmarks: the LP bound of the seven-unknown problem (bench/sivia_lp_hull)

@@ -37,6 +37,10 @@ class Section {
                    node ? line_of(node) : line_);
   }
   bool present() const { return table_ != nullptr; }
+  // For errors about a key's value found valid on its own: points at its line when it is there.
+  const toml::node* node(const std::string& key) const {
+    return table_ ? table_->get(key) : nullptr;
+  }
   bool has(const std::string& key) const { return table_ && table_->contains(key); }
 
   double number(const std::string& key, double fallback,
@@ -139,6 +143,26 @@ class Section {
         list += list.empty() ? name : std::string(", ") + name;
       }
       if (!known) fail(key, node, "'" + value + "' is not one of: " + list);
+      if (std::find(out.begin(), out.end(), value) != out.end()) {
+        fail(key, node, "'" + value + "' is given twice");
+      }
+      out.push_back(value);
+    }
+    return out;
+  }
+  // An array of free-form names (labels): each non-empty, no repeats.
+  std::vector<std::string> names(const std::string& key, const std::vector<std::string>& fallback) {
+    used_.insert(key);
+    const toml::node* node = table_ ? table_->get(key) : nullptr;
+    if (!node) return fallback;
+    const toml::array* a = node->as_array();
+    if (!a) fail(key, node, "must be an array of strings");
+    std::vector<std::string> out;
+    for (const toml::node& e : *a) {
+      const auto s = e.as_string();
+      if (!s) fail(key, node, "must be an array of strings");
+      const std::string value = s->get();
+      if (value.empty()) fail(key, node, "names must not be empty");
       if (std::find(out.begin(), out.end(), value) != out.end()) {
         fail(key, node, "'" + value + "' is given twice");
       }
@@ -475,6 +499,33 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     sc.ddq1_bound = s.numbers("ddq1_bound", sc.ddq1_bound, non_negative, ">= 0");
     sc.ddq2_bound = s.numbers("ddq2_bound", sc.ddq2_bound, non_negative, ">= 0");
     sc.tau_bound = s.numbers("tau_bound", sc.tau_bound, non_negative, ">= 0");
+    s.reject_unknown_keys();
+  }
+
+  {
+    Section s = top.child("automation");
+    AutomationConfig& ac = c.automation;
+    ac.fit_labels = s.names("fit_labels", ac.fit_labels);
+    if (ac.fit_labels.empty()) s.fail("fit_labels", nullptr, "must name at least one label");
+    ac.fit_sessions = static_cast<int>(s.integer(
+        "fit_sessions", ac.fit_sessions, [](std::int64_t v) { return v >= 1 && v <= 100; },
+        "in [1, 100]"));
+    ac.validation_label = s.text("validation_label", ac.validation_label);
+    // A session cannot be both fitted and held out: the validation would not be independent.
+    if (std::find(ac.fit_labels.begin(), ac.fit_labels.end(), ac.validation_label) !=
+        ac.fit_labels.end()) {
+      s.fail("validation_label", s.node("validation_label"),
+             "'" + ac.validation_label + "' is also one of fit_labels");
+    }
+    ac.sivia = s.boolean("sivia", ac.sivia);
+    ac.simulate = s.boolean("simulate", ac.simulate);
+    ac.simulate_seconds = s.number(
+        "simulate_seconds", ac.simulate_seconds, [](double v) { return v >= 0.01 && v <= 60; },
+        "in [0.01, 60]");
+    ac.identifications_dir = s.text("identifications_dir", ac.identifications_dir);
+    if (ac.identifications_dir.empty()) {
+      s.fail("identifications_dir", s.node("identifications_dir"), "must not be empty");
+    }
     s.reject_unknown_keys();
   }
 

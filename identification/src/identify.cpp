@@ -10,6 +10,8 @@
 #include <memory>
 #include <sstream>
 
+#include "furuta/identification/guaranteed.hpp"
+
 namespace furuta::identification {
 
 Identification identify(const std::vector<RawExperiment>& experiments,
@@ -231,17 +233,45 @@ std::string results_json(const Identification& id, const std::vector<InputFile>&
 
 namespace {
 
-// A small line plot: each series a polyline; optional band (lower, upper) drawn under it.
+// A small line plot: each series a polyline, each band (lower, upper) filled under them.
 struct Trace {
   const std::vector<double>* y;
   const char* colour;
   const char* label;
 };
 
+struct Band {
+  std::vector<double> lo, hi;
+  const char* colour;
+};
+
+// Titles carry experiment names, which come from file names and session labels.
+std::string xml_text(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
 std::string svg_panel(double x0, double y0, double width, double height, const std::string& title,
                       const std::vector<double>& t, const std::vector<Trace>& traces,
-                      const std::vector<double>* band_lo = nullptr,
-                      const std::vector<double>* band_hi = nullptr) {
+                      const std::vector<Band>& bands = {}) {
   double lo = 0, hi = 0;
   bool first = true;
   for (const Trace& tr : traces) {
@@ -252,9 +282,9 @@ std::string svg_panel(double x0, double y0, double width, double height, const s
       first = false;
     }
   }
-  if (band_lo && band_hi) {
-    for (double v : *band_lo) lo = std::min(lo, v);
-    for (double v : *band_hi) hi = std::max(hi, v);
+  for (const Band& band : bands) {
+    for (double v : band.lo) lo = std::min(lo, v);
+    for (double v : band.hi) hi = std::max(hi, v);
   }
   if (hi <= lo) hi = lo + 1;
   const double t0 = t.empty() ? 0 : t.front();
@@ -265,16 +295,20 @@ std::string svg_panel(double x0, double y0, double width, double height, const s
   s << std::fixed << std::setprecision(1);
   s << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << width << "\" height=\"" << height
     << "\" fill=\"none\" stroke=\"#999\"/>\n";
-  s << "<text x=\"" << x0 << "\" y=\"" << y0 - 6 << "\" font-size=\"13\">" << title << "</text>\n";
+  s << "<text x=\"" << x0 << "\" y=\"" << y0 - 6 << "\" font-size=\"13\">" << xml_text(title)
+    << "</text>\n";
   s << "<text x=\"" << x0 - 4 << "\" y=\"" << y0 + 10 << "\" font-size=\"10\" text-anchor=\"end\">"
     << std::setprecision(3) << hi << "</text>\n";
   s << "<text x=\"" << x0 - 4 << "\" y=\"" << y0 + height << "\" font-size=\"10\" "
     << "text-anchor=\"end\">" << lo << "</text>\n"
     << std::setprecision(1);
-  if (band_lo && band_hi && !t.empty()) {
-    s << "<polygon fill=\"#f4c7a1\" stroke=\"none\" points=\"";
-    for (std::size_t i = 0; i < t.size(); ++i) s << X(t[i]) << "," << Y((*band_hi)[i]) << " ";
-    for (std::size_t i = t.size(); i-- > 0;) s << X(t[i]) << "," << Y((*band_lo)[i]) << " ";
+  for (const Band& band : bands) {
+    const std::size_t n = std::min({t.size(), band.lo.size(), band.hi.size()});
+    if (n == 0) continue;
+    s << "<polygon class=\"band\" fill=\"" << band.colour
+      << "\" fill-opacity=\"0.3\" stroke=\"none\" points=\"";
+    for (std::size_t i = 0; i < n; ++i) s << X(t[i]) << "," << Y(band.hi[i]) << " ";
+    for (std::size_t i = n; i-- > 0;) s << X(t[i]) << "," << Y(band.lo[i]) << " ";
     s << "\"/>\n";
   }
   double legend_x = x0 + width - 160;
@@ -285,10 +319,22 @@ std::string svg_panel(double x0, double y0, double width, double height, const s
     }
     s << "\"/>\n";
     s << "<text x=\"" << legend_x << "\" y=\"" << y0 + 14 << "\" font-size=\"11\" fill=\""
-      << tr.colour << "\">" << tr.label << "</text>\n";
+      << tr.colour << "\">" << xml_text(tr.label) << "</text>\n";
     legend_x += 80;
   }
   return s.str();
+}
+
+// value +- (absolute + relative |value|): the interval SIVIA gives each sample.
+Band bound_band(const std::vector<double>& value, const ChannelErrorBound& bound,
+                const char* colour) {
+  Band band{value, value, colour};
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    const double half_width = bound.absolute + bound.relative * std::abs(value[i]);
+    band.lo[i] -= half_width;
+    band.hi[i] += half_width;
+  }
+  return band;
 }
 
 std::string svg_document(double width, double height, const std::string& body) {
@@ -301,29 +347,49 @@ std::string svg_document(double width, double height, const std::string& body) {
 
 }  // namespace
 
-std::string svg_signals(const RawExperiment& raw, const JointSeries& p,
-                        double angle_resolution_rad) {
-  // Bands: the encoders' quantisation on the angles; the torque's from the duty's 1/255 steps.
-  std::vector<double> q2_lo(raw.q2.size()), q2_hi(raw.q2.size());
-  for (std::size_t i = 0; i < raw.q2.size(); ++i) {
-    q2_lo[i] = raw.q2[i] - angle_resolution_rad;
-    q2_hi[i] = raw.q2[i] + angle_resolution_rad;
-  }
+std::string svg_signals(const RawExperiment& raw, const JointSeries& p, double angle_resolution_rad,
+                        const DataErrorBounds* bounds) {
+  const char* arm = "#1f4e9c";
+  const char* pendulum = "#b03a2e";
   const double W = 900, H = 170, left = 70;
   std::string body;
   double y = 30;
-  body +=
-      svg_panel(left, y, W - left - 20, H - 40, p.name + ": angles [rad] (band: quantisation)",
-                p.t_s, {{&raw.q1, "#1f4e9c", "q1"}, {&raw.q2, "#b03a2e", "q2"}}, &q2_lo, &q2_hi);
-  y += H;
-  body += svg_panel(left, y, W - left - 20, H - 40, "velocities [rad/s]", p.t_s,
-                    {{&p.dq1, "#1f4e9c", "dq1"}, {&p.dq2, "#b03a2e", "dq2"}});
-  y += H;
-  body += svg_panel(left, y, W - left - 20, H - 40, "accelerations [rad/s^2]", p.t_s,
-                    {{&p.ddq1, "#1f4e9c", "ddq1"}, {&p.ddq2, "#b03a2e", "ddq2"}});
-  y += H;
-  body += svg_panel(left, y, W - left - 20, H - 40, "motor torque at the arm [N m]", p.t_s,
-                    {{&p.tau, "#222", "tau"}});
+  if (bounds == nullptr) {
+    // The encoders' quantisation on the pendulum angle: all that is known without [sivia].
+    ChannelErrorBound quantisation{angle_resolution_rad, 0};
+    body +=
+        svg_panel(left, y, W - left - 20, H - 40, p.name + ": angles [rad] (band: quantisation)",
+                  p.t_s, {{&raw.q1, arm, "q1"}, {&raw.q2, pendulum, "q2"}},
+                  {bound_band(raw.q2, quantisation, "#f4c7a1")});
+    y += H;
+    body += svg_panel(left, y, W - left - 20, H - 40, "velocities [rad/s]", p.t_s,
+                      {{&p.dq1, arm, "dq1"}, {&p.dq2, pendulum, "dq2"}});
+    y += H;
+    body += svg_panel(left, y, W - left - 20, H - 40, "accelerations [rad/s^2]", p.t_s,
+                      {{&p.ddq1, arm, "ddq1"}, {&p.ddq2, pendulum, "ddq2"}});
+    y += H;
+    body += svg_panel(left, y, W - left - 20, H - 40, "motor torque at the arm [N m]", p.t_s,
+                      {{&p.tau, "#222", "tau"}});
+  } else {
+    // The data boxes SIVIA works with: the preprocessed value +- its bound, per channel.
+    const std::string note = " (bands: data error bounds)";
+    body += svg_panel(left, y, W - left - 20, H - 40, p.name + ": angles [rad]" + note, p.t_s,
+                      {{&raw.q1, arm, "q1"}, {&raw.q2, pendulum, "q2"}},
+                      {bound_band(p.q2, bounds->q2, pendulum)});
+    y += H;
+    body +=
+        svg_panel(left, y, W - left - 20, H - 40, "velocities [rad/s]" + note, p.t_s,
+                  {{&p.dq1, arm, "dq1"}, {&p.dq2, pendulum, "dq2"}},
+                  {bound_band(p.dq1, bounds->dq1, arm), bound_band(p.dq2, bounds->dq2, pendulum)});
+    y += H;
+    body += svg_panel(
+        left, y, W - left - 20, H - 40, "accelerations [rad/s^2]" + note, p.t_s,
+        {{&p.ddq1, arm, "ddq1"}, {&p.ddq2, pendulum, "ddq2"}},
+        {bound_band(p.ddq1, bounds->ddq1, arm), bound_band(p.ddq2, bounds->ddq2, pendulum)});
+    y += H;
+    body += svg_panel(left, y, W - left - 20, H - 40, "motor torque at the arm [N m]" + note, p.t_s,
+                      {{&p.tau, "#222", "tau"}}, {bound_band(p.tau, bounds->tau, "#222")});
+  }
   return svg_document(W, y + H - 20, body);
 }
 

@@ -130,8 +130,8 @@ TEST_F(SimulatedTruth, TheCommandWritesTableResultsAndFigures) {
   ASSERT_EQ(run_identify_command(options, out, err), 0) << err.str();
   EXPECT_NE(out.str().find("truth"), std::string::npos) << out.str();
   EXPECT_NE(out.str().find("held-out torque"), std::string::npos);
-  for (const char* name :
-       {"results.json", "table.txt", "signals_1.svg", "signals_2.svg", "torque_validation.svg"}) {
+  for (const char* name : {"results.json", "table.txt", "signals_1.svg", "signals_2.svg",
+                           "torque_validation.svg", "report.html"}) {
     EXPECT_TRUE(fs::exists(out_dir.path() / name)) << name;
   }
   std::ifstream json(out_dir.path() / "results.json");

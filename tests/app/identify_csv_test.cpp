@@ -123,8 +123,8 @@ TEST_F(IdentifyCsv, VoltageRigWithoutAConfigurationWritesTableResultsAndFigures)
   EXPECT_NE(out_.str().find("all experiments"), std::string::npos) << out_.str();
   EXPECT_NE(out_.str().find("held-out torque on c.csv"), std::string::npos) << out_.str();
   EXPECT_EQ(out_.str().find("truth"), std::string::npos);  // no simulation behind a CSV
-  for (const char* name :
-       {"results.json", "table.txt", "signals_1.svg", "signals_2.svg", "torque_validation.svg"}) {
+  for (const char* name : {"results.json", "table.txt", "signals_1.svg", "signals_2.svg",
+                           "torque_validation.svg", "report.html"}) {
     EXPECT_TRUE(fs::exists(options_.output_dir / name)) << name;
   }
   const std::string json = read(options_.output_dir / "results.json");

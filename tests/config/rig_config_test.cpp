@@ -124,3 +124,57 @@ TEST(RigConfig, IdentificationSectionIsCheckedAgainstTheSamplePeriod) {
 
 }  // namespace
 }  // namespace furuta::config
+
+namespace furuta::config {
+namespace {
+
+TEST(RigConfig, AutomationSectionSaysWhichSessionsFormAnIdentification) {
+  const RigConfig shipped = load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  EXPECT_EQ(shipped.automation.fit_labels, std::vector<std::string>{"bang-bang"});
+  EXPECT_EQ(shipped.automation.fit_sessions, 2);
+  EXPECT_EQ(shipped.automation.validation_label, "validation");
+  EXPECT_EQ(shipped.automation.identifications_dir, "/var/lib/furuta/identifications");
+
+  const RigConfig c = parse_rig_config(
+      "[automation]\nfit_labels = [\"a\", \"b\"]\nfit_sessions = 3\nvalidation_label = \"\"\n"
+      "sivia = false\nsimulate = false\nsimulate_seconds = 0.5\nidentifications_dir = \"ids\"\n",
+      "rig.toml");
+  EXPECT_EQ(c.automation.fit_labels, (std::vector<std::string>{"a", "b"}));
+  EXPECT_EQ(c.automation.fit_sessions, 3);
+  EXPECT_TRUE(c.automation.validation_label.empty());
+  EXPECT_FALSE(c.automation.sivia);
+  EXPECT_FALSE(c.automation.simulate);
+  EXPECT_EQ(c.automation.simulate_seconds, 0.5);
+  EXPECT_EQ(c.automation.identifications_dir, "ids");
+}
+
+TEST(RigConfig, AutomationErrorsNameLineAndField) {
+  const ConfigError both =
+      error_of("[automation]\nfit_labels = [\"x\"]\n\nvalidation_label = \"x\"\n");
+  EXPECT_EQ(both.field(), "automation.validation_label");
+  EXPECT_EQ(both.line(), 4);
+  EXPECT_NE(std::string(both.what()).find("also one of fit_labels"), std::string::npos);
+
+  const ConfigError none = error_of("[automation]\nfit_labels = []\n");
+  EXPECT_EQ(none.field(), "automation.fit_labels");
+  EXPECT_NE(std::string(none.what()).find("at least one label"), std::string::npos);
+
+  const ConfigError twice = error_of("[automation]\n\nfit_labels = [\"a\", \"a\"]\n");
+  EXPECT_EQ(twice.line(), 3);
+  EXPECT_NE(std::string(twice.what()).find("'a' is given twice"), std::string::npos);
+
+  EXPECT_EQ(error_of("[automation]\nfit_labels = [\"\"]\n").field(), "automation.fit_labels");
+  EXPECT_EQ(error_of("[automation]\nfit_labels = [1]\n").field(), "automation.fit_labels");
+  EXPECT_EQ(error_of("[automation]\nfit_sessions = 0\n").field(), "automation.fit_sessions");
+  EXPECT_EQ(error_of("[automation]\nsivia = \"yes\"\n").field(), "automation.sivia");
+  EXPECT_EQ(error_of("[automation]\nsimulate_seconds = 0\n").field(),
+            "automation.simulate_seconds");
+  EXPECT_EQ(error_of("[automation]\nidentifications_dir = \"\"\n").field(),
+            "automation.identifications_dir");
+  const ConfigError typo = error_of("[automation]\nfit_label = [\"a\"]\n");
+  EXPECT_EQ(typo.field(), "automation.fit_label");
+  EXPECT_EQ(typo.line(), 2);
+}
+
+}  // namespace
+}  // namespace furuta::config

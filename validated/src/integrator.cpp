@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -34,10 +35,10 @@ namespace {
 using Matrix = Eigen::MatrixXd;
 constexpr std::size_t kMaxDimension = 16;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// The parallelepiped frame is kept while it inflates the new errors at most this much (else the
-// QR frame): it carries r without wrapping, but maps the errors through an ill-conditioned
-// frame when the flow contracts some directions much faster than others (stiff parts).
-constexpr double kMaxInflation = 20.0;
+// Components whose exact part is below this fraction of the widest one are left out of the
+// excess ratio: a component that the flow contracts (the damped arm speed) has a tiny exact
+// part, and its error part's ratio to it says nothing about the set.
+constexpr double kExcessFloor = 0.05;
 
 // A square interval matrix, row-major.
 struct IMatrix {
@@ -218,13 +219,13 @@ void centre_coefficients(const Tape& tape, const std::vector<double>& m, int ord
 
 // The second-order term over the set m + C r0 + B r inside the box y: second[i n + v] = half the
 // second derivative of x_[i]_v along delta = C rho + e (rho in r0, e in B r) over y, i = 0..order.
-template <std::size_t N>
-void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
-                    const std::vector<Interval>& r0, const std::vector<Interval>& br, int order,
-                    std::vector<Interval>& second) {
-  std::vector<Jet2<N>> x0(N);
+// The jets' x0: y over the box, the direction's linear form (row v of c) in rho, e = br.
+template <class Jet, std::size_t N>
+std::vector<Jet> direction_jets(const Box& y, const Matrix& c, const std::vector<Interval>& r0,
+                                const std::vector<Interval>& br) {
+  std::vector<Jet> x0(N);
   for (std::size_t v = 0; v < N; ++v) {
-    x0[v] = Jet2<N>(y[v]);
+    x0[v] = Jet(y[v]);
     for (std::size_t a = 0; a < N; ++a) {
       x0[v].g[a] = Interval(c(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(a)));
     }
@@ -232,32 +233,57 @@ void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
     x0[v].rho = r0.data();
     x0[v].changed();
   }
-  TaylorRunner<Jet2<N>> runner;
-  runner.run(tape, std::span<const Jet2<N>>(x0), order);
+  return x0;
+}
+
+// The second-order term over the set m + C r0 + B r inside the box y: second[i n + v] = half the
+// second derivative of x_[i]_v along delta = C rho + e (rho in r0, e in B r) over y, i = 0..order.
+// Both jets enclose the same quantity: the low orders, where the terms are largest, from the
+// quadratic forms (tight, about 6x the cost per operation), the others from Jet2.
+template <std::size_t N>
+void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
+                    const std::vector<Interval>& r0, const std::vector<Interval>& br, int order,
+                    int quadratic_order, std::vector<Interval>& second) {
   const auto count = static_cast<std::size_t>(order) + 1;
   second.resize(count * N);
-  for (std::size_t i = 0; i < count; ++i) {
-    for (std::size_t v = 0; v < N; ++v)
-      second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
+  const int low = std::min(order, quadratic_order);
+  if (low < order) {
+    const std::vector<Jet2<N>> x0 = direction_jets<Jet2<N>, N>(y, c, r0, br);
+    TaylorRunner<Jet2<N>> runner;
+    runner.run(tape, std::span<const Jet2<N>>(x0), order);
+    for (std::size_t i = static_cast<std::size_t>(low) + 1; i < count; ++i) {
+      for (std::size_t v = 0; v < N; ++v)
+        second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
+    }
+  }
+  if (low >= 0) {
+    const std::vector<QuadJet<N>> x0 = direction_jets<QuadJet<N>, N>(y, c, r0, br);
+    TaylorRunner<QuadJet<N>> runner;
+    runner.run(tape, std::span<const QuadJet<N>>(x0), low);
+    for (std::size_t i = 0; i <= static_cast<std::size_t>(low); ++i) {
+      for (std::size_t v = 0; v < N; ++v)
+        second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).range();
+    }
   }
 }
 
 template <std::size_t... Is>
 void second_order_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
                            const Matrix& c, const std::vector<Interval>& r0,
-                           const std::vector<Interval>& br, int order,
+                           const std::vector<Interval>& br, int order, int quadratic_order,
                            std::vector<Interval>& second) {
   const std::size_t n = y.size();
-  (void)((n == Is + 1 ? (second_order_n<Is + 1>(tape, y, c, r0, br, order, second), true)
-                      : false) ||
+  (void)((n == Is + 1
+              ? (second_order_n<Is + 1>(tape, y, c, r0, br, order, quadratic_order, second), true)
+              : false) ||
          ...);
 }
 
 void second_order_coefficients(const Tape& tape, const Box& y, const Matrix& c,
                                const std::vector<Interval>& r0, const std::vector<Interval>& br,
-                               int order, std::vector<Interval>& second) {
+                               int order, int quadratic_order, std::vector<Interval>& second) {
   second_order_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, y, c, r0, br, order,
-                        second);
+                        quadratic_order, second);
 }
 
 // ---- A priori enclosure -------------------------------------------------------------------------
@@ -330,12 +356,24 @@ void validate(const std::vector<Tape>& tapes, const std::vector<double>& switche
     throw std::invalid_argument("options.h_min, h_max, h_initial: 0 < h_min <= h_initial, h_max");
   }
   if (!(o.max_width > 0.0)) throw std::invalid_argument("options.max_width: > 0");
+  if (!(o.max_excess > 0.0)) throw std::invalid_argument("options.max_excess: > 0");
+  if (!(o.max_inflation >= 1.0)) throw std::invalid_argument("options.max_inflation: >= 1");
+  if (o.quadratic_order < -1) throw std::invalid_argument("options.quadratic_order: >= -1");
   if (!std::isfinite(o.t_start) || !std::isfinite(o.t_end) || o.t_end < o.t_start) {
     throw std::invalid_argument("options.t_start, t_end: finite, t_start <= t_end");
   }
 }
 
 }  // namespace
+
+double excess_ratio(const std::vector<double>& exact, const std::vector<double>& error) {
+  const double largest = exact.empty() ? 0.0 : *std::max_element(exact.begin(), exact.end());
+  double ratio = 0.0;
+  for (std::size_t v = 0; v < exact.size() && v < error.size(); ++v) {
+    if (exact[v] > kExcessFloor * largest) ratio = std::max(ratio, error[v] / exact[v]);
+  }
+  return ratio;
+}
 
 const char* to_string(IntegrationResult::Status status) {
   switch (status) {
@@ -360,7 +398,8 @@ Box Tube::step_form(std::size_t index, const Interval& s) const {
   for (std::size_t i = k; i-- > 0;) {
     for (std::size_t e = 0; e < n * n; ++e) v.v[e] = v.v[e] * s + step.jacobian[i * n * n + e];
   }
-  const std::vector<Interval> linear0 = (v * from_point(n, step.c)) * r0;
+  const std::vector<Interval>& step_r0 = step.r0.empty() ? r0 : step.r0;
+  const std::vector<Interval> linear0 = (v * from_point(n, step.c)) * step_r0;
   const std::vector<Interval> linear = (v * from_point(n, step.b)) * step.r;
   const Interval s_k1 = pow(s, order + 1);
   Box out(n);
@@ -406,23 +445,36 @@ Box Tube::enclosure_over(double ta, double tb) const {
   return hull_box;
 }
 
-IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
-                                  const std::vector<double>& switches, const Box& x0,
-                                  const IntegratorOptions& options) {
-  validate(tapes, switches, x0, options);
+namespace {
+
+// Where a run stands at a step boundary: every solution from x0 = origin + rho, rho in r0, is at
+// time t in m + C rho + B r (for some point of r), and in the box x.
+struct Doubleton {
+  double t = 0.0;
+  std::vector<double> origin;
+  std::vector<Interval> r0;
+  std::vector<double> m;
+  Matrix c;
+  Matrix b;
+  std::vector<Interval> r;
+  Box x;
+  double h_next = 0.0;
+};
+
+// Integrates from `state` on, appending the steps to `tube` (which already covers
+// [tube.t_start, state.t]).
+IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>& switches,
+                      Tube tube, Doubleton state, const IntegratorOptions& options) {
   const auto started = std::chrono::steady_clock::now();
-  const std::size_t n = x0.size();
+  const std::size_t n = tube.dimension;
   const auto en = static_cast<Eigen::Index>(n);
   const int k = options.order;
   const auto uk = static_cast<std::size_t>(k);
   const double root = 1.0 / (k + 1);
 
   IntegrationResult result;
-  Tube& tube = result.tube;
-  tube.dimension = n;
-  tube.order = k;
-  tube.t_start = options.t_start;
-  tube.initial = x0;
+  result.tube = std::move(tube);
+  Tube& tube_out = result.tube;
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   };
@@ -434,20 +486,17 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
     return result;
   };
 
-  // The doubleton: every solution at t is in m + C r0 + B r, and in the box x.
-  std::vector<double> m = x0.mid();
-  tube.r0.resize(n);
-  for (std::size_t v = 0; v < n; ++v) tube.r0[v] = x0[v] - Interval(m[v]);
-  const std::vector<Interval>& r0 = tube.r0;
-  Matrix c = Matrix::Identity(en, en);
-  Matrix b = Matrix::Identity(en, en);
-  std::vector<Interval> r(n, Interval(0.0));
-  Box x = x0;
+  const std::vector<double> origin = std::move(state.origin);
+  const std::vector<Interval> r0 = std::move(state.r0);
+  std::vector<double> m = std::move(state.m);
+  Matrix c = std::move(state.c);
+  Matrix b = std::move(state.b);
+  std::vector<Interval> r = std::move(state.r);
+  Box x = std::move(state.x);
 
   TaylorRunner<Interval> runner;
-  std::vector<Interval> jac;
-  double t = options.t_start;
-  double h_next = std::min(options.h_initial, options.h_max);
+  double t = state.t;
+  double h_next = state.h_next;
   while (t < options.t_end) {
     const std::size_t piece = piece_at(switches, t);
     const Tape& tape = tapes[piece];
@@ -514,6 +563,8 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
       step.b.assign(bt.data(), bt.data() + n * n);
     }
     step.r = r;
+    step.r0 = r0;
+    step.origin = origin;
     step.remainder = remainder_coefficient;
 
     // 3. Taylor coefficients at the centre m and their Jacobian V_[i](m) (thin: m is a point).
@@ -525,7 +576,7 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
     {
       Box y = x;
       for (std::size_t v = 0; v < n; ++v) y[v] = y[v] | Interval(m[v]);
-      second_order_coefficients(tape, y, c, r0, bi * r, k, step.second);
+      second_order_coefficients(tape, y, c, r0, bi * r, k, options.quadratic_order, step.second);
     }
     // z: the image of the centre, with the second-order term and the remainder.
     std::vector<Interval> z(n);
@@ -568,7 +619,7 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
     Lohner parallelepiped;
     Lohner qr;
     Lohner* chosen = nullptr;
-    if (kappa <= kMaxInflation) {
+    if (kappa <= options.max_inflation) {
       parallelepiped = lohner_candidate(p, p_inv, jb, r, rest);
       if (parallelepiped.valid) chosen = &parallelepiped;
     }
@@ -597,9 +648,10 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
 
     step.apriori = apriori;
     step.end = end;
-    tube.steps.push_back(std::move(step));
-    TubeStep& stored = tube.steps.back();
-    stored.over = intersect(tube.step_form(tube.steps.size() - 1, Interval(0.0, hi.hi())), apriori);
+    tube_out.steps.push_back(std::move(step));
+    TubeStep& stored = tube_out.steps.back();
+    stored.over =
+        intersect(tube_out.step_form(tube_out.steps.size() - 1, Interval(0.0, hi.hi())), apriori);
     ++result.steps;
     m = std::move(m_next);
     c = c_next;
@@ -618,6 +670,22 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
                     "enclosure width " + describe(width) + " > max_width " +
                         describe(options.max_width) + " at t = " + describe(t));
     }
+    // The error part against the part carried exactly (the image of r0): when it dominates, the
+    // set is no longer followed, only wrapped (a split run then bisects the box).
+    if (options.max_excess < kInf) {
+      std::vector<double> exact(n);
+      std::vector<double> error(n);
+      for (std::size_t v = 0; v < n; ++v) {
+        exact[v] = new0[v].width();
+        error[v] = new1[v].width();
+      }
+      const double ratio = excess_ratio(exact, error);
+      if (ratio > options.max_excess) {
+        return finish(IntegrationResult::Status::width_exceeded, t,
+                      "error part " + describe(ratio) + " x the exact part (max_excess " +
+                          describe(options.max_excess) + ") at t = " + describe(t));
+      }
+    }
     if (!capped) {
       const double grow =
           remainder_width > 0.0
@@ -628,6 +696,110 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
   }
   result.seconds = elapsed();
   return result;
+}
+
+// An interval enclosure of b^-1 (b invertible in practice: a QR or parallelepiped frame).
+std::optional<IMatrix> frame_inverse(const Matrix& b) {
+  const Matrix approx = b.partialPivLu().inverse();
+  if (!approx.allFinite()) return std::nullopt;
+  return inverse_enclosure(b, approx, 0.5);
+}
+
+}  // namespace
+
+IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
+                                  const std::vector<double>& switches, const Box& x0,
+                                  const IntegratorOptions& options) {
+  validate(tapes, switches, x0, options);
+  const std::size_t n = x0.size();
+  const auto en = static_cast<Eigen::Index>(n);
+  Tube tube;
+  tube.dimension = n;
+  tube.order = options.order;
+  tube.t_start = options.t_start;
+  tube.initial = x0;
+  Doubleton start;
+  start.t = options.t_start;
+  start.origin = x0.mid();
+  start.r0.resize(n);
+  for (std::size_t v = 0; v < n; ++v) start.r0[v] = x0[v] - Interval(start.origin[v]);
+  tube.r0 = start.r0;
+  start.m = start.origin;
+  start.c = Matrix::Identity(en, en);
+  start.b = Matrix::Identity(en, en);
+  start.r.assign(n, Interval(0.0));
+  start.x = x0;
+  start.h_next = std::min(options.h_initial, options.h_max);
+  return run(tapes, switches, std::move(tube), std::move(start), options);
+}
+
+IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
+                                    const std::vector<double>& switches, const Tube& tube,
+                                    std::size_t step, const Box& piece,
+                                    const IntegratorOptions& options) {
+  validate(tapes, switches, piece, options);
+  const std::size_t n = piece.size();
+  if (n != tube.dimension || !piece.is_subset(tube.initial)) {
+    throw std::invalid_argument("integrate_sub_box: the piece is not a sub-box of tube.initial");
+  }
+  if (step >= tube.steps.size()) throw std::invalid_argument("integrate_sub_box: no such step");
+  if (tube.order != options.order) throw std::invalid_argument("integrate_sub_box: order differs");
+  const TubeStep& at = tube.steps[step];
+  const auto en = static_cast<Eigen::Index>(n);
+
+  // The restart state: the doubleton of step `step` at its t0, re-centred on the piece. With
+  // o' = mid(piece) and rho' = x0 - o' = rho - (o' - o): m + C rho = (m + C (o' - o)) + C rho',
+  // the new centre's rounding goes to r through an enclosure of B^-1.
+  Doubleton state;
+  state.t = at.t0;
+  state.origin = piece.mid();
+  state.r0.resize(n);
+  state.c = Matrix(en, en);
+  state.b = Matrix(en, en);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      state.c(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = at.c[i * n + j];
+      state.b(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = at.b[i * n + j];
+    }
+  }
+  std::vector<Interval> shift(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    state.r0[v] = piece[v] - Interval(state.origin[v]);
+    shift[v] = Interval(state.origin[v]) - Interval(at.origin[v]);
+  }
+  const std::vector<Interval> moved = from_point(state.c) * shift;
+  std::vector<Interval> residual(n);
+  state.m.resize(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const Interval centre = at.centre[v] + moved[v];
+    state.m[v] = centre.mid();
+    residual[v] = centre - Interval(state.m[v]);
+  }
+  const std::optional<IMatrix> b_inv = frame_inverse(state.b);
+  if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
+  const std::vector<Interval> residual_r = *b_inv * residual;
+  state.r = at.r;
+  for (std::size_t v = 0; v < n; ++v) state.r[v] += residual_r[v];
+  // The box: the re-centred doubleton, inside the parent's box at t0.
+  const std::vector<Interval> part0 = from_point(state.c) * state.r0;
+  const std::vector<Interval> part1 = from_point(state.b) * state.r;
+  const Box& parent_box = step == 0 ? tube.initial : tube.steps[step - 1].end;
+  state.x = Box(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    state.x[v] = (Interval(state.m[v]) + part0[v] + part1[v]) & parent_box[v];
+  }
+  if (step == 0) state.x = intersect(state.x, piece);
+  state.h_next = std::min(at.h.hi(), options.h_max);
+
+  Tube prefix;
+  prefix.dimension = n;
+  prefix.order = tube.order;
+  prefix.t_start = tube.t_start;
+  prefix.initial = piece;
+  prefix.r0.resize(n);
+  for (std::size_t v = 0; v < n; ++v) prefix.r0[v] = piece[v] - Interval(state.origin[v]);
+  prefix.steps.assign(tube.steps.begin(), tube.steps.begin() + static_cast<std::ptrdiff_t>(step));
+  return run(tapes, switches, std::move(prefix), std::move(state), options);
 }
 
 }  // namespace furuta::validated

@@ -25,25 +25,41 @@ FurutaParameters FurutaParameters::around(const bridge::ModelParameters& p, doub
   return q;
 }
 
-FurutaDynamics::FurutaDynamics(const Interval& tau) : pieces_{InputPiece{0.0, tau}} {}
-
-FurutaDynamics::FurutaDynamics(std::vector<InputPiece> pieces) : pieces_(std::move(pieces)) {
-  if (pieces_.empty()) throw std::invalid_argument("FurutaDynamics: no input piece");
-  for (std::size_t i = 0; i < pieces_.size(); ++i) {
-    if (!std::isfinite(pieces_[i].t_start) || pieces_[i].tau.is_empty() ||
-        !pieces_[i].tau.is_bounded()) {
-      throw std::invalid_argument("FurutaDynamics: piece with a non-finite time or torque");
+std::vector<InputPiece> checked_pieces(std::vector<InputPiece> pieces) {
+  if (pieces.empty()) throw std::invalid_argument("Furuta dynamics: no input piece");
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    if (!std::isfinite(pieces[i].t_start) || pieces[i].tau.is_empty() ||
+        !pieces[i].tau.is_bounded()) {
+      throw std::invalid_argument("Furuta dynamics: piece with a non-finite time or torque");
     }
-    if (i > 0 && !(pieces_[i].t_start > pieces_[i - 1].t_start)) {
-      throw std::invalid_argument("FurutaDynamics: pieces not in increasing time order");
+    if (i > 0 && !(pieces[i].t_start > pieces[i - 1].t_start)) {
+      throw std::invalid_argument("Furuta dynamics: pieces not in increasing time order");
     }
   }
+  return pieces;
 }
 
-std::vector<double> FurutaDynamics::switch_times() const {
+std::vector<double> piece_switch_times(const std::vector<InputPiece>& pieces) {
   std::vector<double> times;
-  for (std::size_t i = 1; i < pieces_.size(); ++i) times.push_back(pieces_[i].t_start);
+  for (std::size_t i = 1; i < pieces.size(); ++i) times.push_back(pieces[i].t_start);
   return times;
+}
+
+FurutaDynamics::FurutaDynamics(const Interval& tau) : pieces_{InputPiece{0.0, tau}} {}
+
+FurutaDynamics::FurutaDynamics(std::vector<InputPiece> pieces)
+    : pieces_(checked_pieces(std::move(pieces))) {}
+
+FurutaStateDynamics::FurutaStateDynamics(const FurutaParameters& p, const Interval& tau)
+    : FurutaStateDynamics(p, std::vector<InputPiece>{InputPiece{0.0, tau}}) {}
+
+FurutaStateDynamics::FurutaStateDynamics(const FurutaParameters& p, std::vector<InputPiece> pieces)
+    : p_(p), pieces_(checked_pieces(std::move(pieces))) {
+  for (const Interval* v : {&p.mu1, &p.mu2, &p.mu3, &p.mu4, &p.mug, &p.fv1, &p.fv2}) {
+    if (v->is_empty() || !v->is_bounded()) {
+      throw std::invalid_argument("FurutaStateDynamics: empty or unbounded parameter");
+    }
+  }
 }
 
 Box FurutaDynamics::initial_box(const Box& state, const FurutaParameters& p) {

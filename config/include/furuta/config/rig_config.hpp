@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "furuta/firmware_bridge/encoder_geometry.hpp"
 #include "furuta/firmware_bridge/rig_model.hpp"
@@ -105,6 +106,20 @@ struct SiviaConfig {
   std::array<double, 2> tau_bound = {0.0, 0.0};
 };
 
+// [automation]: what the identification trigger (`furuta process-logs`, furuta-identify.path) does
+// with the session logs that are complete. Sessions are told apart by the label they were started
+// with (`--label`), as their start record carries it.
+struct AutomationConfig {
+  std::vector<std::string> fit_labels = {"bang-bang"};  // sessions fitted together
+  int fit_sessions = 2;  // how many (the oldest pending first) form one identification
+  // Plus the oldest pending session with this label, held out; empty: identify without one.
+  std::string validation_label = "validation";
+  bool sivia = true;     // guaranteed identification after the LSMI, with [sivia]'s settings
+  bool simulate = true;  // the paper's scenarios by guaranteed simulation (Table III)
+  double simulate_seconds = 4.0;  // each scenario's duration
+  std::string identifications_dir = "/var/lib/furuta/identifications";
+};
+
 struct ExcitationConfig {
   std::string profile = "bang_bang";
   double amplitude_duty = 0.3;
@@ -141,6 +156,7 @@ struct RigConfig {
   ExcitationConfig excitation;
   IdentificationConfig identification;
   SiviaConfig sivia;
+  AutomationConfig automation;
   std::string source_text;  // the file verbatim, so logs can carry it
   std::string source_name;
 };

@@ -56,10 +56,13 @@ struct InputFile {
 std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
                          const std::string& software_version, const std::string& more = "");
 
+struct DataErrorBounds;  // guaranteed.hpp
+
 // SVG figures: measured signals with their uncertainty bands (Fig. 2/3), measured vs predicted
-// torque on the held-out session (Fig. 5).
+// torque on the held-out session (Fig. 5). The bands are the data error bounds SIVIA uses when
+// given (every channel), else the pendulum encoder's quantisation.
 std::string svg_signals(const RawExperiment& raw, const JointSeries& processed,
-                        double angle_resolution_rad);
+                        double angle_resolution_rad, const DataErrorBounds* bounds = nullptr);
 std::string svg_torque_validation(const ValidationResult& validation);
 
 // Hex SHA-256 of a file (inputs are identified by content in results.json).

@@ -31,6 +31,20 @@ struct IntegratorOptions {
   double h_max = 0.5;        // the largest step
   double h_initial = 0.01;   // the first step tried
   double max_width = 1e3;    // an enclosure wider than this (any component) ends the run
+  // The run ends (width_exceeded) when excess_ratio() of the set (its error part B r against the
+  // part carried exactly, C r0) passes this: the tube then only grows (a split run bisects).
+  double max_excess = std::numeric_limits<double>::infinity();
+  // The parallelepiped frame is kept while it inflates the new errors at most this much (its
+  // Skeel condition number), else the QR frame. The parallelepiped carries r without wrapping
+  // (a rotation in an anisotropic metric stays exact: the pendulum); on a stiff flow (the Furuta
+  // arm, damped at about 150 /s) it maps each step's errors through an ill-conditioned frame and
+  // the tube grows much faster than with QR: use 1 there (QR unless the frame is diagonal).
+  double max_inflation = 20.0;
+  // The second-order term of the Taylor coefficients 0..quadratic_order is computed with
+  // QuadJet (its products of first-order forms kept as a quadratic form: tight where the field's
+  // terms cancel, ~6x the cost), the higher ones with Jet2 (-1: all). Both are sound; 2 gives the
+  // tightness of all orders at about half the cost on the Furuta model.
+  int quadratic_order = 2;
   double t_start = 0.0;
   double t_end = 1.0;
 };
@@ -49,6 +63,10 @@ struct TubeStep {
   std::vector<double> c;  // n x n, row-major
   std::vector<double> b;  // n x n, row-major
   std::vector<Interval> r;
+  // rho = x0 - origin lives in r0 (the doubleton's fixed box; a run restarted on a sub-box has
+  // its own from its restart on).
+  std::vector<Interval> r0;
+  std::vector<double> origin;
   // The Taylor form of the step: for s in [0, h], with V(s) = sum_i s^i V_i,
   //   x(t0 + s) in sum_i s^i (c_i + q_i) + V(s) C r0 + V(s) B r + s^(k+1) R   (i = 0..k),
   // c_i the Taylor coefficients at m, V_i their Jacobian there, q_i the second-order term (half
@@ -66,7 +84,7 @@ class Tube {
   int order = 0;
   double t_start = 0.0;
   Box initial;
-  std::vector<Interval> r0;  // initial minus its midpoint (the doubleton's fixed box)
+  std::vector<Interval> r0;  // initial minus its midpoint (for steps without their own r0)
   std::vector<TubeStep> steps;
 
   // The last time covered (t_start if no step).
@@ -98,6 +116,11 @@ struct IntegrationResult {
 
 const char* to_string(IntegrationResult::Status status);
 
+// How much the error part of a doubleton outgrows its exact part: the largest ratio of the
+// widths error[v] / exact[v] over the components whose exact width is at least 5 % of the
+// widest one (0 when all are 0).
+double excess_ratio(const std::vector<double>& exact, const std::vector<double>& error);
+
 // The integrator on recorded fields: tapes[k] is the field of piece k (switches.size() + 1 of
 // them; see ode.hpp for pieces). x0 has tapes' dimension (1..16), bounded non-empty components.
 // Invalid arguments throw std::invalid_argument; integration failures are a status.
@@ -105,9 +128,21 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
                                   const std::vector<double>& switches, const Box& x0,
                                   const IntegratorOptions& options);
 
-// Validated integration of a system (ode.hpp) from the box x0 over [t_start, t_end].
+// Continues `tube` (a run from tube.initial, same tapes, switches and order) for the solutions
+// from `piece`, a sub-box of tube.initial, from the start of tube.steps[step] on: the result's
+// tube holds copies of steps 0..step-1 (they enclose the piece's solutions as well), then its own
+// steps from the doubleton of step `step`, re-centred on the piece (every solution from x0 =
+// origin + rho is in m + C rho + B r, so a piece of r0 gives a doubleton of its own, whose
+// second-order terms shrink with the piece). options.t_start is ignored (tube.t_start holds).
+// std::invalid_argument for a piece outside tube.initial, a bad step or options.
+IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
+                                    const std::vector<double>& switches, const Tube& tube,
+                                    std::size_t step, const Box& piece,
+                                    const IntegratorOptions& options);
+
+// The fields of a system (ode.hpp), one tape per piece of its input.
 template <class System>
-IntegrationResult integrate(const System& system, const Box& x0, const IntegratorOptions& options) {
+std::vector<Tape> record_system(const System& system) {
   const std::vector<double> switches = switch_times(system);
   std::vector<Tape> tapes;
   for (std::size_t piece = 0; piece <= switches.size(); ++piece) {
@@ -115,7 +150,13 @@ IntegrationResult integrate(const System& system, const Box& x0, const Integrato
                                std::span<Recorder> dx) { evaluate_field(system, piece, x, dx); },
                            System::dimension));
   }
-  return integrate_tapes(tapes, switches, x0, options);
+  return tapes;
+}
+
+// Validated integration of a system (ode.hpp) from the box x0 over [t_start, t_end].
+template <class System>
+IntegrationResult integrate(const System& system, const Box& x0, const IntegratorOptions& options) {
+  return integrate_tapes(record_system(system), switch_times(system), x0, options);
 }
 
 }  // namespace furuta::validated

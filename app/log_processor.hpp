@@ -1,0 +1,57 @@
+#pragma once
+// The identification trigger: the session logs that are complete in a logs directory become
+// identifications without anyone asking. One pass is what furuta-identify.service runs when its
+// path unit sees the directory change; watch_logs is the same job in a loop, for machines without
+// systemd.
+//
+// Layout, for a logs directory L and an identifications directory I:
+//   L/<session>.lcmlog           complete logs, pending (L/.partial/ is the daemon's: never
+//   touched) L/done/<session>.lcmlog      identified (or nothing to identify: a label [automation]
+//   ignores) L/failed/<session>.lcmlog    with L/failed/<session>.reason.txt saying why I/<first
+//   fit session>/       one identification: results.json, report.html, batch.json, ...
+//
+// Crash safety: an identification is written into I/.tmp-<name>/ and renamed into place; a journal
+// (L/.commit) names it and its logs until they are all in done/. Whatever point a pass dies at,
+// the next one finds every log either pending (the stale temporary directory is removed and the
+// identification redone) or in done/ with its identification complete.
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "furuta/config/rig_config.hpp"
+
+namespace furuta::app {
+
+struct LogProcessorOptions {
+  std::filesystem::path logs_dir;
+  std::filesystem::path identifications_dir;
+  config::AutomationConfig automation;  // which sessions form one identification, and what it runs
+};
+
+struct ProcessingPass {
+  std::vector<std::filesystem::path> identifications;  // written by this pass, in place
+  int logs_done = 0;       // moved to done/ (identified, or nothing to identify)
+  int logs_failed = 0;     // moved to failed/, with their reason
+  int logs_waiting = 0;    // left pending: their identification is not complete yet
+  bool recovered = false;  // a crashed pass's work was finished or undone first
+};
+
+// One pass: takes the directory's lock (a second pass waits for the first), finishes or undoes
+// what a crashed pass left, then moves unreadable, damaged and cut-short logs to failed/ and
+// identifies every complete batch ([automation]), until a listing finds nothing more to do (logs
+// that landed meanwhile are taken too: a trigger may have been lost while this pass ran).
+// Throws std::runtime_error when the directories cannot be created, locked or read.
+ProcessingPass process_logs(const LogProcessorOptions& options, std::ostream& out,
+                            std::ostream& err);
+
+// Passes until keep_going() turns false: one at once, then one whenever a log lands (inotify), and
+// one every rescan_interval whatever happened (an event can be missed; a pass costs nothing when
+// there is nothing to do). keep_going is asked at least every 250 ms.
+void watch_logs(const LogProcessorOptions& options, const std::function<bool()>& keep_going,
+                std::chrono::milliseconds rescan_interval, std::ostream& out, std::ostream& err);
+
+}  // namespace furuta::app

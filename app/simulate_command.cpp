@@ -1,0 +1,312 @@
+// `furuta simulate`: the paper's validation by guaranteed simulation (section IV.B): the four
+// scenarios measured on the simulated rig, tubes from point (LSMI) and interval (SIVIA)
+// parameters, coverage rates (Table III) and Fig. 6-style figures. `furuta identify --simulate`
+// runs the same after its fit.
+#include <unistd.h>
+
+#include <cctype>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <ostream>
+#include <sstream>
+
+#include "commands.hpp"
+#include "furuta/daemon/rig_connection.hpp"
+
+namespace furuta::app {
+
+namespace {
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+}
+
+// The parameter set's name as a file name part: "LSMI" -> "lsmi", "truth+-1%" -> "truth_pm1pct".
+std::string slug(const std::string& name) {
+  std::string out;
+  for (std::size_t i = 0; i < name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    if (std::isalnum(c)) {
+      out += static_cast<char>(std::tolower(c));
+    } else if (name.compare(i, 2, "+-") == 0) {
+      out += "_pm";
+      ++i;
+    } else if (c == '%') {
+      out += "pct";
+    } else if (c == '.') {
+      out += 'p';
+    } else if (out.empty() || out.back() != '_') {
+      out += '_';
+    }
+  }
+  return out.empty() ? "parameters" : out;
+}
+
+std::string json_number(double v) {
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+std::string parameters_json(const bridge::ModelParameters& p) {
+  return "{\"mu1\": " + json_number(p.mu1) + ", \"mu2\": " + json_number(p.mu2) +
+         ", \"mu3\": " + json_number(p.mu3) + ", \"mu4\": " + json_number(p.mu4) +
+         ", \"mug\": " + json_number(p.mug) + ", \"fv1\": " + json_number(p.fv1) +
+         ", \"fv2\": " + json_number(p.fv2) + "}";
+}
+
+std::string percent_text(double pct) {
+  std::ostringstream s;
+  s << pct;
+  return s.str();
+}
+
+// --- results.json of `furuta identify` ---
+
+class ResultsFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+double finite_number(const nlohmann::json& object, const std::string& key,
+                     const std::string& where) {
+  const auto it = object.find(key);
+  if (it == object.end()) throw ResultsFileError(where + "." + key + ": missing");
+  if (!it->is_number() || !std::isfinite(it->get<double>())) {
+    throw ResultsFileError(where + "." + key + ": not a finite number");
+  }
+  return it->get<double>();
+}
+
+bridge::ModelParameters parameters_from(const nlohmann::json& object, const std::string& where) {
+  if (!object.is_object()) throw ResultsFileError(where + ": not an object");
+  bridge::ModelParameters p;
+  p.mu1 = finite_number(object, "mu1", where);
+  p.mu2 = finite_number(object, "mu2", where);
+  p.mu3 = finite_number(object, "mu3", where);
+  p.mu4 = finite_number(object, "mu4", where);
+  p.mug = finite_number(object, "mug", where);
+  p.fv1 = finite_number(object, "fv1", where);
+  p.fv2 = finite_number(object, "fv2", where);
+  return p;
+}
+
+struct ResultsParameters {
+  bridge::ModelParameters lsmi;
+  std::optional<bridge::ModelParameters> truth;
+  std::optional<validated::FurutaParameters> sivia;
+  std::string note;  // why there is no SIVIA set, when there is none
+};
+
+// The SIVIA outer hull by parameter name: the carried mu's come out as their prior (the LSMI
+// estimate +- Table II %), the frictions as the paving's hull.
+validated::FurutaParameters sivia_hull(const nlohmann::json& sivia) {
+  const auto names = sivia.find("parameters");
+  const auto hull = sivia.find("outer_hull");
+  if (names == sivia.end() || !names->is_array()) {
+    throw ResultsFileError("sivia.parameters: missing");
+  }
+  if (hull == sivia.end() || !hull->is_array() || hull->size() != names->size()) {
+    throw ResultsFileError("sivia.outer_hull: missing or not one interval per parameter");
+  }
+  validated::FurutaParameters p;
+  const std::array<std::pair<const char*, interval::Interval*>, 7> slots = {{{"mu1", &p.mu1},
+                                                                             {"mu2", &p.mu2},
+                                                                             {"mu3", &p.mu3},
+                                                                             {"mu4", &p.mu4},
+                                                                             {"mug", &p.mug},
+                                                                             {"fv1", &p.fv1},
+                                                                             {"fv2", &p.fv2}}};
+  for (const auto& [name, slot] : slots) {
+    bool found = false;
+    for (std::size_t k = 0; k < names->size(); ++k) {
+      if (!(*names)[k].is_string() || (*names)[k].get<std::string>() != name) continue;
+      const nlohmann::json& iv = (*hull)[k];
+      const std::string where =
+          std::string("sivia.outer_hull[") + std::to_string(k) + "] (" + name + ")";
+      if (!iv.is_array() || iv.size() != 2 || !iv[0].is_number() || !iv[1].is_number()) {
+        throw ResultsFileError(where + ": not an interval [lo, hi]");
+      }
+      const double lo = iv[0].get<double>(), hi = iv[1].get<double>();
+      if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) {
+        throw ResultsFileError(where + ": not a bounded interval");
+      }
+      *slot = interval::Interval(lo, hi);
+      found = true;
+    }
+    if (!found) throw ResultsFileError(std::string("sivia.parameters: no ") + name);
+  }
+  return p;
+}
+
+ResultsParameters read_results(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ResultsFileError("cannot open");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw ResultsFileError(std::string("not valid JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw ResultsFileError("not a JSON object");
+  const auto combined = j.find("combined");
+  if (combined == j.end() || !combined->is_object() || !combined->contains("estimate")) {
+    throw ResultsFileError("combined.estimate: missing (not a results.json of furuta identify?)");
+  }
+  ResultsParameters r;
+  r.lsmi = parameters_from((*combined)["estimate"], "combined.estimate");
+  if (j.contains("truth")) r.truth = parameters_from(j["truth"], "truth");
+  const auto sivia = j.find("sivia");
+  if (sivia == j.end()) {
+    r.note = "no SIVIA in it (furuta identify --sivia): LSMI parameters only";
+  } else if (!sivia->is_object()) {
+    throw ResultsFileError("sivia: not an object");
+  } else if (sivia->value("empty", false)) {
+    r.note = "SIVIA found no consistent parameter: LSMI parameters only";
+  } else {
+    r.sivia = sivia_hull(*sivia);
+  }
+  return r;
+}
+
+}  // namespace
+
+SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>& scenarios,
+                                          const std::vector<validated::ParameterSet>& sets,
+                                          const bridge::ModelParameters& truth,
+                                          const std::filesystem::path& figures_dir,
+                                          const std::string& truth_source) {
+  const validated::MeasurementOptions measurement_options;
+  const validated::IntegratorOptions integrator = validated::scenario_integrator_options();
+  const validated::StateUncertainty uncertainty;
+  const bool tty = ::isatty(STDERR_FILENO) == 1;
+
+  std::vector<validated::ScenarioResult> results;
+  SimulationReport report;
+  for (const validated::Scenario& scenario : scenarios) {
+    const validated::ScenarioMeasurement measurement =
+        validated::measure_scenario(scenario, truth, measurement_options);
+    for (const validated::ParameterSet& set : sets) {
+      // Progress only on a terminal: logs and CI stay quiet.
+      if (tty) {
+        std::fprintf(stderr, "\rscenario %s, %s parameters: integrating %.1f s ...        ",
+                     scenario.label().c_str(), set.name.c_str(), scenario.duration_s);
+        std::fflush(stderr);
+      }
+      results.push_back(
+          validated::evaluate_scenario(scenario, set, measurement, uncertainty, integrator));
+      const std::string file =
+          "scenario_" + std::to_string(scenario.number) + "_" + slug(set.name) + ".svg";
+      write_text(figures_dir / file, validated::svg_scenario(results.back()));
+      report.figures.push_back(file);
+    }
+  }
+  if (tty) std::fprintf(stderr, "\r%60s\r", "");
+
+  report.table = validated::format_table_three(results);
+  const validated::ScenarioMeasurement& m0 =
+      results.empty() ? validated::ScenarioMeasurement{} : results.front().measurement;
+  std::ostringstream json;
+  json << "{\"truth\": " << parameters_json(truth)
+       << ", \"truth_source\": " << nlohmann::json(truth_source).dump()
+       << ", \"measurement\": {\"step_s\": " << json_number(measurement_options.step_s)
+       << ", \"sample_period_s\": " << json_number(measurement_options.sample_period_s)
+       << ", \"arm_resolution_rad\": " << json_number(m0.arm_resolution_rad)
+       << ", \"pendulum_resolution_rad\": " << json_number(m0.pendulum_resolution_rad) << "}"
+       << ", \"integrator\": {\"order\": " << integrator.order
+       << ", \"tolerance\": " << json_number(integrator.tolerance)
+       << ", \"h_min\": " << json_number(integrator.h_min)
+       << ", \"max_width\": " << json_number(integrator.max_width) << "}"
+       << ", \"figures\": " << nlohmann::json(report.figures).dump()
+       << ",\n  \"results\": " << validated::scenarios_json(results) << "}";
+  report.json = json.str();
+  report.results = std::move(results);
+  return report;
+}
+
+int run_simulate_command(const SimulateCommandOptions& options, std::ostream& out,
+                         std::ostream& err) {
+  if (!options.results.empty() && options.truth) {
+    err << "furuta simulate: --results and --truth choose the parameters two ways; give one\n";
+    return 2;
+  }
+  if (options.relative_pct && !options.results.empty()) {
+    err << "furuta simulate: --relative widens the truth (--truth); with --results the interval "
+           "parameters are SIVIA's\n";
+    return 2;
+  }
+  if (options.relative_pct && !(*options.relative_pct > 0 && *options.relative_pct < 100)) {
+    err << "furuta simulate: --relative " << *options.relative_pct
+        << ": a percentage in (0, 100) expected\n";
+    return 2;
+  }
+  if (options.seconds && !(*options.seconds > 0 && *options.seconds <= 60)) {
+    err << "furuta simulate: --seconds " << *options.seconds << ": expected in (0, 60]\n";
+    return 2;
+  }
+  std::vector<validated::Scenario> scenarios;
+  for (const int n : options.scenarios) {
+    if (n < 1 || n > 4) {
+      err << "furuta simulate: --scenario " << n << ": the paper's scenarios are 1 to 4\n";
+      return 2;
+    }
+    scenarios.push_back(validated::paper_scenario(n));
+  }
+  if (scenarios.empty()) scenarios = validated::paper_scenarios();
+  if (options.seconds) {
+    for (validated::Scenario& s : scenarios) s.duration_s = *options.seconds;
+  }
+
+  std::vector<validated::ParameterSet> sets;
+  bridge::ModelParameters truth = bridge::ModelParameters::paper_run1();
+  std::string truth_source = "the simulated rig's default (the paper's run 1)";
+  std::string note;
+  if (!options.results.empty()) {
+    ResultsParameters r;
+    try {
+      r = read_results(options.results);
+    } catch (const ResultsFileError& e) {
+      err << "furuta simulate: " << options.results.string() << ": " << e.what() << "\n";
+      return 2;
+    }
+    if (r.truth) {
+      truth = *r.truth;
+      truth_source = options.results.string() + " (truth)";
+    } else {
+      note = options.results.string() + " has no truth (not a simulated rig): the measurements " +
+             "come from " + truth_source + "\n";
+    }
+    if (r.sivia) sets.push_back({"SIVIA", *r.sivia});
+    sets.push_back(validated::point_parameters("LSMI", r.lsmi));
+    if (!r.note.empty()) note += options.results.string() + ": " + r.note + "\n";
+  } else {
+    if (options.relative_pct) {
+      sets.push_back({"truth+-" + percent_text(*options.relative_pct) + "%",
+                      validated::FurutaParameters::around(truth, *options.relative_pct / 100)});
+    }
+    sets.push_back(validated::point_parameters("truth", truth));
+  }
+
+  std::filesystem::create_directories(options.output_dir);
+  const SimulationReport report =
+      run_scenario_simulations(scenarios, sets, truth, options.output_dir, truth_source);
+  std::string json = "{\"software_version\": \"" + std::string(daemon::kSoftwareVersion) + "\"";
+  if (!options.results.empty()) {
+    json += ", \"parameters_from\": " + nlohmann::json(options.results.string()).dump();
+  }
+  json += ", \"simulation\": " + report.json + "}\n";
+  write_text(options.output_dir / "simulate.json", json);
+  write_text(options.output_dir / "table3.txt", report.table);
+  out << note << report.table;
+  out << "wrote " << (options.output_dir / "simulate.json").string() << ", table3.txt and "
+      << report.figures.size() << " figures in " << options.output_dir.string() << "\n";
+  return 0;
+}
+
+}  // namespace furuta::app

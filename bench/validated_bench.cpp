@@ -1,0 +1,200 @@
+// Validated simulation (issue 6): the DynIbex pendulum benchmark and the paper's four Furuta
+// scenarios over 4 s, with point parameters and with interval parameters, against the spread of
+// sampled solutions (long double RK4, tests/validated/reference.hpp). Each benchmark runs once
+// (a run is seconds to minutes); the figures are counters:
+//
+//   build/hB/bench/validated_bench --benchmark_counters_tabular=true
+//
+// Environment: FURUTA_SPLIT_PIECES (cap on pieces, default 16), FURUTA_FV1_REL / FURUTA_FV2_REL /
+// FURUTA_MU_REL (the interval parameters' relative half-widths, default 0.1 / 0.5 / 0.02).
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/validated/integrator.hpp"
+#include "furuta/validated/split.hpp"
+#include "reference.hpp"
+
+namespace {
+
+using furuta::interval::Box;
+using furuta::interval::Interval;
+namespace v = furuta::validated;
+namespace ref = furuta::validated::testing;
+
+double env_or(const char* name, double fallback) {
+  const char* s = std::getenv(name);
+  return s != nullptr ? std::atof(s) : fallback;
+}
+
+// ---- (1) The DynIbex pendulum ------------------------------------------------------------------
+
+void BM_Pendulum(benchmark::State& state) {
+  const v::SimplePendulum pendulum;
+  const Box x0{Interval(-1.755, -1.735), Interval(-0.01, 0.01)};
+  v::IntegratorOptions options;
+  options.t_end = 4.0;
+  v::IntegrationResult r;
+  for (auto _ : state) {
+    r = v::integrate(pendulum, x0, options);
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["ok"] = r.ok() ? 1 : 0;
+  state.counters["wall_s"] = r.seconds;
+  state.counters["steps"] = static_cast<double>(r.steps);
+  // The true range of x1 from 1,000 points on the box's boundary (where the extremes are).
+  std::vector<ref::Point<2>> points;
+  for (int i = 0; i < 250; ++i) {
+    const long double s = -1.0L + 2.0L * i / 250;
+    points.push_back({-1.745L + 0.01L * s, -0.01L});
+    points.push_back({-1.735L, 0.01L * s});
+    points.push_back({-1.745L - 0.01L * s, 0.01L});
+    points.push_back({-1.755L, -0.01L * s});
+  }
+  for (int second = 1; second <= 4; ++second) {
+    long double lo = 1e9L;
+    long double hi = -1e9L;
+    for (ref::Point<2>& x : points) {
+      x = ref::simulate(pendulum, x, second - 1.0, second, 1e-3);
+      lo = std::min(lo, x[0]);
+      hi = std::max(hi, x[0]);
+    }
+    const double width = r.tube.enclosure_at(second)[0].width();
+    const std::string t = std::to_string(second);
+    state.counters["x1_w_" + t + "s"] = width;
+    state.counters["ratio_" + t + "s"] = width / static_cast<double>(hi - lo);
+  }
+}
+BENCHMARK(BM_Pendulum)->Iterations(3)->Unit(benchmark::kMillisecond);
+
+// ---- (2), (3) The paper's Furuta scenarios ----------------------------------------------------
+
+struct Scenario {
+  double q2_deg;
+  double tau_nm;
+};
+constexpr Scenario kScenarios[] = {{-100.0, 0.0}, {50.0, 0.0}, {-90.0, 0.17}, {-45.0, -0.1}};
+
+Box initial_state(const Scenario& s) {
+  const double q2 = s.q2_deg * std::numbers::pi / 180.0;
+  return Box{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
+             Interval(-1e-3, 1e-3)};
+}
+
+// The spread of q2 at 1, 2, 3, 4 s over `count` sampled initial states (corners included) and,
+// when `params` is not null, parameters drawn in their intervals (one draw per 50 points).
+std::vector<double> sampled_q2_spread(const Scenario& s, const Box& x0,
+                                      const v::FurutaParameters* params, std::size_t count) {
+  const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
+  std::mt19937_64 rng(2024);
+  const std::vector<ref::Point<4>> points = ref::sample_box<4>(x0, count, rng);
+  std::vector<long double> lo(4, 1e9L);
+  std::vector<long double> hi(4, -1e9L);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  auto draw = [&](const Interval& x) { return x.lo() + u(rng) * (x.hi() - x.lo()); };
+  v::FurutaParameters p = v::FurutaParameters::point(truth);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (params != nullptr && i % 50 == 0) {
+      p = v::FurutaParameters{draw(params->mu1), draw(params->mu2), draw(params->mu3),
+                              draw(params->mu4), draw(params->mug), draw(params->fv1),
+                              draw(params->fv2)};
+    }
+    const v::FurutaStateDynamics system(p, Interval(s.tau_nm));
+    ref::Point<4> x = points[i];
+    for (int second = 1; second <= 4; ++second) {
+      x = ref::simulate(system, x, second - 1.0, second, 1e-3);
+      lo[static_cast<std::size_t>(second - 1)] = std::min(lo[second - 1], x[2]);
+      hi[static_cast<std::size_t>(second - 1)] = std::max(hi[second - 1], x[2]);
+    }
+  }
+  std::vector<double> spread(4);
+  for (std::size_t k = 0; k < 4; ++k) spread[k] = static_cast<double>(hi[k] - lo[k]);
+  return spread;
+}
+
+void report(benchmark::State& state, const v::SplitResult& r, std::size_t q2_component,
+            const std::vector<double>& spread) {
+  state.counters["ok"] = r.ok() ? 1 : 0;
+  state.counters["t_reached"] = r.t_reached;
+  state.counters["wall_s"] = r.seconds;
+  state.counters["pieces"] = static_cast<double>(r.pieces.size());
+  state.counters["runs"] = static_cast<double>(r.runs);
+  state.counters["steps"] = static_cast<double>(r.steps);
+  for (int second = 1; second <= 4; ++second) {
+    const Box e = r.enclosure_at(second);
+    const double width = e.is_empty() ? 0.0 : e[q2_component].width();
+    const std::string t = std::to_string(second);
+    state.counters["q2_w_" + t + "s"] = width;
+    state.counters["spread_" + t + "s"] = spread[static_cast<std::size_t>(second - 1)];
+    state.counters["ratio_" + t + "s"] = width / spread[static_cast<std::size_t>(second - 1)];
+  }
+}
+
+v::IntegratorOptions furuta_options() {
+  v::IntegratorOptions options;
+  options.t_end = 4.0;
+  options.tolerance = 1e-10;    // the pieces are >= 1e-5 wide: 1e-13 only tripled the steps
+  options.max_inflation = 1.0;  // QR frame: the arm's damping (150 /s) ruins the parallelepiped
+  return options;
+}
+
+v::SplitOptions split_options() {
+  v::SplitOptions split;
+  split.max_pieces = static_cast<std::size_t>(env_or("FURUTA_SPLIT_PIECES", 16));
+  return split;
+}
+
+// (2) Point parameters (the truth), state box +-1e-3 (q2 +-1.6e-3), the 4-dimensional system.
+void BM_FurutaPointParameters(benchmark::State& state) {
+  const Scenario& s = kScenarios[state.range(0)];
+  const Box x0 = initial_state(s);
+  const v::FurutaStateDynamics system(
+      v::FurutaParameters::point(furuta::bridge::ModelParameters::paper_run1()),
+      Interval(s.tau_nm));
+  v::SplitResult r;
+  for (auto _ : state) {
+    r = v::integrate_split(system, x0, furuta_options(), split_options());
+    benchmark::DoNotOptimize(r);
+  }
+  report(state, r, v::FurutaStateDynamics::q2, sampled_q2_spread(s, x0, nullptr, 1000));
+}
+BENCHMARK(BM_FurutaPointParameters)
+    ->DenseRange(0, 3)
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+// (3) Interval parameters: fv1 +-10 %, fv2 +-50 % (a stand-in for SIVIA's box), the mu's +-2 %,
+// carried as state (the 11-dimensional system) so that their correlation with the motion is kept.
+void BM_FurutaIntervalParameters(benchmark::State& state) {
+  const Scenario& s = kScenarios[state.range(0)];
+  const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
+  v::FurutaParameters p = v::FurutaParameters::around(truth, env_or("FURUTA_MU_REL", 0.02));
+  const double fv1 = env_or("FURUTA_FV1_REL", 0.1);
+  const double fv2 = env_or("FURUTA_FV2_REL", 0.5);
+  p.fv1 = Interval(truth.fv1) * (Interval(1.0) + Interval(-fv1, fv1));
+  p.fv2 = Interval(truth.fv2) * (Interval(1.0) + Interval(-fv2, fv2));
+  const Box state_box = initial_state(s);
+  const Box x0 = v::FurutaDynamics::initial_box(state_box, p);
+  const v::FurutaDynamics system(Interval(s.tau_nm));
+  v::SplitResult r;
+  for (auto _ : state) {
+    r = v::integrate_split(system, x0, furuta_options(), split_options());
+    benchmark::DoNotOptimize(r);
+  }
+  report(state, r, v::FurutaDynamics::q2, sampled_q2_spread(s, state_box, &p, 1000));
+}
+BENCHMARK(BM_FurutaIntervalParameters)
+    ->DenseRange(0, 3)
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+}  // namespace

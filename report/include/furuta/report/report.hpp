@@ -1,0 +1,142 @@
+#pragma once
+// The identification report a person reads: one self-contained HTML page (inline CSS and SVG, no
+// script, no external URL) with the rig and its sessions, Table I (LSMI), Table II (the intervals
+// SIVIA starts from), the paving (Fig. 4), the held-out torque (Fig. 5), the data with their
+// uncertainty bands (Fig. 2/3), the tubes and their coverage (Fig. 6, Table III), and what to be
+// wary of. results.json is the machine-readable twin; both come from `furuta identify`.
+//
+//   report::ReportInput input = report::report_input(id);      // Table I, Fig. 5, warnings
+//   input.sessions.push_back(report::summarize_session(log, "fit"));
+//   input.signals_svg.push_back(identification::svg_signals(...));
+//   write(dir / "report.html", report::render_html(input));
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "furuta/config/rig_config.hpp"
+#include "furuta/identification/guaranteed.hpp"
+#include "furuta/identification/identify.hpp"
+#include "furuta/session_log/session_log.hpp"
+#include "furuta/validated/scenarios.hpp"
+
+namespace furuta::report {
+
+// What a session log says about itself, as `furuta log info` prints it: the basis of the
+// lost-sample warnings.
+struct SessionSummary {
+  std::string file;  // the log's file name
+  std::string role;  // "fit" or "held out"
+  std::string label, profile;
+  double amplitude_duty = 0;
+  double duration_s = 0;
+  double period_s = 0;
+  std::int64_t seed = 0;
+  std::size_t samples = 0;
+  std::size_t missing_samples = 0;        // sequence numbers absent between the first and the last
+  std::int64_t motor_lost_reports = 0;    // 1065
+  std::int64_t encoder_lost_reports = 0;  // 1047
+  std::int64_t overruns = 0;              // missed loop cycles
+  std::size_t faults = 0;
+  std::vector<std::string> fatal_faults;  // "reason (detail)"
+  bool complete = false;                  // start and end records present
+  std::uint64_t damaged_regions = 0;      // skipped by the checked reader
+  bool truncated_tail = false;
+};
+SessionSummary summarize_session(const session_log::SessionLog& log, std::string role);
+
+struct Warning {
+  std::string topic;  // "excitation", "session", "SIVIA", "simulation"
+  std::string text;
+};
+
+// A row of Table II: the interval a parameter enters SIVIA with, and what SIVIA made of it.
+struct IntervalRow {
+  std::string parameter, unit;
+  double lo = 0, hi = 0;
+  std::string origin;                               // "LSMI +- 12 %" (carried) or "prior (unknown)"
+  std::optional<std::array<double, 2>> outer_hull;  // SIVIA ran and found a set
+};
+
+struct SiviaSummary {
+  std::size_t samples = 0;
+  int q = 0;
+  std::size_t inner = 0, boundary = 0, outer = 0, tested = 0;
+  double seconds = 0;
+  bool truncated = false;
+  bool empty = false;
+  std::string finding;  // why it is empty
+  std::size_t inconsistent_samples = 0;
+  std::string svg;  // Fig. 4 (svg_paving)
+};
+
+struct ValidationSummary {
+  std::string name;  // the held-out experiment
+  double rmse_nm = 0;
+  double rmse_percent_of_range = 0;
+  std::string svg;  // Fig. 5 (svg_torque_validation)
+};
+
+struct SimulationSummary {
+  std::string measurement_source;                  // where the "measured" scenarios come from
+  std::vector<validated::ScenarioResult> results;  // Table III rows; Fig. 6 drawn from each
+};
+
+// Everything the page shows, as plain data. Absent parts are said to be absent (not run, no
+// held-out session), never left out silently.
+struct ReportInput {
+  std::string title = "Identification report";
+  std::string software_version;
+  std::vector<std::pair<std::string, std::string>> rig;  // facts: name, backend, period, ...
+  std::vector<SessionSummary> sessions;                  // empty for CSV inputs
+  std::vector<std::string> inputs;                       // the files fitted and held out
+
+  // Table I: one column per experiment, then all together.
+  std::vector<std::string> experiment_names;
+  std::vector<identification::LsmiResult> per_experiment;
+  identification::LsmiResult combined;
+  std::optional<identification::ParameterVector> nominal, truth;
+  double input_lag_s = 0;
+
+  std::vector<std::string> signals_svg;  // Fig. 2/3, one per experiment (svg_signals)
+  std::string signals_bands;             // what the bands in them are
+
+  std::optional<ValidationSummary> validation;  // Fig. 5
+
+  std::vector<IntervalRow> table_two;
+  std::optional<SiviaSummary> sivia;  // Fig. 4; absent: --sivia not given
+
+  std::optional<SimulationSummary> simulation;  // Table III, Fig. 6; absent: --simulate not given
+
+  // Warnings found elsewhere (identification's); render_html adds derived_warnings().
+  std::vector<Warning> warnings;
+};
+
+// Table I, the validation and identification's warnings (LSMI's as "excitation", the data's as
+// "session") from an identification.
+ReportInput report_input(const identification::Identification& id);
+
+// Table II: the intervals of the SIVIA problem the configuration sets up around the LSMI estimate
+// (the mu's +- [sivia] mu_uncertainty_pct, the frictions' priors; unknowns as in [sivia]), and,
+// when SIVIA ran, its outer hull per parameter.
+std::vector<IntervalRow> table_two(const identification::ParameterVector& lsmi,
+                                   const config::SiviaConfig& sivia,
+                                   const identification::GuaranteedResult* result);
+SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::string svg);
+
+// What the struct itself shows to be wary of: damaged or cut-short logs and fatal faults, an
+// empty or truncated SIVIA set, samples SIVIA tolerated, tubes that ended early.
+std::vector<Warning> derived_warnings(const ReportInput& input);
+
+// The page. Every text is escaped; the SVG strings are the project's own generators' output and
+// go in as they are (an XML declaration, if any, is dropped).
+std::string render_html(const ReportInput& input);
+
+// Text as HTML character data or attribute value.
+std::string escape_html(const std::string& text);
+
+}  // namespace furuta::report

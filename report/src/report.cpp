@@ -1,0 +1,602 @@
+#include "furuta/report/report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <set>
+#include <sstream>
+
+namespace furuta::report {
+
+namespace {
+
+using identification::kParameterCount;
+using identification::kParameterNames;
+using identification::kParameterUnits;
+
+std::string sci(double v, int digits) {
+  if (!std::isfinite(v)) return "-";
+  std::ostringstream s;
+  s << std::scientific << std::setprecision(digits) << v;
+  return s.str();
+}
+
+std::string short_number(double v) {
+  std::ostringstream s;
+  s << std::setprecision(3) << v;
+  return s.str();
+}
+
+std::string fixed(double v, int digits) {
+  if (!std::isfinite(v)) return "-";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+// The units as a reader writes them, not as a terminal must.
+std::string pretty_unit(const std::string& unit) {
+  std::string out = unit;
+  const auto replace = [&out](const std::string& from, const std::string& to) {
+    for (std::size_t at = out.find(from); at != std::string::npos; at = out.find(from, at)) {
+      out.replace(at, from.size(), to);
+      at += to.size();
+    }
+  };
+  replace("^-2", "\u207b\u00b2");
+  replace("^2", "\u00b2");
+  return out;
+}
+
+std::string plus_minus(const std::string& value, const std::string& sd) {
+  return value + " \u00b1 " + sd;
+}
+
+class Html {
+ public:
+  void raw(const std::string& text) { out_ += text; }
+  void text(const std::string& text) { out_ += escape_html(text); }
+  // <tag attributes>escaped text</tag>
+  void element(const std::string& tag, const std::string& text,
+               const std::string& attributes = "") {
+    out_ += "<" + tag + (attributes.empty() ? "" : " " + attributes) + ">" + escape_html(text) +
+            "</" + tag + ">";
+  }
+  void paragraph(const std::string& text, const std::string& css_class = "") {
+    element("p", text, css_class.empty() ? "" : "class=\"" + css_class + "\"");
+    out_ += "\n";
+  }
+  void table(const std::string& id, const std::string& caption,
+             const std::vector<std::string>& header,
+             const std::vector<std::vector<std::string>>& rows) {
+    // Wide tables scroll on their own rather than widening the page.
+    out_ += "<div class=\"table\"><table id=\"" + escape_html(id) + "\">\n";
+    element("caption", caption);
+    out_ += "\n<thead><tr>";
+    for (const auto& h : header) element("th", h, "scope=\"col\"");
+    out_ += "</tr></thead>\n<tbody>\n";
+    for (const auto& row : rows) {
+      out_ += "<tr>";
+      for (std::size_t i = 0; i < row.size(); ++i) {
+        if (i == 0) {
+          element("th", row[i], "scope=\"row\"");
+        } else {
+          element("td", row[i]);
+        }
+      }
+      out_ += "</tr>\n";
+    }
+    out_ += "</tbody>\n</table></div>\n";
+  }
+  void figure(const std::string& id, const std::string& svg, const std::string& caption) {
+    out_ += "<figure id=\"" + escape_html(id) + "\">\n" + inline_svg(svg, id);
+    element("figcaption", caption);
+    out_ += "\n</figure>\n";
+  }
+  const std::string& str() const { return out_; }
+
+ private:
+  // An SVG document as an element of the page: an XML declaration or doctype is not allowed
+  // there, and its ids (clip paths) share the page's namespace with every other figure's, so
+  // they take the figure's id as a prefix.
+  static std::string inline_svg(const std::string& svg, const std::string& figure) {
+    const std::size_t at = svg.find("<svg");
+    if (at == std::string::npos) return {};
+    std::string out = svg.substr(at);
+    for (const std::string marker : {" id=\"", "url(#", "href=\"#"}) {
+      const std::string prefixed = marker + figure + "-";
+      for (std::size_t i = out.find(marker); i != std::string::npos;
+           i = out.find(marker, i + prefixed.size())) {
+        out.replace(i, marker.size(), prefixed);
+      }
+    }
+    return out;
+  }
+  std::string out_;
+};
+
+constexpr const char* kStyle = R"(
+body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em; color: #222;
+       line-height: 1.4; }
+h1 { margin-bottom: 0.2em; }
+h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
+.meta { color: #666; }
+nav ol { columns: 2; }
+table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
+caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
+th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; white-space: nowrap; }
+td:last-child { white-space: normal; }
+.table { overflow-x: auto; }
+thead th { background: #f0f0f0; }
+tbody th { text-align: left; font-weight: normal; }
+figure { margin: 1em 0; }
+figure svg { max-width: 100%; height: auto; border: 1px solid #eee; }
+figcaption { font-size: 0.9em; color: #444; }
+.warnings li { margin: 0.2em 0; }
+.topic { display: inline-block; min-width: 6em; font-weight: bold; color: #8a4b00; }
+.absent { color: #666; font-style: italic; }
+.none { color: #2a6e2a; }
+)";
+
+std::string table_three_cell(const validated::Coverage& c) {
+  return fixed(100 * c.rate(), 1) + " (" + fixed(100 * c.rate_in_time(), 1) + ")";
+}
+
+// "seed1.lcmlog" -> "fig-signals-1": ids stay ASCII whatever the names are.
+std::string figure_id(const std::string& prefix, std::size_t n) {
+  return prefix + "-" + std::to_string(n);
+}
+
+}  // namespace
+
+std::string escape_html(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+SessionSummary summarize_session(const session_log::SessionLog& log, std::string role) {
+  SessionSummary s;
+  s.file = log.path.filename().string();
+  s.role = std::move(role);
+  if (log.start) {
+    s.label = log.start->label;
+    s.profile = log.start->profile;
+    s.amplitude_duty = log.start->amplitude_duty;
+    s.duration_s = log.start->duration_s;
+    s.period_s = static_cast<double>(log.start->period_ns) * 1e-9;
+    s.seed = log.start->seed;
+  }
+  s.samples = log.samples.size();
+  s.missing_samples = log.missing_sequence_numbers().size();
+  if (!log.samples.empty()) {
+    // The counters are cumulative over the session: the last sample holds the totals.
+    s.motor_lost_reports = log.samples.back().motor_lost_reports;
+    s.encoder_lost_reports = log.samples.back().encoder_lost_reports;
+    s.overruns = log.samples.back().overruns;
+  }
+  s.faults = log.faults.size();
+  for (const auto& f : log.faults) {
+    if (f.fatal)
+      s.fatal_faults.push_back(f.reason + (f.detail.empty() ? "" : " (" + f.detail + ")"));
+  }
+  s.complete = log.complete();
+  s.damaged_regions = log.read_stats.damaged_regions;
+  s.truncated_tail = log.read_stats.truncated_tail;
+  return s;
+}
+
+ReportInput report_input(const identification::Identification& id) {
+  ReportInput r;
+  for (const auto& s : id.processed) r.experiment_names.push_back(s.name);
+  r.per_experiment = id.per_experiment;
+  r.combined = id.combined;
+  r.nominal = id.nominal;
+  r.truth = id.truth;
+  r.input_lag_s = id.input_lag_s;
+  if (id.validation) {
+    r.validation = ValidationSummary{id.validation->name, id.validation->fit.rmse_nm,
+                                     id.validation->fit.rmse_percent_of_range,
+                                     identification::svg_torque_validation(*id.validation)};
+  }
+  // identify() prefixes LSMI's warnings as below; what else it warns about comes from the data
+  // (lost reports, missing samples, a cut-short session, irregular CSV time stamps).
+  std::set<std::string> excitation;
+  for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
+    for (const auto& w : id.per_experiment[i].warnings) {
+      excitation.insert(id.processed[i].name + ": " + w);
+    }
+  }
+  for (const auto& w : id.combined.warnings) excitation.insert("all experiments: " + w);
+  for (const auto& w : id.warnings) {
+    r.warnings.push_back({excitation.contains(w) ? "excitation" : "session", w});
+  }
+  return r;
+}
+
+std::vector<IntervalRow> table_two(const identification::ParameterVector& lsmi,
+                                   const config::SiviaConfig& sivia,
+                                   const identification::GuaranteedResult* result) {
+  interval::Box prior;
+  if (result) {
+    prior = result->paving.prior;  // what the paver was given
+  } else {
+    prior = identification::paper_prior(lsmi, sivia.mu_uncertainty_pct);
+    prior[5] = interval::Interval(sivia.fv1_prior[0], sivia.fv1_prior[1]);
+    prior[6] = interval::Interval(sivia.fv2_prior[0], sivia.fv2_prior[1]);
+  }
+  std::optional<interval::Box> hull;
+  if (result && !result->empty) hull = result->paving.outer_hull();
+  std::vector<IntervalRow> rows;
+  for (int k = 0; k < kParameterCount; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    IntervalRow row;
+    row.parameter = kParameterNames[i];
+    row.unit = kParameterUnits[i];
+    const bool unknown = std::find(sivia.unknowns.begin(), sivia.unknowns.end(), row.parameter) !=
+                         sivia.unknowns.end();
+    row.lo = prior[i].lo();
+    row.hi = prior[i].hi();
+    if (unknown) {
+      row.origin = "prior (unknown, bisected)";
+    } else if (k < 5) {
+      std::ostringstream s;
+      s << "LSMI \u00b1 " << sivia.mu_uncertainty_pct[i] << " % (carried)";
+      row.origin = s.str();
+    } else {
+      row.origin = "prior (carried)";
+    }
+    if (hull) row.outer_hull = std::array<double, 2>{(*hull)[i].lo(), (*hull)[i].hi()};
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::string svg) {
+  SiviaSummary s;
+  s.samples = result.samples;
+  s.q = result.q;
+  s.inner = result.paving.inner.size();
+  s.boundary = result.paving.boundary.size();
+  s.outer = result.paving.outer_count;
+  s.tested = result.paving.boxes_tested;
+  s.seconds = result.paving.seconds;
+  s.truncated = result.paving.truncated;
+  s.empty = result.empty;
+  s.finding = result.finding;
+  s.inconsistent_samples = result.inconsistent_samples.size();
+  s.svg = std::move(svg);
+  return s;
+}
+
+std::vector<Warning> derived_warnings(const ReportInput& input) {
+  std::vector<Warning> out;
+  for (const SessionSummary& s : input.sessions) {
+    if (s.damaged_regions > 0) {
+      out.push_back({"session", s.file + ": " + std::to_string(s.damaged_regions) +
+                                    " damaged regions of the log skipped"});
+    }
+    if (s.truncated_tail) out.push_back({"session", s.file + ": the log's tail is truncated"});
+    for (const auto& f : s.fatal_faults) out.push_back({"session", s.file + ": fatal fault " + f});
+  }
+  if (input.sivia) {
+    const SiviaSummary& s = *input.sivia;
+    if (s.empty) {
+      out.push_back({"SIVIA", "empty feasible set: " +
+                                  (s.finding.empty() ? std::string("no parameter is consistent "
+                                                                   "with the data and its bounds")
+                                                     : s.finding)});
+    }
+    if (s.truncated) {
+      out.push_back({"SIVIA", "the paving was truncated: the untested boxes count as boundary"});
+    }
+    if (s.inconsistent_samples > 0) {
+      out.push_back({"SIVIA", std::to_string(s.inconsistent_samples) +
+                                  " samples inconsistent with the whole set (tolerated by q = " +
+                                  std::to_string(s.q) + ")"});
+    }
+  }
+  if (input.simulation) {
+    for (const auto& r : input.simulation->results) {
+      if (r.t_reached_s + 1e-9 >= r.scenario.duration_s &&
+          r.status == validated::IntegrationResult::Status::ok) {
+        continue;
+      }
+      out.push_back({"simulation", "scenario " + r.scenario.label() + ", " + r.parameters.name +
+                                       ": the tube ended early, at " + fixed(r.t_reached_s, 3) +
+                                       " s of " + fixed(r.scenario.duration_s, 1) + " s (" +
+                                       validated::to_string(r.status) +
+                                       (r.reason.empty() ? "" : ": " + r.reason) + ")"});
+    }
+  }
+  return out;
+}
+
+std::string render_html(const ReportInput& in) {
+  Html h;
+  h.raw("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+  h.raw("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+  h.element("title", in.title);
+  h.raw("\n<style>");
+  h.raw(kStyle);
+  h.raw("</style>\n</head>\n<body>\n<header>\n");
+  h.element("h1", in.title);
+  h.paragraph(in.software_version +
+                  ": identification of a rotary inverted (Furuta) pendulum, least squares (LSMI) "
+                  "and guaranteed (SIVIA, validated simulation). The numbers are also in "
+                  "results.json.",
+              "meta");
+  h.raw("</header>\n<nav>\n<ol>\n");
+  const std::vector<std::pair<std::string, std::string>> contents = {
+      {"summary", "Rig and sessions"},
+      {"warnings", "Warnings"},
+      {"lsmi", "Least squares (Table I)"},
+      {"data", "Data and uncertainty bands (Fig. 2/3)"},
+      {"validation", "Held-out torque (Fig. 5)"},
+      {"sivia", "Guaranteed identification (Table II, Fig. 4)"},
+      {"simulation", "Validated simulation (Table III, Fig. 6)"}};
+  for (const auto& [id, name] : contents) {
+    h.raw("<li><a href=\"#" + id + "\">");
+    h.text(name);
+    h.raw("</a></li>\n");
+  }
+  h.raw("</ol>\n</nav>\n");
+
+  // --- rig and sessions ---
+  h.raw("<section id=\"summary\">\n");
+  h.element("h2", "Rig and sessions");
+  std::vector<std::vector<std::string>> rig_rows;
+  for (const auto& [key, value] : in.rig) rig_rows.push_back({key, value});
+  rig_rows.push_back({"input lag", fixed(in.input_lag_s * 1e3, 3) + " ms"});
+  h.table("rig", "The rig and the identification settings", {"", "value"}, rig_rows);
+  if (!in.sessions.empty()) {
+    std::vector<std::vector<std::string>> rows;
+    for (const SessionSummary& s : in.sessions) {
+      rows.push_back(
+          {s.file, s.role, s.label, s.profile, fixed(s.amplitude_duty, 2), fixed(s.duration_s, 1),
+           fixed(s.period_s * 1e3, 1), std::to_string(s.seed), std::to_string(s.samples),
+           std::to_string(s.missing_samples),
+           std::to_string(s.motor_lost_reports) + " / " + std::to_string(s.encoder_lost_reports),
+           std::to_string(s.overruns), std::to_string(s.faults),
+           s.complete ? "yes" : "no (cut short)"});
+    }
+    h.table("sessions", "Sessions (from their logs)",
+            {"log", "role", "label", "profile", "amplitude [duty]", "duration [s]", "period [ms]",
+             "seed", "samples", "missing samples", "lost reports 1065 / 1047", "missed cycles",
+             "faults", "complete"},
+            rows);
+  }
+  if (!in.inputs.empty()) {
+    h.raw("<p>Inputs: ");
+    for (std::size_t i = 0; i < in.inputs.size(); ++i) {
+      if (i) h.raw(", ");
+      h.element("code", in.inputs[i]);
+    }
+    h.raw("</p>\n");
+  }
+  h.raw("</section>\n");
+
+  // --- warnings ---
+  h.raw("<section id=\"warnings\">\n");
+  h.element("h2", "Warnings");
+  std::vector<Warning> warnings = in.warnings;
+  for (Warning& w : derived_warnings(in)) warnings.push_back(std::move(w));
+  if (warnings.empty()) {
+    h.paragraph(
+        "None: the regressor is well conditioned, every parameter is excited, the sessions lost "
+        "nothing, and what ran of SIVIA and the simulation finished.",
+        "none");
+  } else {
+    h.raw("<ul class=\"warnings\">\n");
+    for (const Warning& w : warnings) {
+      h.raw("<li>");
+      h.element("span", w.topic, "class=\"topic\"");
+      h.text(" " + w.text);
+      h.raw("</li>\n");
+    }
+    h.raw("</ul>\n");
+  }
+  h.raw("</section>\n");
+
+  // --- Table I ---
+  h.raw("<section id=\"lsmi\">\n");
+  h.element("h2", "Least squares (Table I)");
+  h.paragraph(
+      "The model's seven parameters by least squares (LSMI) on each experiment and on all "
+      "together, each with its standard deviation (the residual's, through "
+      "(W\u1d40W)\u207b\u00b9). "
+      "The standard deviations measure noise, not bias.");
+  {
+    std::vector<std::string> header = {"parameter", "unit"};
+    for (const auto& name : in.experiment_names) header.push_back(name);
+    header.push_back("all experiments");
+    if (in.nominal) header.push_back("CAD");
+    if (in.truth) header.push_back("truth");
+    std::vector<std::vector<std::string>> rows;
+    for (int k = 0; k < kParameterCount; ++k) {
+      const auto i = static_cast<std::size_t>(k);
+      std::vector<std::string> row = {kParameterNames[i], pretty_unit(kParameterUnits[i])};
+      const auto cell = [i](const identification::LsmiResult& r) {
+        return plus_minus(sci(r.estimate[i], 4), sci(r.std_dev[i], 1));
+      };
+      for (const auto& r : in.per_experiment) row.push_back(cell(r));
+      row.push_back(cell(in.combined));
+      if (in.nominal) row.push_back((*in.nominal)[i] != 0 ? sci((*in.nominal)[i], 4) : "-");
+      if (in.truth) row.push_back(sci((*in.truth)[i], 4));
+      rows.push_back(std::move(row));
+    }
+    h.table("table-1", "Table I: LSMI estimates \u00b1 one standard deviation", header, rows);
+    std::vector<std::vector<std::string>> diagnostics;
+    const auto diagnostic = [](const std::string& name, const identification::LsmiResult& r) {
+      std::string poorly_excited;
+      for (const auto& p : r.poorly_excited) {
+        poorly_excited += (poorly_excited.empty() ? "" : ", ") + p;
+      }
+      return std::vector<std::string>{name,
+                                      std::to_string(r.rows / 2),
+                                      sci(r.condition_number, 2),
+                                      std::to_string(r.rank),
+                                      sci(r.sigma, 2),
+                                      poorly_excited.empty() ? "-" : poorly_excited};
+    };
+    for (std::size_t e = 0; e < in.per_experiment.size() && e < in.experiment_names.size(); ++e) {
+      diagnostics.push_back(diagnostic(in.experiment_names[e], in.per_experiment[e]));
+    }
+    diagnostics.push_back(diagnostic("all experiments", in.combined));
+    h.table("lsmi-diagnostics",
+            "How well the data excite the parameters: the column-scaled regressor's condition "
+            "number, its rank (of 7), the residual",
+            {"experiment", "samples", "condition number", "rank", "residual \u03c3 [N m]",
+             "poorly excited"},
+            diagnostics);
+  }
+  h.raw("</section>\n");
+
+  // --- Fig. 2/3 ---
+  h.raw("<section id=\"data\">\n");
+  h.element("h2", "Data and uncertainty bands (Fig. 2/3)");
+  if (in.signals_svg.empty()) {
+    h.paragraph("No experiment figures.", "absent");
+  }
+  for (std::size_t i = 0; i < in.signals_svg.size(); ++i) {
+    const std::string name = i < in.experiment_names.size() ? in.experiment_names[i] : "";
+    h.figure(figure_id("fig-signals", i + 1), in.signals_svg[i],
+             "Fig. " + std::to_string(i + 2) + " (" + name +
+                 "): the measured angles, the filtered velocities and accelerations and the "
+                 "motor torque (eq. 4) over time [s]; " +
+                 (in.signals_bands.empty() ? std::string("the shaded bands are the data's "
+                                                         "uncertainty")
+                                           : in.signals_bands) +
+                 ".");
+  }
+  h.raw("</section>\n");
+
+  // --- Fig. 5 ---
+  h.raw("<section id=\"validation\">\n");
+  h.element("h2", "Held-out torque (Fig. 5)");
+  if (in.validation) {
+    const ValidationSummary& v = *in.validation;
+    h.paragraph("On the held-out session " + v.name +
+                ", the torque predicted by the combined LSMI "
+                "estimate misses the measured one by RMSE " +
+                sci(v.rmse_nm, 3) + " N m, " + fixed(v.rmse_percent_of_range, 2) +
+                " % of the torque range (eq. 12; the paper: 6.4 % with LSMI).");
+    h.figure("fig-5", v.svg,
+             "Fig. 5: measured (black) and LSMI-predicted (red) motor torque [N m] over time [s] "
+             "on a session not used for the fit; RMSE " +
+                 fixed(v.rmse_percent_of_range, 2) + " % of the range.");
+  } else {
+    h.paragraph(
+        "No held-out session was given (furuta identify --validate LOG): no torque "
+        "validation.",
+        "absent");
+  }
+  h.raw("</section>\n");
+
+  // --- Table II and Fig. 4 ---
+  h.raw("<section id=\"sivia\">\n");
+  h.element("h2", "Guaranteed identification (Table II, Fig. 4)");
+  {
+    std::vector<std::vector<std::string>> rows;
+    for (const IntervalRow& r : in.table_two) {
+      rows.push_back(
+          {r.parameter, pretty_unit(r.unit), "[" + sci(r.lo, 4) + ", " + sci(r.hi, 4) + "]",
+           r.origin,
+           r.outer_hull ? "[" + sci((*r.outer_hull)[0], 4) + ", " + sci((*r.outer_hull)[1], 4) + "]"
+                        : "-"});
+    }
+    if (!rows.empty()) {
+      h.table("table-2",
+              "Table II: the intervals SIVIA starts from, and its outer approximation's hull",
+              {"parameter", "unit", "interval used", "from", "SIVIA outer hull"}, rows);
+    }
+  }
+  if (in.sivia) {
+    const SiviaSummary& s = *in.sivia;
+    h.paragraph("SIVIA over " + std::to_string(s.samples) + " samples (q = " + std::to_string(s.q) +
+                "): " + std::to_string(s.inner) + " inner, " + std::to_string(s.boundary) +
+                " boundary and " + std::to_string(s.outer) + " outer boxes; " +
+                std::to_string(s.tested) + " tested in " + short_number(s.seconds) + " s" +
+                (s.truncated ? " (truncated)" : "") + ".");
+    if (s.empty) h.paragraph("The feasible set is empty. " + s.finding);
+    h.figure("fig-4", s.svg,
+             "Fig. 4: the SIVIA paving projected on the viscous frictions (fv1, fv2) [N m s]: "
+             "inner boxes (every parameter consistent with the data), boundary boxes "
+             "(undecided at epsilon) and outer boxes (proven inconsistent).");
+  } else {
+    h.paragraph(
+        "SIVIA was not run (furuta identify --sivia): no paving. The intervals above are "
+        "those it would start from.",
+        "absent");
+  }
+  h.raw("</section>\n");
+
+  // --- Table III and Fig. 6 ---
+  h.raw("<section id=\"simulation\">\n");
+  h.element("h2", "Validated simulation (Table III, Fig. 6)");
+  if (in.simulation) {
+    const SimulationSummary& sim = *in.simulation;
+    h.paragraph("The paper's four scenarios, measured on the simulated rig (" +
+                sim.measurement_source +
+                "), against guaranteed tubes of the pendulum angle from each parameter set. "
+                "Coverage: the share of the measured samples inside the tube, over all samples "
+                "and (in parentheses) over those the tube reached; \"step\" is the paper's test, "
+                "\"interp.\" the enclosure at the sample's instant. The paper, q2 step: "
+                "46/61/38/25 % with interval parameters, 41/34/20/21 % with LSMI.");
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& r : sim.results) {
+      rows.push_back({r.scenario.label() + " " + r.scenario.description(), r.parameters.name,
+                      fixed(r.t_reached_s, 3) + " / " + fixed(r.scenario.duration_s, 1),
+                      std::to_string(r.steps), table_three_cell(r.q2_step),
+                      table_three_cell(r.q2_interpolated), fixed(100 * r.q1_step.rate(), 1),
+                      fixed(100 * r.q1_interpolated.rate(), 1),
+                      fixed(r.q2_mean_width_rad * 180 / 3.14159265358979323846, 3),
+                      std::string(validated::to_string(r.status)) +
+                          (r.reason.empty() ? "" : ": " + r.reason)});
+    }
+    h.table("table-3", "Table III: coverage of the measurements by the tubes [%]",
+            {"scenario", "parameters", "reached / duration [s]", "steps", "q2 step, all (reached)",
+             "q2 interp., all (reached)", "q1 step", "q1 interp.", "q2 mean width [deg]", "end"},
+            rows);
+    std::size_t n = 0;
+    for (const auto& r : sim.results) {
+      const bool early = r.t_reached_s + 1e-9 < r.scenario.duration_s;
+      h.figure(figure_id("fig-6", ++n), validated::svg_scenario(r),
+               "Fig. 6 " + r.scenario.label() + ", " + r.parameters.name +
+                   " parameters: the tube of the pendulum angle q2 [deg] over time [s] (shaded) "
+                   "and the measured q2 (points; red where outside the tube); q2 step coverage " +
+                   fixed(100 * r.q2_step.rate(), 1) + " %" +
+                   (early ? ", the tube ended at " + fixed(r.t_reached_s, 3) + " s" : "") + ".");
+    }
+  } else {
+    h.paragraph(
+        "The validated simulation was not run (furuta identify --simulate): no tubes, no "
+        "Table III.",
+        "absent");
+  }
+  h.raw("</section>\n</body>\n</html>\n");
+  return h.str();
+}
+
+}  // namespace furuta::report

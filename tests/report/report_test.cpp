@@ -1,0 +1,402 @@
+// The HTML report: its text is escaped, absent parts are said to be absent, the warnings are
+// found; and a real identification's report, opened in headless Chromium, renders every figure
+// and table (the screenshot is kept in report_test_output/ of the test's working directory).
+#include "furuta/report/report.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include "commands.hpp"
+#include "temp_dir.hpp"
+
+namespace furuta::report {
+namespace {
+
+namespace fs = std::filesystem;
+using furuta::testing::TempDir;
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) {
+    ++n;
+  }
+  return n;
+}
+
+// Nothing the page shows may reach the network, and reading it needs no script.
+void expect_self_contained(const std::string& html) {
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);
+  EXPECT_EQ(html.find("<img"), std::string::npos);
+  EXPECT_FALSE(std::regex_search(html, std::regex(R"re(url\(\s*['"]?[^#'"\s])re")))
+      << "url() to anything but an element of the page";
+  EXPECT_FALSE(std::regex_search(
+      html, std::regex(R"((src|href)\s*=\s*["']?\s*(https?:)?//)", std::regex::icase)));
+  const std::regex href(R"re(href\s*=\s*"([^"]*)")re");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), href); it != std::sregex_iterator();
+       ++it) {
+    EXPECT_EQ((*it)[1].str().rfind('#', 0), 0u) << "a link out of the page: " << (*it)[1].str();
+  }
+}
+
+ReportInput minimal_input() {
+  ReportInput in;
+  in.software_version = "0.1.0-test";
+  in.experiment_names = {"run1"};
+  in.per_experiment.resize(1);
+  in.per_experiment[0].estimate = {1e-3, 2e-3, 8e-4, 1.2e-3, 7e-2, 8e-2, 6e-4};
+  in.combined = in.per_experiment[0];
+  return in;
+}
+
+TEST(ReportHtml, EscapesEveryText) {
+  ReportInput in = minimal_input();
+  in.title = "run <b>1</b> & \"2\"";
+  in.experiment_names = {"<script>alert(1)</script>"};
+  in.rig = {{"configuration", "lab's <rig>"}};
+  in.warnings = {{"session", "seed1: lost <reports> & more"}};
+  SessionSummary s;
+  s.file = "a<b>.lcmlog";
+  s.fatal_faults = {"usb <gone>"};
+  in.sessions = {s};
+  const std::string html = render_html(in);
+  EXPECT_EQ(html.find("<b>"), std::string::npos);
+  EXPECT_EQ(html.find("<script>"), std::string::npos);
+  EXPECT_EQ(html.find("<rig>"), std::string::npos);
+  EXPECT_NE(html.find("run &lt;b&gt;1&lt;/b&gt; &amp; &quot;2&quot;"), std::string::npos);
+  EXPECT_NE(html.find("&lt;script&gt;alert(1)&lt;/script&gt;"), std::string::npos);
+  EXPECT_NE(html.find("lost &lt;reports&gt; &amp; more"), std::string::npos);
+  EXPECT_NE(html.find("fatal fault usb &lt;gone&gt;"), std::string::npos);
+  EXPECT_EQ(escape_html("<a href='x'>&</a>"), "&lt;a href=&#39;x&#39;&gt;&amp;&lt;/a&gt;");
+  expect_self_contained(html);
+}
+
+TEST(ReportHtml, SaysWhatWasNotRun) {
+  const std::string html = render_html(minimal_input());
+  EXPECT_NE(html.find("SIVIA was not run"), std::string::npos);
+  EXPECT_NE(html.find("validated simulation was not run"), std::string::npos);
+  EXPECT_NE(html.find("No held-out session"), std::string::npos);
+  EXPECT_NE(html.find("class=\"none\""), std::string::npos) << "no warnings, and says so";
+  // Table I always has its seven parameters.
+  const std::size_t table = html.find("<table id=\"table-1\">");
+  ASSERT_NE(table, std::string::npos);
+  EXPECT_EQ(count(html.substr(table, html.find("</table>", table) - table), "<tr>"), 8u)
+      << "a header row and 7 parameters";
+  expect_self_contained(html);
+}
+
+TEST(ReportHtml, InlineSvgKeepsItsIdsToItself) {
+  ReportInput in = minimal_input();
+  const std::string svg =
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"10\" height=\"10\"><clipPath "
+      "id=\"plot\"><rect width=\"5\" height=\"5\"/></clipPath><g clip-path=\"url(#plot)\"/></svg>";
+  in.signals_svg = {svg, svg};
+  const std::string html = render_html(in);
+  EXPECT_EQ(html.find("id=\"plot\""), std::string::npos);
+  EXPECT_NE(html.find("<clipPath id=\"fig-signals-1-plot\">"), std::string::npos);
+  EXPECT_NE(html.find("clip-path=\"url(#fig-signals-1-plot)\""), std::string::npos);
+  EXPECT_NE(html.find("clip-path=\"url(#fig-signals-2-plot)\""), std::string::npos);
+}
+
+TEST(ReportHtml, InlineSvgLosesItsXmlDeclaration) {
+  ReportInput in = minimal_input();
+  in.signals_svg = {
+      "<?xml version=\"1.0\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" "
+      "width=\"10\" height=\"10\"><rect width=\"5\" height=\"5\"/></svg>"};
+  const std::string html = render_html(in);
+  EXPECT_EQ(html.find("<?xml"), std::string::npos);
+  EXPECT_NE(html.find("<figure id=\"fig-signals-1\">\n<svg xmlns"), std::string::npos);
+}
+
+TEST(ReportWarnings, EmptySetTruncationToleratedSamplesLogDamageAndShortTubes) {
+  ReportInput in = minimal_input();
+  SessionSummary s;
+  s.file = "s.lcmlog";
+  s.damaged_regions = 2;
+  s.truncated_tail = true;
+  s.fatal_faults = {"encoder_timeout"};
+  in.sessions = {s};
+  SiviaSummary sivia;
+  sivia.empty = true;
+  sivia.finding = "no parameter is consistent with the data";
+  sivia.truncated = true;
+  sivia.inconsistent_samples = 3;
+  sivia.q = 3;
+  in.sivia = sivia;
+  validated::ScenarioResult tube;
+  tube.scenario = validated::paper_scenario(1);
+  tube.parameters.name = "LSMI";
+  tube.t_reached_s = 1.5;
+  tube.status = validated::IntegrationResult::Status::width_exceeded;
+  tube.reason = "q2 wider than 2 pi";
+  validated::ScenarioResult whole = tube;
+  whole.scenario = validated::paper_scenario(2);
+  whole.t_reached_s = whole.scenario.duration_s;
+  whole.status = validated::IntegrationResult::Status::ok;
+  whole.reason.clear();
+  in.simulation = SimulationSummary{"the truth", {tube, whole}};
+
+  const std::vector<Warning> w = derived_warnings(in);
+  std::string all;
+  for (const Warning& x : w) all += x.topic + ": " + x.text + "\n";
+  EXPECT_NE(all.find("session: s.lcmlog: 2 damaged regions"), std::string::npos) << all;
+  EXPECT_NE(all.find("session: s.lcmlog: the log's tail is truncated"), std::string::npos);
+  EXPECT_NE(all.find("session: s.lcmlog: fatal fault encoder_timeout"), std::string::npos);
+  EXPECT_NE(all.find("SIVIA: empty feasible set: no parameter is consistent"), std::string::npos);
+  EXPECT_NE(all.find("SIVIA: the paving was truncated"), std::string::npos);
+  EXPECT_NE(all.find("SIVIA: 3 samples inconsistent"), std::string::npos);
+  EXPECT_NE(all.find("simulation: scenario (a), LSMI: the tube ended early, at 1.500 s of 4.0 s"),
+            std::string::npos)
+      << all;
+  EXPECT_EQ(all.find("scenario (b)"), std::string::npos) << "a tube that reached the end";
+  EXPECT_EQ(w.size(), 7u) << all;
+  const std::string html = render_html(in);
+  EXPECT_NE(html.find("The feasible set is empty."), std::string::npos);
+  EXPECT_EQ(count(html, "<figure id=\"fig-6-"), 2u);
+}
+
+TEST(ReportWarnings, LsmiWarningsAreExcitationTheDatasAreSession) {
+  identification::Identification id;
+  id.processed.resize(1);
+  id.processed[0].name = "run1";
+  id.per_experiment.resize(1);
+  id.per_experiment[0].warnings = {"poorly excited (relative standard deviation above 10 %): fv2"};
+  id.combined.warnings = {"W is ill-conditioned (condition number 2e+05)"};
+  id.warnings = {"run1: 4 samples missing from the log",
+                 "run1: poorly excited (relative standard deviation above 10 %): fv2",
+                 "all experiments: W is ill-conditioned (condition number 2e+05)"};
+  const ReportInput in = report_input(id);
+  ASSERT_EQ(in.warnings.size(), 3u);
+  EXPECT_EQ(in.warnings[0].topic, "session");
+  EXPECT_EQ(in.warnings[1].topic, "excitation");
+  EXPECT_EQ(in.warnings[2].topic, "excitation");
+  EXPECT_FALSE(in.validation);
+}
+
+TEST(ReportTableTwo, WithoutSiviaTheIntervalsItWouldStartFrom) {
+  const identification::ParameterVector lsmi = {1e-3, 2e-3, 8e-4, 1.2e-3, 7e-2, 8e-2, 6e-4};
+  config::SiviaConfig cfg;
+  cfg.fv1_prior = {-1.5, 1.5};
+  cfg.fv2_prior = {-0.5, 0.5};
+  const std::vector<IntervalRow> rows = table_two(lsmi, cfg, nullptr);
+  ASSERT_EQ(rows.size(), 7u);
+  EXPECT_NEAR(rows[0].lo, 1e-3 * 0.88, 1e-12);
+  EXPECT_NEAR(rows[0].hi, 1e-3 * 1.12, 1e-12);
+  EXPECT_NEAR(rows[4].hi, 7e-2 * 1.15, 1e-12);
+  EXPECT_EQ(rows[6].lo, -0.5);
+  EXPECT_EQ(rows[6].hi, 0.5);
+  EXPECT_EQ(rows[5].origin, "prior (unknown, bisected)");
+  EXPECT_NE(rows[2].origin.find("10 %"), std::string::npos);
+  EXPECT_FALSE(rows[5].outer_hull);
+}
+
+// --- the report of a real identification, in a real browser ---
+
+// A session of the simulated rig (the configuration's bang-bang), in virtual time.
+fs::path simulated_session(const fs::path& logs, std::int64_t seed) {
+  app::RunOptions options;
+  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  options.simulated = true;
+  options.virtual_time = true;
+  options.logs_dir = logs;
+  options.lcm_url = "memq://";
+  options.session.seed = seed;
+  options.session.duration_s = 6.0;
+  options.session.label = "seed" + std::to_string(seed);
+  std::ostringstream out, err;
+  EXPECT_EQ(app::run_session_command(options, out, err), 0) << out.str() << err.str();
+  const std::string text = out.str();
+  const auto at = text.find("; log ");
+  if (at == std::string::npos) return {};
+  return fs::path(text.substr(at + 6, text.find('\n', at) - at - 6));
+}
+
+// Measures what the browser laid out, into an element --dump-dom serialises.
+constexpr const char* kCheckScript = R"(<script>
+(function () {
+  const figures = Array.from(document.querySelectorAll('figure')).map(function (f) {
+    const svg = f.querySelector('svg');
+    const box = svg ? svg.getBBox() : null;
+    const shown = svg ? svg.getBoundingClientRect() : null;
+    return {id: f.id, svg: !!svg, width: box ? box.width : 0, height: box ? box.height : 0,
+            shown_width: shown ? shown.width : 0, shown_height: shown ? shown.height : 0,
+            elements: svg ? svg.querySelectorAll('*').length : 0,
+            caption: f.querySelector('figcaption') ? f.querySelector('figcaption').textContent : ''};
+  });
+  const tables = Array.from(document.querySelectorAll('table')).map(function (t) {
+    return {id: t.id, rows: t.tBodies.length ? t.tBodies[0].rows.length : 0,
+            columns: t.tHead ? t.tHead.rows[0].cells.length : 0};
+  });
+  const out = document.createElement('pre');
+  out.id = 'report-check';
+  out.textContent = JSON.stringify({figures: figures, tables: tables,
+                                    sections: document.querySelectorAll('section').length});
+  document.body.appendChild(out);
+})();
+</script>
+)";
+
+std::string unescape_text(std::string s) {
+  const std::pair<const char*, const char*> entities[] = {
+      {"&lt;", "<"}, {"&gt;", ">"}, {"&quot;", "\""}, {"&#39;", "'"}, {"&amp;", "&"}};
+  for (const auto& [from, to] : entities) {
+    const std::string f = from;
+    for (std::size_t at = s.find(f); at != std::string::npos; at = s.find(f, at + 1)) {
+      s.replace(at, f.size(), to);
+    }
+  }
+  return s;
+}
+
+std::string chromium_command() {
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
+    const std::string probe = std::string("command -v ") + name + " >/dev/null 2>&1";
+    if (std::system(probe.c_str()) == 0) return name;
+  }
+  return {};
+}
+
+int run_chromium(const std::string& chromium, const fs::path& profile, const std::string& args,
+                 const fs::path& stdout_file, const fs::path& log_file) {
+  const std::string command = "timeout 60 " + chromium +
+                              " --headless --no-sandbox --disable-gpu --no-first-run "
+                              "--disable-extensions --user-data-dir='" +
+                              profile.string() + "' " + args + " >'" + stdout_file.string() +
+                              "' 2>'" + log_file.string() + "'";
+  return std::system(command.c_str());
+}
+
+TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
+  const std::string chromium = chromium_command();
+  ASSERT_FALSE(chromium.empty())
+      << "headless Chromium is needed to check the report renders: install Debian's chromium "
+         "(scripts/setup.sh does)";
+
+  TempDir dir;
+  const fs::path fit1 = simulated_session(dir.path() / "logs", 1);
+  const fs::path fit2 = simulated_session(dir.path() / "logs", 2);
+  const fs::path held_out = simulated_session(dir.path() / "logs", 3);
+  ASSERT_FALSE(fit1.empty() || fit2.empty() || held_out.empty());
+  app::IdentifyCommandOptions options;
+  options.logs = {fit1, fit2};
+  options.validate = held_out;
+  options.output_dir = dir.path() / "identification";
+  options.sivia = true;
+  options.threads = 2;
+  options.simulate = true;
+  options.simulate_seconds = 0.3;  // the tubes' length does not change what the page must show
+  std::ostringstream out, err;
+  ASSERT_EQ(app::run_identify_command(options, out, err), 0) << err.str();
+  const fs::path report = options.output_dir / "report.html";
+  EXPECT_NE(out.str().find("report: " + report.string()), std::string::npos) << out.str();
+  ASSERT_TRUE(fs::exists(report));
+  const std::string html = read_text(report);
+  expect_self_contained(html);
+
+  const nlohmann::json results =
+      nlohmann::json::parse(read_text(options.output_dir / "results.json"));
+  const bool sivia_found_a_set = !results["sivia"].value("empty", false);
+  const std::size_t scenario_rows = results["simulation"]["results"].size();
+  EXPECT_EQ(scenario_rows, sivia_found_a_set ? 8u : 4u);
+
+  // A copy with the measuring script: the report itself carries no script.
+  const fs::path checked = dir.path() / "checked.html";
+  std::string with_script = html;
+  with_script.insert(with_script.rfind("</body>"), kCheckScript);
+  write_text(checked, with_script);
+  const fs::path dom = dir.path() / "dom.html";
+  const int rc =
+      run_chromium(chromium, dir.path() / "profile", "--dump-dom 'file://" + checked.string() + "'",
+                   dom, dir.path() / "chromium.log");
+  ASSERT_EQ(rc, 0) << "chromium --dump-dom failed: " << read_text(dir.path() / "chromium.log");
+  const std::string dumped = read_text(dom);
+  const std::string open = "<pre id=\"report-check\">";
+  const std::size_t at = dumped.find(open);
+  ASSERT_NE(at, std::string::npos) << "the check script did not run: " << dumped.substr(0, 500);
+  const std::size_t end = dumped.find("</pre>", at);
+  const nlohmann::json check =
+      nlohmann::json::parse(unescape_text(dumped.substr(at + open.size(), end - at - open.size())));
+
+  // Every figure drawn, with geometry.
+  std::size_t signals = 0, fig6 = 0;
+  bool fig4 = false, fig5 = false;
+  for (const auto& f : check["figures"]) {
+    const std::string id = f["id"];
+    EXPECT_TRUE(f["svg"].get<bool>()) << id;
+    EXPECT_GT(f["width"].get<double>(), 100) << id;
+    EXPECT_GT(f["height"].get<double>(), 50) << id;
+    EXPECT_GT(f["shown_width"].get<double>(), 100) << id << ": laid out on the page";
+    EXPECT_GT(f["elements"].get<int>(), 5) << id;
+    EXPECT_FALSE(f["caption"].get<std::string>().empty()) << id;
+    if (id.rfind("fig-signals-", 0) == 0) ++signals;
+    if (id.rfind("fig-6-", 0) == 0) ++fig6;
+    fig4 = fig4 || id == "fig-4";
+    fig5 = fig5 || id == "fig-5";
+  }
+  EXPECT_EQ(signals, 2u);
+  EXPECT_TRUE(fig4);
+  EXPECT_TRUE(fig5);
+  EXPECT_EQ(fig6, scenario_rows);
+
+  // Tables with the right rows.
+  std::map<std::string, std::pair<int, int>> tables;
+  for (const auto& t : check["tables"]) {
+    tables[t["id"].get<std::string>()] = {t["rows"].get<int>(), t["columns"].get<int>()};
+  }
+  EXPECT_EQ(tables["table-1"].first, 7) << "one row per parameter";
+  // parameter, unit, 2 experiments, all, CAD, truth
+  EXPECT_EQ(tables["table-1"].second, 7);
+  EXPECT_EQ(tables["table-2"].first, 7);
+  EXPECT_EQ(tables["table-3"].first, static_cast<int>(scenario_rows));
+  EXPECT_EQ(tables["sessions"].first, 3) << "two fitted, one held out";
+  EXPECT_EQ(tables["lsmi-diagnostics"].first, 3);
+  EXPECT_EQ(check["sections"].get<int>(), 7);
+  // Every tube that stopped short of its 0.3 s is a warning, and no other.
+  std::size_t short_tubes = 0;
+  for (const auto& r : results["simulation"]["results"]) {
+    if (r["t_reached_s"].get<double>() + 1e-9 < r["duration_s"].get<double>()) ++short_tubes;
+  }
+  EXPECT_EQ(count(html, "the tube ended early"), short_tubes);
+
+  // A screenshot a person can look at, kept beside the test's working directory.
+  const fs::path keep = fs::current_path() / "report_test_output";
+  fs::create_directories(keep);
+  fs::copy_file(report, keep / "report.html", fs::copy_options::overwrite_existing);
+  const fs::path png = keep / "report.png";
+  fs::remove(png);
+  const int shot = run_chromium(chromium, dir.path() / "profile",
+                                "--hide-scrollbars --window-size=1280,4000 --screenshot='" +
+                                    png.string() + "' 'file://" + report.string() + "'",
+                                dir.path() / "shot.out", dir.path() / "shot.log");
+  ASSERT_EQ(shot, 0) << read_text(dir.path() / "shot.log");
+  ASSERT_TRUE(fs::exists(png)) << read_text(dir.path() / "shot.log");
+  const std::string image = read_text(png);
+  EXPECT_EQ(image.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_GT(image.size(), 50'000u) << "a page of figures compresses to more than a blank page";
+  std::printf("[ measured ] report %zu bytes, screenshot %s (%zu bytes)\n", html.size(),
+              png.c_str(), image.size());
+}
+
+}  // namespace
+}  // namespace furuta::report

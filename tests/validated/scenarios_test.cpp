@@ -1,0 +1,271 @@
+// The paper's scenarios: the "measurement" against the physics, a short real integration whose
+// tube must hold the true model's samples (soundness), Table III, JSON and the Fig. 6 figure.
+#include "furuta/validated/scenarios.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace furuta::validated {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+TEST(Scenarios, ThePapersFour) {
+  const std::vector<Scenario> s = paper_scenarios();
+  ASSERT_EQ(s.size(), 4u);
+  const double q2_deg[] = {-100, 50, -90, -45};
+  const double u_nm[] = {0, 0, 0.17, -0.1};
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(s[i].number, static_cast<int>(i + 1));
+    EXPECT_NEAR(s[i].q2_initial_rad, q2_deg[i] * kPi / 180, 1e-15);
+    EXPECT_EQ(s[i].torque_nm, u_nm[i]);
+    EXPECT_EQ(s[i].duration_s, 4.0);
+  }
+  EXPECT_EQ(s[0].label(), "(a)");
+  EXPECT_EQ(s[3].label(), "(d)");
+  EXPECT_EQ(s[0].description(), "x0 = [0, 0, -100 deg, 0], u = 0 N m");
+  EXPECT_EQ(s[2].description(), "x0 = [0, 0, -90 deg, 0], u = 0.17 N m");
+  EXPECT_EQ(paper_scenario(2).q2_initial_rad, s[1].q2_initial_rad);
+  EXPECT_THROW(paper_scenario(0), std::invalid_argument);
+  EXPECT_THROW(paper_scenario(5), std::invalid_argument);
+}
+
+TEST(ScenarioMeasurement, SampledAndQuantisedLikeTheRig) {
+  const ScenarioMeasurement m =
+      measure_scenario(paper_scenario(1), bridge::ModelParameters::paper_run1());
+  ASSERT_EQ(m.t_s.size(), 251u);  // 0 to 4 s every 16 ms
+  const double pendulum = 2 * kPi / 4096, arm = 2 * kPi / (512 * 26.0);
+  EXPECT_DOUBLE_EQ(m.pendulum_resolution_rad, pendulum);
+  EXPECT_DOUBLE_EQ(m.arm_resolution_rad, arm);
+  for (std::size_t k = 0; k < m.t_s.size(); ++k) {
+    EXPECT_DOUBLE_EQ(m.t_s[k], 0.016 * static_cast<double>(k));
+    // A whole number of counts, within half a count of the truth.
+    EXPECT_NEAR(m.q2_rad[k] / pendulum, std::round(m.q2_rad[k] / pendulum), 1e-9);
+    EXPECT_LE(std::abs(m.q2_rad[k] - m.q2_true_rad[k]), pendulum / 2 + 1e-15);
+    EXPECT_NEAR(m.q1_rad[k] / arm, std::round(m.q1_rad[k] / arm), 1e-9);
+    EXPECT_LE(std::abs(m.q1_rad[k] - m.q1_true_rad[k]), arm / 2 + 1e-15);
+  }
+  EXPECT_DOUBLE_EQ(m.q2_true_rad[0], -100 * kPi / 180);
+  EXPECT_EQ(m.q1_true_rad[0], 0.0);
+}
+
+// Free decay (u = 0): friction only takes energy out, so the swing never exceeds its start and
+// its peaks shrink; the half-period lies between the small-swing value with the arm free and,
+// at this amplitude, the pendulum's with the arm clamped stretched by the large-swing factor.
+TEST(ScenarioMeasurement, FreeDecayFollowsThePhysics) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  for (const int n : {1, 2}) {
+    const Scenario s = paper_scenario(n);
+    const ScenarioMeasurement m = measure_scenario(s, p);
+    const double start = std::abs(s.q2_initial_rad);
+    std::vector<double> crossings, peaks;
+    double peak = 0;
+    for (std::size_t k = 1; k < m.t_s.size(); ++k) {
+      const double a = m.q2_true_rad[k - 1], b = m.q2_true_rad[k];
+      EXPECT_LE(std::abs(b), start + 1e-9) << "scenario " << n << " at " << m.t_s[k] << " s";
+      peak = std::max(peak, std::abs(b));
+      if ((a < 0) != (b < 0)) {
+        crossings.push_back(m.t_s[k - 1] + 0.016 * a / (a - b));
+        peaks.push_back(peak);
+        peak = 0;
+      }
+    }
+    ASSERT_GE(crossings.size(), 6u) << "scenario " << n;
+    for (std::size_t i = 2; i < peaks.size(); ++i) EXPECT_LT(peaks[i], peaks[i - 1]);
+    const double free_arm = kPi * std::sqrt((p.mu4 - p.mu3 * p.mu3 / p.mu1) / p.mug);
+    const double clamped = kPi * std::sqrt(p.mu4 / p.mug);
+    // Complete elliptic integral factor 2 K(sin(a/2)) / pi at the start's amplitude.
+    const double k = std::sin(start / 2);
+    const double stretch = 1 + k * k / 4 + 9 * std::pow(k, 4) / 64 + 25 * std::pow(k, 6) / 256 +
+                           1225 * std::pow(k, 8) / 16384 + 0.05;
+    for (std::size_t i = 1; i < crossings.size(); ++i) {
+      const double half_period = crossings[i] - crossings[i - 1];
+      EXPECT_GT(half_period, free_arm) << "scenario " << n;
+      EXPECT_LT(half_period, clamped * stretch) << "scenario " << n;
+    }
+  }
+}
+
+// A constant torque drives the arm to the speed where viscous friction balances it (the pendulum's
+// coupling averages out): q1 grows at about u / fv1.
+TEST(ScenarioMeasurement, ConstantTorqueDrivesTheArmAtItsTerminalSpeed) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  for (const int n : {3, 4}) {
+    const Scenario s = paper_scenario(n);
+    const ScenarioMeasurement m = measure_scenario(s, p);
+    const double speed = (m.q1_true_rad.back() - m.q1_true_rad[125]) / (m.t_s.back() - m.t_s[125]);
+    EXPECT_NEAR(speed, s.torque_nm / p.fv1, 0.15 * std::abs(s.torque_nm / p.fv1))
+        << "scenario " << n;
+  }
+}
+
+TEST(ScenarioMeasurement, BadOptionsAreRefused) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  MeasurementOptions o;
+  o.step_s = 0.003;  // 16 ms is not a whole number of 3 ms steps
+  EXPECT_THROW(measure_scenario(paper_scenario(1), p, o), std::invalid_argument);
+  o.step_s = 0;
+  EXPECT_THROW(measure_scenario(paper_scenario(1), p, o), std::invalid_argument);
+  Scenario s = paper_scenario(1);
+  s.duration_s = -1;
+  EXPECT_THROW(measure_scenario(s, p), std::invalid_argument);
+  StateUncertainty u;
+  u.q2_rad = -1e-3;
+  EXPECT_THROW(initial_state_box(paper_scenario(1), u), std::invalid_argument);
+}
+
+TEST(ScenarioParameters, IntervalSetsWidenTheMusAndTakeTheFrictions) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const ParameterSet set = interval_parameters(
+      "SIVIA", p, {12, 12, 10, 12, 15}, Interval(0.043012, 0.13002), Interval(0.000454, 0.001174));
+  EXPECT_EQ(set.name, "SIVIA");
+  EXPECT_LE(set.parameters.mu1.lo(), p.mu1 * 0.88);
+  EXPECT_GE(set.parameters.mu1.hi(), p.mu1 * 1.12);
+  EXPECT_NEAR(set.parameters.mu3.width(), 0.2 * p.mu3, 1e-12);
+  EXPECT_NEAR(set.parameters.mug.width(), 0.3 * p.mug, 1e-12);
+  EXPECT_EQ(set.parameters.fv1, Interval(0.043012, 0.13002));
+  const ParameterSet point = point_parameters("LSMI", p);
+  EXPECT_TRUE(point.parameters.fv2.is_point());
+  EXPECT_EQ(point.parameters.fv2.lo(), p.fv2);
+  EXPECT_THROW(interval_parameters("x", p, {-1, 0, 0, 0, 0}, Interval(0, 1), Interval(0, 1)),
+               std::invalid_argument);
+  EXPECT_THROW(interval_parameters("x", p, {0, 0, 0, 0, 0}, Interval::entire(), Interval(0, 1)),
+               std::invalid_argument);
+}
+
+// One short real run shared by the tests below (computed once): scenario (a) for 0.2 s with the
+// truth as point parameters and the data uncertainty on x0.
+class ShortRun : public ::testing::Test {
+ protected:
+  static const Scenario& scenario() {
+    static const Scenario s = [] {
+      Scenario a = paper_scenario(1);
+      a.duration_s = 0.2;
+      return a;
+    }();
+    return s;
+  }
+  static const ScenarioTubes& tubes() {
+    static const ScenarioTubes t = run_scenario_tubes(
+        scenario(), FurutaParameters::point(bridge::ModelParameters::paper_run1()), {}, {});
+    return t;
+  }
+};
+
+// Every solution from x0 +- the uncertainty is in the tube: the true model's own samples, from
+// the centre and from starts inside the box, are all covered, in both modes.
+TEST_F(ShortRun, TubeHoldsTheTrueModelsSamples) {
+  ASSERT_EQ(tubes().status, IntegrationResult::Status::ok) << tubes().reason;
+  ASSERT_EQ(tubes().pieces.size(), 1u);
+  EXPECT_DOUBLE_EQ(tubes().t_reached_s, 0.2);
+  const bridge::ModelParameters truth = bridge::ModelParameters::paper_run1();
+  for (const double offset : {0.0, 1.5e-3, -1.5e-3}) {
+    Scenario start = scenario();
+    start.q2_initial_rad += offset;
+    MeasurementOptions fine;
+    fine.sample_period_s = 0.004;  // more samples than the rig takes, to test more instants
+    const ScenarioMeasurement m = measure_scenario(start, truth, fine);
+    ASSERT_EQ(m.t_s.size(), 51u);
+    for (const CoverageMode mode : {CoverageMode::step, CoverageMode::interpolated}) {
+      for (const std::size_t component :
+           {std::size_t{FurutaDynamics::q1}, std::size_t{FurutaDynamics::q2}}) {
+        const std::vector<double>& y =
+            component == FurutaDynamics::q1 ? m.q1_true_rad : m.q2_true_rad;
+        const Coverage c = coverage(tubes().views(), component, m.t_s, y, mode);
+        EXPECT_EQ(c.in_time, m.t_s.size());
+        EXPECT_EQ(c.covered, m.t_s.size())
+            << "offset " << offset << ", component " << component << ", " << to_string(mode);
+      }
+    }
+  }
+}
+
+// The same tube against a model it does not hold (the pendulum started 0.01 rad outside the
+// box): the coverage falls, so the check above can fail.
+TEST_F(ShortRun, TubeMissesAStartOutsideItsBox) {
+  Scenario outside = scenario();
+  outside.q2_initial_rad += 0.01;
+  const ScenarioMeasurement m = measure_scenario(outside, bridge::ModelParameters::paper_run1());
+  const Coverage c = coverage(tubes().views(), FurutaDynamics::q2, m.t_s, m.q2_true_rad,
+                              CoverageMode::interpolated);
+  EXPECT_LT(c.covered, c.measurements / 2);
+}
+
+TEST_F(ShortRun, ResultTableJsonAndFigure) {
+  const ScenarioMeasurement m = measure_scenario(scenario(), bridge::ModelParameters::paper_run1());
+  const ParameterSet set = point_parameters("LSMI", bridge::ModelParameters::paper_run1());
+  const ScenarioResult r = evaluate_tubes(scenario(), set, {}, m, tubes());
+  EXPECT_EQ(r.q2_step.measurements, m.t_s.size());
+  EXPECT_EQ(r.q2_step.in_time, m.t_s.size());
+  EXPECT_EQ(r.q2_tube.size(), tubes().steps);
+  EXPECT_GT(r.q2_mean_width_rad, 0.0);
+  EXPECT_LE(r.q2_mean_width_rad, r.q2_max_width_rad);
+  // The x0 box is 3.2e-3 wide in q2: the tube can never be narrower than that at t = 0.
+  EXPECT_GE(r.q2_max_width_rad, 3.2e-3);
+  // Quantised samples: covered by the step test at least as often as by the interpolated one.
+  EXPECT_GE(r.q2_step.covered, r.q2_interpolated.covered);
+  ASSERT_EQ(r.q2_covered_step.size(), m.t_s.size());
+  EXPECT_EQ(static_cast<std::size_t>(
+                std::count(r.q2_covered_step.begin(), r.q2_covered_step.end(), true)),
+            r.q2_step.covered);
+
+  const std::string table = format_table_three({r});
+  EXPECT_NE(table.find("(a)"), std::string::npos);
+  EXPECT_NE(table.find("LSMI"), std::string::npos);
+  EXPECT_NE(table.find("0.200 / 0.2"), std::string::npos);
+
+  const nlohmann::json j = nlohmann::json::parse(scenarios_json({r}));
+  ASSERT_TRUE(j.is_array());
+  ASSERT_EQ(j.size(), 1u);
+  EXPECT_EQ(j[0]["scenario"], 1);
+  EXPECT_EQ(j[0]["parameter_set"], "LSMI");
+  EXPECT_EQ(j[0]["status"], "ok");
+  EXPECT_EQ(j[0]["coverage"]["q2_step"]["covered"], r.q2_step.covered);
+  EXPECT_DOUBLE_EQ(j[0]["coverage"]["q2_interpolated"]["rate"].get<double>(),
+                   r.q2_interpolated.rate());
+  EXPECT_DOUBLE_EQ(j[0]["parameters"]["fv1"][0].get<double>(), set.parameters.fv1.lo());
+
+  const std::string svg = svg_scenario(r);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  EXPECT_NE(svg.find("Scenario (a): x0 = [0, 0, -100 deg, 0], u = 0 N m, LSMI"), std::string::npos);
+  EXPECT_NE(svg.find("class=\"tube\""), std::string::npos);
+  EXPECT_NE(svg.find("class=\"measured\""), std::string::npos);
+  EXPECT_NE(svg.find("time t [s]"), std::string::npos);
+  EXPECT_NE(svg.find("q2 [deg]"), std::string::npos);
+  const std::regex circle("<circle cx=");
+  const auto circles =
+      std::distance(std::sregex_iterator(svg.begin(), svg.end(), circle), std::sregex_iterator());
+  EXPECT_EQ(static_cast<std::size_t>(circles), m.t_s.size() + 2);  // samples + legend's two
+  std::ostringstream rate;
+  rate << "step (paper) " << std::fixed << std::setprecision(1) << 100 * r.q2_step.rate() << " %";
+  EXPECT_NE(svg.find(rate.str()), std::string::npos) << rate.str();
+  EXPECT_EQ(svg.find("tube ends"), std::string::npos);  // it reached the end
+}
+
+// A tube that ends early: the samples past its end are counted apart, and the figure marks it.
+TEST_F(ShortRun, EarlyEndIsReported) {
+  Scenario longer = scenario();
+  longer.duration_s = 0.8;
+  const ScenarioMeasurement m = measure_scenario(longer, bridge::ModelParameters::paper_run1());
+  const ScenarioResult r = evaluate_tubes(
+      longer, point_parameters("LSMI", bridge::ModelParameters::paper_run1()), {}, m, tubes());
+  EXPECT_DOUBLE_EQ(r.t_reached_s, 0.2);
+  EXPECT_EQ(r.q2_step.outside_time, m.t_s.size() - r.q2_step.in_time);
+  EXPECT_GT(r.q2_step.outside_time, 20u);
+  EXPECT_LT(r.q2_step.rate(), r.q2_step.rate_in_time());
+  EXPECT_NE(svg_scenario(r).find("tube ends at 0.200 s"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace furuta::validated

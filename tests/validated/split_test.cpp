@@ -1,0 +1,115 @@
+// The splitting integrator: a box that one tube cannot carry is split and every piece's tube
+// holds every sampled solution from its own initial box; the pieces cover x0; the result does not
+// depend on the number of threads; the hull queries and the caps.
+#include "furuta/validated/split.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "reference.hpp"
+
+namespace furuta::validated {
+namespace {
+
+using testing::Point;
+
+// The pendulum from a box 10x the benchmark's: one tube passes max_width at about 2 s, the split
+// run reaches 3 s (its hull is wide: the true set spreads over a large part of the swing).
+IntegratorOptions wide_pendulum_options() {
+  IntegratorOptions options;
+  options.t_end = 3.0;
+  return options;
+}
+
+const Box kWide{Interval(-1.845, -1.645), Interval(-0.1, 0.1)};
+
+TEST(Split, WidePendulumBoxIsSplitAndEveryPieceIsSound) {
+  const SimplePendulum pendulum;
+  const IntegratorOptions options = wide_pendulum_options();
+  const IntegrationResult single = integrate(pendulum, kWide, options);
+  EXPECT_FALSE(single.ok());
+
+  SplitOptions split;
+  split.max_pieces = 32;
+  const SplitResult r = integrate_split(pendulum, kWide, options, split);
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_EQ(r.t_reached, 3.0);
+  EXPECT_GT(r.pieces.size(), 1U);
+  EXPECT_LE(r.pieces.size(), 32U);
+  EXPECT_EQ(r.splits + 1, r.pieces.size());
+  EXPECT_EQ(r.tubes().size(), r.pieces.size());
+
+  // Every piece: points of its own box along its tube.
+  std::mt19937_64 rng(99);
+  testing::SoundnessCount total;
+  for (const Tube& piece : r.pieces) {
+    EXPECT_TRUE(piece.initial.is_subset(kWide));
+    const testing::SoundnessCount c =
+        testing::check_tube(pendulum, piece, testing::sample_box<2>(piece.initial, 60, rng), 8);
+    total.points += c.points;
+    total.checks += c.checks;
+    total.violations += c.violations;
+  }
+  EXPECT_EQ(total.violations, 0U);
+  // The pieces cover x0: every sampled point of x0 is in some piece's initial box, and its
+  // solution inside the hull at 1, 2, 3 s.
+  for (const Point<2>& x : testing::sample_box<2>(kWide, 300, rng)) {
+    EXPECT_TRUE(std::any_of(r.pieces.begin(), r.pieces.end(),
+                            [&](const Tube& t) { return testing::inside(x, t.initial); }));
+    Point<2> y = x;
+    for (int second = 1; second <= 3; ++second) {
+      y = testing::simulate(pendulum, y, second - 1.0, second, 1e-3);
+      EXPECT_TRUE(testing::inside(y, r.enclosure_at(second))) << second;
+    }
+  }
+  std::printf(
+      "[ measured ] split pendulum +-0.1, 3 s: %zu pieces, %zu runs, %zu steps, %.3f s wall, x1 "
+      "width at 3 s %.4f; %zu points, %zu checks, %zu violations\n",
+      r.pieces.size(), r.runs, r.steps, r.seconds, r.enclosure_at(3.0)[0].width(), total.points,
+      total.checks, total.violations);
+}
+
+TEST(Split, ResultDoesNotDependOnThreads) {
+  const IntegratorOptions options = wide_pendulum_options();
+  SplitOptions split;
+  split.max_pieces = 8;
+  split.threads = 1;
+  const SplitResult one = integrate_split(SimplePendulum{}, kWide, options, split);
+  split.threads = 2;
+  const SplitResult two = integrate_split(SimplePendulum{}, kWide, options, split);
+  ASSERT_EQ(one.pieces.size(), two.pieces.size());
+  EXPECT_EQ(one.status, two.status);
+  EXPECT_EQ(one.t_reached, two.t_reached);
+  for (std::size_t i = 0; i < one.pieces.size(); ++i) {
+    EXPECT_EQ(one.pieces[i].initial, two.pieces[i].initial);
+    ASSERT_EQ(one.pieces[i].steps.size(), two.pieces[i].steps.size());
+    EXPECT_EQ(one.pieces[i].steps.back().end, two.pieces[i].steps.back().end);
+  }
+}
+
+TEST(Split, CapsEndTheRunWithTheFailedPieces) {
+  IntegratorOptions options = wide_pendulum_options();
+  SplitOptions split;
+  split.max_pieces = 2;
+  const SplitResult r = integrate_split(SimplePendulum{}, kWide, options, split);
+  EXPECT_LE(r.pieces.size(), 2U);
+  EXPECT_FALSE(r.ok());
+  EXPECT_FALSE(r.reason.empty());
+  EXPECT_LT(r.t_reached, 3.0);
+  // Beyond t_reached some piece has no enclosure: the hull is empty there, not partial.
+  EXPECT_TRUE(r.enclosure_at(r.t_reached + 0.01).is_empty());
+  EXPECT_FALSE(r.enclosure_at(r.t_reached).is_empty());
+  EXPECT_FALSE(r.enclosure_over(0.0, 10.0).is_empty());
+  for (const Tube& t : r.pieces) EXPECT_GE(t.t_end(), r.t_reached);
+
+  split.max_pieces = 0;
+  EXPECT_THROW((void)integrate_split(SimplePendulum{}, kWide, options, split),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace furuta::validated

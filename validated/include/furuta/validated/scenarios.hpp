@@ -1,0 +1,177 @@
+#pragma once
+// The paper's validation by guaranteed simulation (section IV.B, Fig. 6, Table III): four
+// scenarios run on the simulated rig as "measurements", tubes from interval (SIVIA) and point
+// (LSMI) parameters with the data's uncertainty on the initial state, coverage rates, Table III,
+// Fig. 6-style figures. See validated/README.md, "Scenarios and coverage".
+//
+//   const Scenario s = paper_scenario(1);
+//   const ScenarioMeasurement m = measure_scenario(s, bridge::ModelParameters::paper_run1());
+//   const ScenarioResult r = evaluate_scenario(s, point_parameters("LSMI", estimate), m, {}, {});
+//   std::cout << format_table_three({r});
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/interval/box.hpp"
+#include "furuta/validated/coverage.hpp"
+#include "furuta/validated/integrator.hpp"
+#include "furuta/validated/ode.hpp"
+#include "furuta/validated/split.hpp"
+
+namespace furuta::validated {
+
+// From rest at x0 = [q1, dq1, q2, dq2] = [0, 0, q2_initial, 0] under a constant arm torque.
+struct Scenario {
+  int number = 1;  // the paper's (a)..(d) are 1..4
+  double q2_initial_rad = 0.0;
+  double torque_nm = 0.0;
+  double duration_s = 4.0;
+
+  std::string label() const;        // "(a)" for 1 ... "(d)" for 4, "#n" beyond
+  std::string description() const;  // "x0 = [0, 0, -100 deg, 0], u = 0 N m"
+};
+
+// The paper's four: [0,0,-100 deg,0] u = 0; [0,0,50 deg,0] u = 0; [0,0,-90 deg,0] u = 0.17 N m;
+// [0,0,-45 deg,0] u = -0.1 N m; 4 s each.
+std::vector<Scenario> paper_scenarios();
+// One of them; std::invalid_argument outside 1..4.
+Scenario paper_scenario(int number);
+
+// How the simulated rig "measures" a scenario (the rig's defaults).
+struct MeasurementOptions {
+  double step_s = 1e-3;                  // RK4 step of the true model
+  double sample_period_s = 0.016;        // the daemon's loop
+  double arm_resolution_rad = 0.0;       // 0: one count of the 512-line motor encoder behind 26:1
+  double pendulum_resolution_rad = 0.0;  // 0: one count of the 1047's 4096 per turn
+};
+
+struct ScenarioMeasurement {
+  std::vector<double> t_s;     // 0, T, 2T, ... up to the scenario's duration
+  std::vector<double> q1_rad;  // quantised like the encoders
+  std::vector<double> q2_rad;
+  std::vector<double> q1_true_rad;  // the model's own values at the samples (no quantisation)
+  std::vector<double> q2_true_rad;
+  double arm_resolution_rad = 0.0;
+  double pendulum_resolution_rad = 0.0;
+};
+
+// The true model from exactly x0 with the scenario's torque, RK4 at options.step_s, sampled
+// every sample period with the encoders' quantisation. std::invalid_argument for a non-positive
+// step, period or duration, or a period that is not a whole number of steps.
+ScenarioMeasurement measure_scenario(const Scenario& scenario, const bridge::ModelParameters& truth,
+                                     const MeasurementOptions& options = {});
+
+// The data's uncertainty on the initial state (half-widths): the tube starts from x0 +- these.
+struct StateUncertainty {
+  double q1_rad = 1e-3;
+  double dq1_rad_s = 1e-3;
+  double q2_rad = 1.6e-3;  // about one pendulum count and the zero's uncertainty
+  double dq2_rad_s = 1e-3;
+};
+
+// [q1, dq1, q2, dq2] of the scenario's x0 widened by the uncertainty (std::invalid_argument for
+// a negative or non-finite half-width).
+interval::Box initial_state_box(const Scenario& scenario, const StateUncertainty& uncertainty);
+
+// A named set of model parameters for the tubes: intervals (SIVIA) or points (LSMI).
+struct ParameterSet {
+  std::string name;
+  FurutaParameters parameters;
+};
+
+// Point parameters (every interval a single value).
+ParameterSet point_parameters(std::string name, const bridge::ModelParameters& p);
+// The paper's interval parameters: the mu's as mu_centre +- percent (Table II: 12, 12, 10, 12, 15
+// for mu1, mu2, mu3, mu4, mug), the frictions as given (SIVIA's outer hull).
+ParameterSet interval_parameters(std::string name, const bridge::ModelParameters& mu_centre,
+                                 const std::array<double, 5>& mu_percent,
+                                 const interval::Interval& fv1, const interval::Interval& fv2);
+
+// The integrator's settings for the Furuta scenarios (measured in bench/validated_bench.cpp):
+// tolerance 1e-10 (the initial boxes are >= 1e-5 wide: 1e-13 only triples the steps), the QR frame
+// at every step (the arm's damping, about 150 /s, makes the parallelepiped ill-conditioned), and
+// max_width 2 pi (a q2 tube wider than a turn says nothing about the angle).
+IntegratorOptions scenario_integrator_options();
+
+// Split options that never split: one tube.
+inline SplitOptions single_tube() {
+  SplitOptions o;
+  o.max_pieces = 1;
+  return o;
+}
+
+// The tube set of one scenario: today one piece from `integrate`; a split run gives several.
+struct ScenarioTubes {
+  std::vector<Tube> pieces;
+  IntegrationResult::Status status = IntegrationResult::Status::ok;
+  std::string reason;  // why the run ended early (empty when it reached the end)
+  double t_reached_s = 0.0;
+  std::size_t steps = 0;
+  std::size_t rejected = 0;
+  double seconds = 0.0;  // wall time
+
+  std::vector<const Tube*> views() const;
+};
+
+// Validated integration of the Furuta model from the initial state box, with the scenario's
+// torque, over [0, scenario.duration_s] (options' t_start and t_end are set from the scenario; the
+// rest is used as given): FurutaStateDynamics for point parameters, FurutaDynamics (parameters
+// carried as state) for intervals. A run that fails is split into pieces up to split.max_pieces
+// (1: one tube, no splitting).
+ScenarioTubes run_scenario_tubes(const Scenario& scenario, const FurutaParameters& parameters,
+                                 const StateUncertainty& uncertainty, IntegratorOptions options,
+                                 const SplitOptions& split = single_tube());
+
+// One step of the q2 tube (for figures): the enclosure of q2 over [t0, t1].
+struct TubeBand {
+  double t0_s = 0.0;
+  double t1_s = 0.0;
+  double lo_rad = 0.0;
+  double hi_rad = 0.0;
+};
+
+// A row of Table III, with what its figure needs.
+struct ScenarioResult {
+  Scenario scenario;
+  ParameterSet parameters;
+  StateUncertainty uncertainty;
+  IntegrationResult::Status status = IntegrationResult::Status::ok;
+  std::string reason;
+  double t_reached_s = 0.0;
+  std::size_t steps = 0;
+  std::size_t pieces = 0;
+  double seconds = 0.0;
+  Coverage q1_step, q1_interpolated, q2_step, q2_interpolated;
+  // Width of the q2 enclosure at the sample times reached (interpolated): mean and largest.
+  double q2_mean_width_rad = 0.0;
+  double q2_max_width_rad = 0.0;
+  std::vector<TubeBand> q2_tube;      // every piece's steps
+  std::vector<bool> q2_covered_step;  // per measurement, the paper's test
+  ScenarioMeasurement measurement;
+};
+
+// Coverage rates and figures' data of a tube set against a measurement.
+ScenarioResult evaluate_tubes(const Scenario& scenario, const ParameterSet& parameters,
+                              const StateUncertainty& uncertainty,
+                              const ScenarioMeasurement& measurement, const ScenarioTubes& tubes);
+// run_scenario_tubes, then evaluate_tubes.
+ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& parameters,
+                                 const ScenarioMeasurement& measurement,
+                                 const StateUncertainty& uncertainty,
+                                 const IntegratorOptions& options);
+
+// Table III as text: per scenario and parameter set, time reached, steps, coverage of q2 (both
+// modes, over all samples and over those reached) and q1, the q2 tube's mean width, the status;
+// with the paper's figures for comparison.
+std::string format_table_three(const std::vector<ScenarioResult>& results);
+// The same rows as a JSON array (parameters as [lo, hi], coverage counts and rates).
+std::string scenarios_json(const std::vector<ScenarioResult>& results);
+// Fig. 6: the q2 tube (filled step boxes) with the measured q2 over it (samples outside the
+// paper's test in red), axes in s and deg, the scenario as the title, the coverage rates in the
+// legend. A self-contained SVG document.
+std::string svg_scenario(const ScenarioResult& result);
+
+}  // namespace furuta::validated

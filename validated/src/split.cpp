@@ -1,0 +1,186 @@
+// The splitting integrator (see split.hpp and validated/README.md, "Splitting").
+
+#include "furuta/validated/split.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <utility>
+
+namespace furuta::validated {
+namespace {
+
+// A piece to integrate: its initial box, the failed run it continues (null: from t_start) and
+// that run's step to restart from, its depth and its path in the bisection tree ('0' lower half).
+struct Job {
+  Box box;
+  std::shared_ptr<const IntegrationResult> parent;
+  std::size_t step = 0;
+  int depth = 0;
+  std::string path;
+};
+
+// The components that the field reads (q1 of the Furuta model is read by nothing: its direction
+// is a pure translation of the solutions, splitting it changes nothing).
+std::vector<bool> read_components(const std::vector<Tape>& tapes, std::size_t n) {
+  std::vector<bool> read(n, false);
+  for (const Tape& tape : tapes) {
+    auto mark = [&](int node) {
+      if (node >= 0 && static_cast<std::size_t>(node) < n)
+        read[static_cast<std::size_t>(node)] = true;
+    };
+    for (std::size_t i = n; i < tape.nodes.size(); ++i) {
+      mark(tape.nodes[i].a);
+      mark(tape.nodes[i].b);
+    }
+    for (int out : tape.outputs) mark(out);
+  }
+  return read;
+}
+
+// The widths of C r0 and B r (the exact and the error part of the doubleton) at a step's t0.
+void part_widths(const TubeStep& s, std::size_t n, std::vector<double>& exact,
+                 std::vector<double>& error) {
+  exact.assign(n, 0.0);
+  error.assign(n, 0.0);
+  for (std::size_t v = 0; v < n; ++v) {
+    for (std::size_t j = 0; j < n; ++j) {
+      exact[v] += std::abs(s.c[v * n + j]) * s.r0[j].width();
+      error[v] += std::abs(s.b[v * n + j]) * s.r[j].width();
+    }
+  }
+}
+
+// The last step whose set at t0 was still tight (excess_ratio at most `excess`), or 0.
+std::size_t restart_step(const Tube& tube, double excess) {
+  std::vector<double> exact;
+  std::vector<double> error;
+  for (std::size_t j = tube.steps.size(); j-- > 1;) {
+    part_widths(tube.steps[j], tube.dimension, exact, error);
+    if (excess > 0.0 && excess_ratio(exact, error) <= excess) return j;
+  }
+  return 0;
+}
+
+// The component of the piece to bisect: the widest relative to x0 among those that can bend the
+// flow (read by the field: the moving state and the parameters carried as state), so that the
+// pieces shrink in turn in every such direction. (Choosing by the share of each direction in the
+// set's extent at the failure kept cutting the same one: on the Furuta model the pendulum angle,
+// while the speeds' widths fed the growth as much.)
+std::size_t split_component(const Box& piece, const Box& x0, const std::vector<bool>& read) {
+  std::vector<double> scale(x0.size(), 0.0);
+  for (std::size_t v = 0; v < x0.size(); ++v) {
+    if (read[v] && x0[v].width() > 0.0) scale[v] = x0[v].width();
+  }
+  return piece.widest_relative_index(scale);
+}
+
+}  // namespace
+
+std::vector<const Tube*> SplitResult::tubes() const {
+  std::vector<const Tube*> out;
+  out.reserve(pieces.size());
+  for (const Tube& t : pieces) out.push_back(&t);
+  return out;
+}
+
+Box SplitResult::enclosure_at(double t) const {
+  if (pieces.empty()) return Box();
+  const std::size_t n = pieces.front().dimension;
+  if (!(t >= pieces.front().t_start && t <= t_reached)) return Box(n, Interval::empty());
+  Box out(n, Interval::empty());
+  for (const Tube& p : pieces) out = hull(out, p.enclosure_at(t));
+  return out;
+}
+
+Box SplitResult::enclosure_over(double ta, double tb) const {
+  if (pieces.empty()) return Box();
+  const std::size_t n = pieces.front().dimension;
+  tb = std::min(tb, t_reached);
+  if (!(ta <= tb)) return Box(n, Interval::empty());
+  Box out(n, Interval::empty());
+  for (const Tube& p : pieces) out = hull(out, p.enclosure_over(ta, tb));
+  return out;
+}
+
+SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
+                                  const std::vector<double>& switches, const Box& x0,
+                                  const IntegratorOptions& options, const SplitOptions& split) {
+  if (split.max_pieces == 0 || split.max_depth < 0 || !(split.restart_excess >= 0.0)) {
+    throw std::invalid_argument("split options: max_pieces >= 1, max_depth >= 0, excess >= 0");
+  }
+  const auto started = std::chrono::steady_clock::now();
+  const std::vector<bool> read = read_components(tapes, x0.size());
+  tbb::task_arena arena(split.threads > 0 ? split.threads : tbb::task_arena::automatic);
+
+  SplitResult out;
+  struct Done {
+    std::string path;
+    std::shared_ptr<const IntegrationResult> result;
+  };
+  std::vector<Done> done;
+  std::vector<Job> jobs{Job{x0, nullptr, 0, 0, ""}};
+  std::size_t leaves = 1;
+  while (!jobs.empty()) {
+    // Each job's run depends only on the job: the generation's results do not depend on the
+    // schedule.
+    std::vector<std::shared_ptr<const IntegrationResult>> results(jobs.size());
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 1),
+                        [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                            const Job& job = jobs[i];
+                            results[i] = std::make_shared<const IntegrationResult>(
+                                job.parent == nullptr
+                                    ? integrate_tapes(tapes, switches, job.box, options)
+                                    : integrate_sub_box(tapes, switches, job.parent->tube, job.step,
+                                                        job.box, options));
+                          }
+                        });
+    });
+    std::vector<Job> next;
+    for (std::size_t i = 0; i < jobs.size(); ++i) {
+      const IntegrationResult& r = *results[i];
+      ++out.runs;
+      out.steps += r.steps;
+      const Job& job = jobs[i];
+      if (r.ok() || job.depth >= split.max_depth || leaves + 1 > split.max_pieces) {
+        done.push_back(Done{job.path, results[i]});
+        continue;
+      }
+      const std::size_t d = split_component(job.box, x0, read);
+      const auto [lower, upper] = job.box.bisect(d);
+      const bool restart = !r.tube.steps.empty();
+      const std::size_t step = restart ? restart_step(r.tube, split.restart_excess) : 0;
+      const auto parent = restart ? results[i] : nullptr;
+      next.push_back(Job{lower, parent, step, job.depth + 1, job.path + "0"});
+      next.push_back(Job{upper, parent, step, job.depth + 1, job.path + "1"});
+      ++leaves;
+      ++out.splits;
+    }
+    jobs = std::move(next);
+  }
+
+  std::sort(done.begin(), done.end(), [](const Done& a, const Done& b) { return a.path < b.path; });
+  out.t_reached = std::numeric_limits<double>::infinity();
+  for (const Done& d : done) {
+    out.t_reached = std::min(out.t_reached, d.result->tube.t_end());
+    if (!d.result->ok() && out.ok()) {
+      out.status = d.result->status;
+      out.reason = d.result->reason;
+    }
+  }
+  out.pieces.reserve(done.size());
+  for (Done& d : done) out.pieces.push_back(d.result->tube);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return out;
+}
+
+}  // namespace furuta::validated
