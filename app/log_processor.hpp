@@ -1,6 +1,6 @@
 #pragma once
 // The identification trigger: the session logs that are complete in a logs directory become
-// identifications without anyone asking. One pass is what furuta-identify.service runs when its
+// identifications without anyone asking. One pass is what furuta-identify@.service runs when its
 // path unit sees the directory change; watch_logs is the same job in a loop, for machines without
 // systemd.
 //

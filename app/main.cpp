@@ -143,7 +143,7 @@ int main(int argc, char** argv) {
   CLI::App* process_logs_cmd = app.add_subcommand(
       "process-logs",
       "Identify the complete session logs in a directory as [automation] groups them; move each "
-      "to done/ or failed/ (what furuta-identify.service runs)");
+      "to done/ or failed/ (what furuta-identify@.service runs)");
   process_logs_cmd->add_option("DIR", process_logs.logs_dir,
                                "Logs directory (default: the configuration's [daemon] logs_dir)");
   process_logs_cmd->add_option("--config", process_logs.config_path, "Rig configuration (TOML)")

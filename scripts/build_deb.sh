@@ -11,7 +11,7 @@ cpack -G DEB --config "$build/CPackConfig.cmake" -B "$out" >/dev/null
 deb=$(ls -t "$out"/*.deb | head -n 1)
 contents=$(dpkg-deb -c "$deb")
 for f in ./usr/bin/furuta ./usr/sbin/furutad ./etc/furuta/rig.toml \
-  ./usr/lib/systemd/system/furuta-identify.path ./usr/lib/systemd/system/furuta-identify.service \
+  ./usr/lib/systemd/system/furuta-identify.path ./usr/lib/systemd/system/furuta-identify@.service \
   ./usr/lib/systemd/system/furutad.service ./usr/lib/udev/rules.d/70-furuta-phidgets.rules \
   ./usr/lib/sysusers.d/furuta.conf ./usr/lib/tmpfiles.d/furuta.conf; do
   grep -q " $f\$" <<<"$contents" || { echo "build_deb: $f is not in $deb" >&2; exit 1; }

@@ -15,7 +15,7 @@ units=usr/lib/systemd/system
 for f in usr/bin/furuta usr/sbin/furutad; do
   [ -x "$root/$f" ] || fail "$f is not installed as an executable"
 done
-for f in etc/furuta/rig.toml "$units/furutad.service" "$units/furuta-identify.service" \
+for f in etc/furuta/rig.toml "$units/furutad.service" "$units/furuta-identify@.service" \
   "$units/furuta-identify.path" usr/lib/udev/rules.d/70-furuta-phidgets.rules \
   usr/lib/sysusers.d/furuta.conf usr/lib/tmpfiles.d/furuta.conf usr/share/doc/furuta/README.md; do
   [ -f "$root/$f" ] || fail "$f is missing"
@@ -31,12 +31,16 @@ grep -h '^ExecStart=' "$root/$units"/furuta*.service | while read -r line; do
   [ -x "$root$binary" ] || fail "$line: $binary is not installed"
 done
 target=$(sed -n 's/^Unit=//p' "$root/$units/furuta-identify.path")
-[ -f "$root/$units/$target" ] || fail "furuta-identify.path starts $target, which is not installed"
+template=$(printf '%s' "$target" | sed 's/@[^.]*\./@./')
+[ -f "$root/$units/$template" ] || fail "furuta-identify.path starts $target, which is not installed"
+instance=$(printf '%s' "$target" | sed -n 's/.*@\([^.]*\)\..*/\1/p')
+[ -z "$instance" ] || [ -f "$root/etc/furuta/$instance.toml" ] ||
+  fail "furuta-identify.path starts $target, but /etc/furuta/$instance.toml is not installed"
 
 cp -rn /usr/lib/systemd/system/. "$root/$units/"
 # systemd-analyze warns (exit 0) on unknown keys and bad values: any output is a problem, except
 # what the container lacks (the furuta user before sysusers has run in a real root).
-out=$(systemd-analyze verify --root="$root" furutad.service furuta-identify.service \
+out=$(systemd-analyze verify --root="$root" furutad.service furuta-identify@rig.service \
   furuta-identify.path 2>&1) || fail "systemd-analyze verify failed:
 $out"
 filtered=$(printf '%s\n' "$out" | grep -v -e '^$' -e 'Failed to resolve user' \

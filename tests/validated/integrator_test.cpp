@@ -315,6 +315,32 @@ TEST(Integrator, FurutaStateDynamicsSoundness) {
   }
 }
 
+// The second-order model (the quadratic part P(r0) carried, the jets over (rho, r)) over the
+// fast swing of the paper's scenario (a): box +-1e-3 (q2 +-1.6e-3) around [0, 0, -100 deg, 0],
+// u = 0, point parameters, 2.5 s (the doubleton alone ended at 1.22 s).
+TEST(Integrator, FurutaQuadraticModelSoundness) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const FurutaStateDynamics system(FurutaParameters::point(p), Interval(0.0));
+  const double q2 = -100.0 * 3.14159265358979323846 / 180.0;
+  const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
+                  Interval(-1e-3, 1e-3)};
+  IntegratorOptions options;
+  options.t_end = 2.5;
+  options.tolerance = 1e-10;
+  options.max_inflation = 1.0;
+  const IntegrationResult r = integrate(system, state, options);
+  ASSERT_TRUE(r.ok()) << r.reason;
+  std::mt19937_64 rng(77);
+  const auto points = testing::sample_box<4>(state, 240, rng);
+  const testing::SoundnessCount c = testing::check_tube(system, r.tube, points, 32);
+  EXPECT_EQ(c.violations, 0U);
+  const Box end = r.tube.enclosure_at(options.t_end);
+  std::printf(
+      "[ measured ] Furuta 4-dim scenario (a) %.2f s (state +-1e-3): %.3f s wall, %zu steps, q2 "
+      "width %.3g; %zu points, %zu checks, %zu violations\n",
+      options.t_end, r.seconds, r.steps, end[2].width(), c.points, c.checks, c.violations);
+}
+
 // A restart on a sub-box (the splitting's building block) keeps the tube sound: halves of the
 // pendulum's box continued from the middle of the whole box's run.
 TEST(Integrator, SubBoxRestartIsSound) {

@@ -10,7 +10,13 @@
 //     V_[i](m) (forward-mode gradients of the coefficients; thin, m is a point);
 //  4. the second-order term q = sum_i h^i q_i, q_i = half the second derivative of x_[i] along
 //     delta = C rho + e (rho in r0, e in B r) over X (second-order jets, the direction carried as
-//     a linear form in rho), so that T(x0) is in T(m) + J (C rho + B r) + q;
+//     a linear form in rho), so that T(x0) is in T(m) + J (C rho + B r) + q. With the quadratic
+//     model (options.quadratic_model) the set is m + C rho + P(rho) + B r, P a quadratic form
+//     in rho per component (point coefficients): the jets of orders 0..quadratic_order carry the
+//     second-order term as a quadratic form over the coordinates (rho, r) (n <= 6; else rho
+//     only), the rho-rho block's midpoint, with J P, becomes P', and only the variation of its
+//     coefficients over the set (third order), the blocks with r, the terms with P(r0) and the
+//     higher orders' second-order terms go into the error part;
 //  5. Lohner: z = T(m) + q + R, m' = mid(z), C' = mid(J C), B' = mid(J B) (parallelepiped) while
 //     its condition number is small, else Q of the QR factorisation of mid(J B) (columns pivoted
 //     by length times the width of r); r' = (B'^-1 J B) r + B'^-1 (z - m' + (J C - C') r0), with
@@ -236,33 +242,56 @@ std::vector<Jet> direction_jets(const Box& y, const Matrix& c, const std::vector
   return x0;
 }
 
-// The second-order term over the set m + C r0 + B r inside the box y: second[i n + v] = half the
-// second derivative of x_[i]_v along delta = C rho + e (rho in r0, e in B r) over y, i = 0..order.
-// Both jets enclose the same quantity: the low orders, where the terms are largest, from the
-// quadratic forms (tight, about 6x the cost per operation), the others from Jet2.
+// The second-order term over the set inside the box y: second[i n + v] = half the second
+// derivative of x_[i]_v along delta = C rho + e (rho in r0, e in the interval vector `e`) over y,
+// i = 0..order. Both jets enclose the same quantity: the low orders (0..quadratic_order), where
+// the terms are largest, from the quadratic forms (tight, about 6x the cost per operation), the
+// others from Jet2. With `forms` (not null) the low orders also give their quadratic form in rho:
+// forms[(i n + v) P + pair] (interval coefficients over y, P = n (n + 1) / 2 pairs a <= b) and
+// d2e[i n + v] (the terms with e), so that second = forms(rho) + d2e; the other orders have a
+// zero form and d2e = second.
 template <std::size_t N>
 void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
-                    const std::vector<Interval>& r0, const std::vector<Interval>& br, int order,
-                    int quadratic_order, std::vector<Interval>& second) {
+                    const std::vector<Interval>& r0, const std::vector<Interval>& e, int order,
+                    int quadratic_order, std::vector<Interval>& second,
+                    std::vector<Interval>* forms, std::vector<Interval>* d2e) {
+  constexpr std::size_t kPairs = QuadJet<N>::kPairs;
   const auto count = static_cast<std::size_t>(order) + 1;
   second.resize(count * N);
+  if (forms != nullptr) {
+    forms->assign(count * N * kPairs, Interval(0.0));
+    d2e->assign(count * N, Interval(0.0));
+  }
   const int low = std::min(order, quadratic_order);
   if (low < order) {
-    const std::vector<Jet2<N>> x0 = direction_jets<Jet2<N>, N>(y, c, r0, br);
+    const std::vector<Jet2<N>> x0 = direction_jets<Jet2<N>, N>(y, c, r0, e);
     TaylorRunner<Jet2<N>> runner;
     runner.run(tape, std::span<const Jet2<N>>(x0), order);
     for (std::size_t i = static_cast<std::size_t>(low) + 1; i < count; ++i) {
-      for (std::size_t v = 0; v < N; ++v)
+      for (std::size_t v = 0; v < N; ++v) {
         second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
+        if (d2e != nullptr) (*d2e)[i * N + v] = second[i * N + v];
+      }
     }
   }
   if (low >= 0) {
-    const std::vector<QuadJet<N>> x0 = direction_jets<QuadJet<N>, N>(y, c, r0, br);
+    const std::vector<QuadJet<N>> x0 = direction_jets<QuadJet<N>, N>(y, c, r0, e);
     TaylorRunner<QuadJet<N>> runner;
     runner.run(tape, std::span<const QuadJet<N>>(x0), low);
     for (std::size_t i = 0; i <= static_cast<std::size_t>(low); ++i) {
-      for (std::size_t v = 0; v < N; ++v)
-        second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).range();
+      for (std::size_t v = 0; v < N; ++v) {
+        const QuadJet<N>& jet = runner.coefficient(v, static_cast<int>(i));
+        second[i * N + v] = jet.range();
+        if (forms != nullptr) {
+          if (jet.rho != nullptr) {
+            std::copy(jet.q.begin(), jet.q.end(),
+                      forms->begin() + static_cast<std::ptrdiff_t>((i * N + v) * kPairs));
+            (*d2e)[i * N + v] = jet.d2e;
+          } else {
+            (*d2e)[i * N + v] = second[i * N + v];  // range() is d2e alone then
+          }
+        }
+      }
     }
   }
 }
@@ -270,20 +299,148 @@ void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
 template <std::size_t... Is>
 void second_order_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
                            const Matrix& c, const std::vector<Interval>& r0,
-                           const std::vector<Interval>& br, int order, int quadratic_order,
-                           std::vector<Interval>& second) {
+                           const std::vector<Interval>& e, int order, int quadratic_order,
+                           std::vector<Interval>& second, std::vector<Interval>* forms,
+                           std::vector<Interval>* d2e) {
   const std::size_t n = y.size();
-  (void)((n == Is + 1
-              ? (second_order_n<Is + 1>(tape, y, c, r0, br, order, quadratic_order, second), true)
-              : false) ||
+  (void)((n == Is + 1 ? (second_order_n<Is + 1>(tape, y, c, r0, e, order, quadratic_order, second,
+                                                forms, d2e),
+                         true)
+                      : false) ||
          ...);
 }
 
 void second_order_coefficients(const Tape& tape, const Box& y, const Matrix& c,
-                               const std::vector<Interval>& r0, const std::vector<Interval>& br,
-                               int order, int quadratic_order, std::vector<Interval>& second) {
-  second_order_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, y, c, r0, br, order,
-                        quadratic_order, second);
+                               const std::vector<Interval>& r0, const std::vector<Interval>& e,
+                               int order, int quadratic_order, std::vector<Interval>& second,
+                               std::vector<Interval>* forms = nullptr,
+                               std::vector<Interval>* d2e = nullptr) {
+  second_order_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, y, c, r0, e, order,
+                        quadratic_order, second, forms, d2e);
+}
+
+// The same with the error part's coordinates r in the jets' linear form: the direction is
+// delta = C rho + B r + e (e: the interval vector P(r0)), the QuadJet orders run on the 2N
+// coordinates (rho, r), so that the products of first-order terms with B r are kept as a form
+// too (the field's large terms cancel in them as in the rho terms). forms: the rho-rho block
+// (as second_order_n); d2e: the jets' d2e plus the range of the blocks with r over (r0, r).
+template <std::size_t N>
+void second_order_extended_n(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
+                             const std::vector<Interval>& r0, const std::vector<Interval>& r,
+                             const std::vector<Interval>& e_quadratic,
+                             const std::vector<Interval>& e_all, int order, int quadratic_order,
+                             std::vector<Interval>& second, std::vector<Interval>& forms,
+                             std::vector<Interval>& d2e) {
+  constexpr std::size_t M = 2 * N;
+  constexpr std::size_t kPairs = QuadJet<N>::kPairs;
+  const auto count = static_cast<std::size_t>(order) + 1;
+  second.resize(count * N);
+  forms.assign(count * N * kPairs, Interval(0.0));
+  d2e.assign(count * N, Interval(0.0));
+  const int low = std::min(order, quadratic_order);
+  if (low < order) {
+    const std::vector<Jet2<N>> x0 = direction_jets<Jet2<N>, N>(y, c, r0, e_all);
+    TaylorRunner<Jet2<N>> runner;
+    runner.run(tape, std::span<const Jet2<N>>(x0), order);
+    for (std::size_t i = static_cast<std::size_t>(low) + 1; i < count; ++i) {
+      for (std::size_t v = 0; v < N; ++v) {
+        second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
+        d2e[i * N + v] = second[i * N + v];
+      }
+    }
+  }
+  if (low < 0) return;
+  std::vector<Interval> coordinates(r0.begin(), r0.end());
+  coordinates.insert(coordinates.end(), r.begin(), r.end());
+  std::vector<QuadJet<M>> x0(N);
+  for (std::size_t v = 0; v < N; ++v) {
+    const auto ev = static_cast<Eigen::Index>(v);
+    x0[v] = QuadJet<M>(y[v]);
+    for (std::size_t a = 0; a < N; ++a) {
+      const auto ea = static_cast<Eigen::Index>(a);
+      x0[v].g[a] = Interval(c(ev, ea));
+      x0[v].g[N + a] = Interval(b(ev, ea));
+    }
+    x0[v].e = e_quadratic[v];
+    x0[v].rho = coordinates.data();
+    x0[v].changed();
+  }
+  TaylorRunner<QuadJet<M>> runner;
+  runner.run(tape, std::span<const QuadJet<M>>(x0), low);
+  for (std::size_t i = 0; i <= static_cast<std::size_t>(low); ++i) {
+    for (std::size_t v = 0; v < N; ++v) {
+      const QuadJet<M>& jet = runner.coefficient(v, static_cast<int>(i));
+      second[i * N + v] = jet.range();
+      if (jet.rho == nullptr) {
+        d2e[i * N + v] = second[i * N + v];
+        continue;
+      }
+      Interval rest = jet.d2e;
+      std::size_t k = 0;
+      std::size_t kk = 0;
+      for (std::size_t a = 0; a < M; ++a) {
+        for (std::size_t bb = a; bb < M; ++bb, ++k) {
+          if (bb < N) {
+            forms[(i * N + v) * kPairs + kk++] = jet.q[k];
+          } else if (a == bb) {
+            rest += jet.q[k] * sqr(coordinates[a]);
+          } else {
+            rest += jet.q[k] * (coordinates[a] * coordinates[bb]);
+          }
+        }
+      }
+      d2e[i * N + v] = rest;
+    }
+  }
+}
+
+constexpr std::size_t kMaxExtended = 6;
+
+template <std::size_t... Is>
+void second_order_extended_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
+                                    const Matrix& c, const Matrix& b,
+                                    const std::vector<Interval>& r0, const std::vector<Interval>& r,
+                                    const std::vector<Interval>& e_quadratic,
+                                    const std::vector<Interval>& e_all, int order,
+                                    int quadratic_order, std::vector<Interval>& second,
+                                    std::vector<Interval>& forms, std::vector<Interval>& d2e) {
+  const std::size_t n = y.size();
+  (void)((n == Is + 1
+              ? (second_order_extended_n<Is + 1>(tape, y, c, b, r0, r, e_quadratic, e_all, order,
+                                                 quadratic_order, second, forms, d2e),
+                 true)
+              : false) ||
+         ...);
+}
+
+// ---- Quadratic forms in rho ---------------------------------------------------------------------
+
+std::size_t pair_count(std::size_t n) {
+  return n * (n + 1) / 2;
+}
+
+// The range over the box rho of the quadratic form with coefficients q[0..P) (pairs a <= b, row
+// by row, as QuadJet): each rho_a^2 as a square.
+template <class Coefficient>
+Interval form_range(const Coefficient* q, const std::vector<Interval>& rho) {
+  const std::size_t n = rho.size();
+  Interval out(0.0);
+  std::size_t k = 0;
+  for (std::size_t a = 0; a < n; ++a) {
+    out += Interval(q[k++]) * sqr(rho[a]);
+    for (std::size_t b = a + 1; b < n; ++b) out += Interval(q[k++]) * (rho[a] * rho[b]);
+  }
+  return out;
+}
+
+// The ranges of the n forms p[v P .. (v + 1) P) over rho (zeros when p is empty).
+std::vector<Interval> forms_range(const std::vector<double>& p, const std::vector<Interval>& rho) {
+  const std::size_t n = rho.size();
+  std::vector<Interval> out(n, Interval(0.0));
+  if (p.empty()) return out;
+  const std::size_t pairs = pair_count(n);
+  for (std::size_t v = 0; v < n; ++v) out[v] = form_range(p.data() + v * pairs, rho);
+  return out;
 }
 
 // ---- A priori enclosure -------------------------------------------------------------------------
@@ -401,11 +558,13 @@ Box Tube::step_form(std::size_t index, const Interval& s) const {
   const std::vector<Interval>& step_r0 = step.r0.empty() ? r0 : step.r0;
   const std::vector<Interval> linear0 = (v * from_point(n, step.c)) * step_r0;
   const std::vector<Interval> linear = (v * from_point(n, step.b)) * step.r;
+  // The quadratic part of the set at t0 (P(r0), if any), through V(s) as the rest.
+  const std::vector<Interval> quadratic = v * forms_range(step.quad, step_r0);
   const Interval s_k1 = pow(s, order + 1);
   Box out(n);
   for (std::size_t i = 0; i < n; ++i) {
     out[i] = horner(step.centre, n, i, order, s) + horner(step.second, n, i, order, s) +
-             linear0[i] + linear[i] + s_k1 * step.remainder[i];
+             linear0[i] + quadratic[i] + linear[i] + s_k1 * step.remainder[i];
   }
   return out;
 }
@@ -455,6 +614,7 @@ struct Doubleton {
   std::vector<Interval> r0;
   std::vector<double> m;
   Matrix c;
+  std::vector<double> p;  // the quadratic part P(rho): n forms of pair_count(n) coefficients
   Matrix b;
   std::vector<Interval> r;
   Box x;
@@ -490,6 +650,9 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
   const std::vector<Interval> r0 = std::move(state.r0);
   std::vector<double> m = std::move(state.m);
   Matrix c = std::move(state.c);
+  std::vector<double> quad = std::move(state.p);
+  const std::size_t pairs = pair_count(n);
+  if (quad.size() != n * pairs) quad.assign(n * pairs, 0.0);
   Matrix b = std::move(state.b);
   std::vector<Interval> r = std::move(state.r);
   Box x = std::move(state.x);
@@ -566,6 +729,7 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     step.r0 = r0;
     step.origin = origin;
     step.remainder = remainder_coefficient;
+    step.quad = quad;
 
     // 3. Taylor coefficients at the centre m and their Jacobian V_[i](m) (thin: m is a point).
     centre_coefficients(tape, m, k, step.centre, step.jacobian);
@@ -573,15 +737,25 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     // box (with the centre) and delta in C r0 + B r.
     const IMatrix ci = from_point(c);
     const IMatrix bi = from_point(b);
+    // The set at t is m + C rho + P(rho) + B r: the direction's interval part e holds P(r0) and
+    // B r (P is zero without the quadratic model).
+    const std::vector<Interval> p_range = forms_range(quad, r0);
+    std::vector<Interval> forms;
+    std::vector<Interval> d2e;
     {
+      std::vector<Interval> e = bi * r;
+      for (std::size_t v = 0; v < n; ++v) e[v] += p_range[v];
       Box y = x;
       for (std::size_t v = 0; v < n; ++v) y[v] = y[v] | Interval(m[v]);
-      second_order_coefficients(tape, y, c, r0, bi * r, k, options.quadratic_order, step.second);
-    }
-    // z: the image of the centre, with the second-order term and the remainder.
-    std::vector<Interval> z(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      z[v] = horner(step.centre, n, v, k, hi) + horner(step.second, n, v, k, hi) + remainder[v];
+      if (options.quadratic_model && n <= kMaxExtended) {
+        second_order_extended_dispatch(std::make_index_sequence<kMaxExtended>{}, tape, y, c, b, r0,
+                                       r, p_range, e, k, options.quadratic_order, step.second,
+                                       forms, d2e);
+      } else {
+        second_order_coefficients(tape, y, c, r0, e, k, options.quadratic_order, step.second,
+                                  options.quadratic_model ? &forms : nullptr,
+                                  options.quadratic_model ? &d2e : nullptr);
+      }
     }
     // J = sum_i h^i V_[i](m).
     IMatrix j(n);
@@ -589,6 +763,40 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
               j.v.begin());
     for (std::size_t i = uk; i-- > 0;) {
       for (std::size_t e = 0; e < n * n; ++e) j.v[e] = j.v[e] * hi + step.jacobian[i * n * n + e];
+    }
+    // T(x0) = T(m) + J (C rho + P(rho) + e) + S(rho) + R, S the second-order term. Without the
+    // quadratic model S is enclosed by sum_i h^i q_i (its range) and P = 0. With it, S(rho) =
+    // Q(rho) + D, Q the quadratic form sum_i h^i forms_i (interval coefficients) and D the
+    // interval sum_i h^i d2e_i; the new quadratic part is P'(rho) = mid(J P + Q)(rho) and the
+    // coefficients' rest ((J P + Q) - P')(rho) over r0, with D, goes to the error part.
+    std::vector<double> p_next(n * pairs, 0.0);
+    std::vector<Interval> second_rest(n, Interval(0.0));
+    if (options.quadratic_model) {
+      std::vector<Interval> coefficients(n * pairs, Interval(0.0));
+      for (std::size_t v = 0; v < n; ++v) {
+        for (std::size_t a = 0; a < pairs; ++a) {
+          Interval sum = forms[(uk * n + v) * pairs + a];
+          for (std::size_t i = uk; i-- > 0;) sum = sum * hi + forms[(i * n + v) * pairs + a];
+          for (std::size_t w = 0; w < n; ++w) {
+            if (quad[w * pairs + a] != 0.0) sum += j(v, w) * Interval(quad[w * pairs + a]);
+          }
+          p_next[v * pairs + a] = sum.is_bounded() ? sum.mid() : 0.0;
+          coefficients[v * pairs + a] = sum - Interval(p_next[v * pairs + a]);
+        }
+        second_rest[v] = form_range(coefficients.data() + v * pairs, r0) + horner(d2e, n, v, k, hi);
+      }
+    } else {
+      // P is zero unless the run was restarted (integrate_sub_box) from a tube that carried it:
+      // then J P(rho) goes into the error part too.
+      const std::vector<Interval> image = j * p_range;
+      for (std::size_t v = 0; v < n; ++v) {
+        second_rest[v] = horner(step.second, n, v, k, hi) + image[v];
+      }
+    }
+    // z: the image of the centre, with what the second-order term leaves and the remainder.
+    std::vector<Interval> z(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      z[v] = horner(step.centre, n, v, k, hi) + second_rest[v] + remainder[v];
     }
 
     // 5. Lohner's step on the doubleton.
@@ -638,12 +846,16 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     std::vector<Interval> r_next = chosen->r;
     // The tight enclosure: the new doubleton, intersected with the direct image.
     const std::vector<Interval> new0 = from_point(c_next) * r0;
+    const std::vector<Interval> new_quadratic = forms_range(p_next, r0);
     const std::vector<Interval>& new1 = chosen->box;
     const std::vector<Interval> old0 = jc * r0;
+    const std::vector<Interval> old_quadratic = j * p_range;
     const std::vector<Interval> old1 = jb * r;
     Box end(n);
     for (std::size_t v = 0; v < n; ++v) {
-      end[v] = (Interval(m_next[v]) + new0[v] + new1[v]) & (z[v] + old0[v] + old1[v]);
+      const Interval direct = horner(step.centre, n, v, k, hi) + horner(step.second, n, v, k, hi) +
+                              remainder[v] + old0[v] + old_quadratic[v] + old1[v];
+      end[v] = (Interval(m_next[v]) + new0[v] + new_quadratic[v] + new1[v]) & direct;
     }
 
     step.apriori = apriori;
@@ -655,6 +867,7 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     ++result.steps;
     m = std::move(m_next);
     c = c_next;
+    quad = std::move(p_next);
     b = std::move(b_next);
     r = std::move(r_next);
     x = std::move(end);
@@ -676,7 +889,7 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
       std::vector<double> exact(n);
       std::vector<double> error(n);
       for (std::size_t v = 0; v < n; ++v) {
-        exact[v] = new0[v].width();
+        exact[v] = (new0[v] + new_quadratic[v]).width();
         error[v] = new1[v].width();
       }
       const double ratio = excess_ratio(exact, error);
@@ -775,6 +988,24 @@ IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
     state.m[v] = centre.mid();
     residual[v] = centre - Interval(state.m[v]);
   }
+  // The quadratic part: P(rho' + shift) = P(rho') + (the terms with shift), the latter enclosed
+  // over the piece's r0 and put into r with the centre's rounding.
+  if (!at.quad.empty()) {
+    state.p = at.quad;
+    const std::size_t pairs = pair_count(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      std::size_t k = 0;
+      for (std::size_t a = 0; a < n; ++a) {
+        for (std::size_t bb = a; bb < n; ++bb, ++k) {
+          const double coefficient = at.quad[v * pairs + k];
+          if (coefficient == 0.0) continue;
+          const Interval terms =
+              state.r0[a] * shift[bb] + shift[a] * state.r0[bb] + shift[a] * shift[bb];
+          residual[v] += Interval(coefficient) * terms;
+        }
+      }
+    }
+  }
   const std::optional<IMatrix> b_inv = frame_inverse(state.b);
   if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
   const std::vector<Interval> residual_r = *b_inv * residual;
@@ -783,10 +1014,11 @@ IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
   // The box: the re-centred doubleton, inside the parent's box at t0.
   const std::vector<Interval> part0 = from_point(state.c) * state.r0;
   const std::vector<Interval> part1 = from_point(state.b) * state.r;
+  const std::vector<Interval> part2 = forms_range(state.p, state.r0);
   const Box& parent_box = step == 0 ? tube.initial : tube.steps[step - 1].end;
   state.x = Box(n);
   for (std::size_t v = 0; v < n; ++v) {
-    state.x[v] = (Interval(state.m[v]) + part0[v] + part1[v]) & parent_box[v];
+    state.x[v] = (Interval(state.m[v]) + part0[v] + part2[v] + part1[v]) & parent_box[v];
   }
   if (step == 0) state.x = intersect(state.x, piece);
   state.h_next = std::min(at.h.hi(), options.h_max);
