@@ -14,9 +14,12 @@
 #include <sstream>
 
 #include "commands.hpp"
+#include "furuta/common/text_format.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 
 namespace furuta::app {
+
+using text::json_number;
 
 namespace {
 
@@ -46,12 +49,6 @@ std::string slug(const std::string& name) {
     }
   }
   return out.empty() ? "parameters" : out;
-}
-
-std::string json_number(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
 }
 
 std::string parameters_json(const bridge::ModelParameters& p) {

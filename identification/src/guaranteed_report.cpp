@@ -4,41 +4,22 @@
 #include <iomanip>
 #include <sstream>
 
+#include "furuta/common/text_format.hpp"
 #include "furuta/identification/guaranteed.hpp"
 
 namespace furuta::identification {
 
 namespace {
 
-std::string number(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
-
 std::string interval_json(const Interval& x) {
   if (x.is_empty()) return "null";
-  return "[" + number(x.lo()) + ", " + number(x.hi()) + "]";
+  return "[" + text::json_number(x.lo()) + ", " + text::json_number(x.hi()) + "]";
 }
 
 std::string box_json(const Box& b) {
   std::string out = "[";
   for (std::size_t k = 0; k < b.size(); ++k) out += (k ? ", " : "") + interval_json(b[k]);
   return out + "]";
-}
-
-std::string escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (c == '\n') {
-      out += "\\n";
-      continue;
-    }
-    out += c;
-  }
-  return out;
 }
 
 }  // namespace
@@ -75,7 +56,8 @@ std::string guaranteed_json(const GuaranteedResult& r, const SampleConstraints& 
       << ", \"probed_inner_count\": " << p.probed_inner
       << ", \"boundary_count\": " << p.boundary.size() << ", \"outer_count\": " << p.outer_count
       << ", \"truncated\": " << (p.truncated ? "true" : "false")
-      << ", \"seconds\": " << number(p.seconds) << ", \"empty\": " << (r.empty ? "true" : "false");
+      << ", \"seconds\": " << text::json_number(p.seconds)
+      << ", \"empty\": " << (r.empty ? "true" : "false");
   if (!r.empty) {
     out << ", \"outer_hull\": " << box_json(p.outer_hull());
     if (!p.inner.empty()) {
@@ -88,15 +70,15 @@ std::string guaranteed_json(const GuaranteedResult& r, const SampleConstraints& 
       out << ", \"central_feasible_box\": " << box_json(*largest);
     }
   }
-  out << ", \"inner_measure\": " << number(unknowns_volume(p.inner, r.unknown))
-      << ", \"boundary_measure\": " << number(unknowns_volume(p.boundary, r.unknown));
-  out << ", \"finding\": \"" << escape(r.finding) << "\"";
+  out << ", \"inner_measure\": " << text::json_number(unknowns_volume(p.inner, r.unknown))
+      << ", \"boundary_measure\": " << text::json_number(unknowns_volume(p.boundary, r.unknown));
+  out << ", \"finding\": \"" << text::json_escape(r.finding) << "\"";
   const auto samples = [&](const char* key, const std::vector<std::size_t>& list) {
     out << ", \"" << key << "\": [";
     for (std::size_t k = 0; k < list.size(); ++k) {
       const IntervalSample& s = constraints.sample(list[k]);
-      out << (k ? ", " : "") << "{\"experiment\": \"" << escape(s.experiment)
-          << "\", \"index\": " << s.index << ", \"t_s\": " << number(s.t_s) << "}";
+      out << (k ? ", " : "") << "{\"experiment\": \"" << text::json_escape(s.experiment)
+          << "\", \"index\": " << s.index << ", \"t_s\": " << text::json_number(s.t_s) << "}";
     }
     out << "]";
   };

@@ -10,9 +10,13 @@
 #include <memory>
 #include <sstream>
 
+#include "furuta/common/text_format.hpp"
 #include "furuta/identification/guaranteed.hpp"
 
 namespace furuta::identification {
+
+using text::json_number;
+using text::json_string;
 
 Identification identify(const std::vector<RawExperiment>& experiments,
                         const std::optional<RawExperiment>& validation,
@@ -93,42 +97,6 @@ std::string sci(double v, int precision = 5) {
   std::ostringstream s;
   s << std::scientific << std::setprecision(precision) << v;
   return s.str();
-}
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
-
-std::string json_string(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
 }
 
 std::string json_vector(const ParameterVector& v) {
@@ -245,30 +213,6 @@ struct Band {
   const char* colour;
 };
 
-// Titles carry experiment names, which come from file names and session labels.
-std::string xml_text(const std::string& text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::string svg_panel(double x0, double y0, double width, double height, const std::string& title,
                       const std::vector<double>& t, const std::vector<Trace>& traces,
                       const std::vector<Band>& bands = {}) {
@@ -295,8 +239,8 @@ std::string svg_panel(double x0, double y0, double width, double height, const s
   s << std::fixed << std::setprecision(1);
   s << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << width << "\" height=\"" << height
     << "\" fill=\"none\" stroke=\"#999\"/>\n";
-  s << "<text x=\"" << x0 << "\" y=\"" << y0 - 6 << "\" font-size=\"13\">" << xml_text(title)
-    << "</text>\n";
+  s << "<text x=\"" << x0 << "\" y=\"" << y0 - 6 << "\" font-size=\"13\">"
+    << text::xml_escape(title) << "</text>\n";
   s << "<text x=\"" << x0 - 4 << "\" y=\"" << y0 + 10 << "\" font-size=\"10\" text-anchor=\"end\">"
     << std::setprecision(3) << hi << "</text>\n";
   s << "<text x=\"" << x0 - 4 << "\" y=\"" << y0 + height << "\" font-size=\"10\" "
@@ -319,7 +263,7 @@ std::string svg_panel(double x0, double y0, double width, double height, const s
     }
     s << "\"/>\n";
     s << "<text x=\"" << legend_x << "\" y=\"" << y0 + 14 << "\" font-size=\"11\" fill=\""
-      << tr.colour << "\">" << xml_text(tr.label) << "</text>\n";
+      << tr.colour << "\">" << text::xml_escape(tr.label) << "</text>\n";
     legend_x += 80;
   }
   return s.str();

@@ -6,6 +6,8 @@
 #include <set>
 #include <sstream>
 
+#include "furuta/common/text_format.hpp"
+
 namespace furuta::report {
 
 namespace {
@@ -150,30 +152,7 @@ std::string figure_id(const std::string& prefix, std::size_t n) {
 }  // namespace
 
 std::string escape_html(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
+  return text::xml_escape(text);
 }
 
 SessionSummary summarize_session(const session_log::SessionLog& log, std::string role) {

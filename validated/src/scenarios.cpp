@@ -9,7 +9,12 @@
 #include <stdexcept>
 #include <utility>
 
+#include "furuta/common/text_format.hpp"
+
 namespace furuta::validated {
+
+using text::json_number;
+using text::json_string;
 
 namespace {
 
@@ -17,31 +22,6 @@ constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 double deg_to_rad(double deg) {
   return deg / kDegPerRad;
-}
-
-// The shortest decimal text that reads back as the same double; null for NaN and infinities.
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
-}
-
-std::string json_string(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      out += ' ';
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
 }
 
 std::string json_interval(const interval::Interval& x) {
@@ -53,30 +33,6 @@ std::string fixed(double v, int digits) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << v;
   return s.str();
-}
-
-// Text for SVG: the few characters XML reserves.
-std::string xml(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
 }
 
 // A number as a person writes it in a scenario's description: -100, 0.17, 0.
@@ -420,8 +376,8 @@ std::string svg_scenario(const ScenarioResult& r) {
     << "\" font-family=\"sans-serif\" font-size=\"12\">\n";
   s << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
   s << "<text x=\"" << width / 2 << "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">"
-    << xml("Scenario " + r.scenario.label() + ": " + r.scenario.description() + ", " +
-           r.parameters.name + " parameters")
+    << text::xml_escape("Scenario " + r.scenario.label() + ": " + r.scenario.description() + ", " +
+                        r.parameters.name + " parameters")
     << "</text>\n";
 
   // Axes, ticks and grid.
@@ -514,22 +470,23 @@ std::string svg_scenario(const ScenarioResult& r) {
   s << "<rect x=\"" << left << "\" y=\"" << ly - 10 << "\" width=\"18\" height=\"10\" "
     << "fill=\"#6fa8dc\" fill-opacity=\"0.55\"/>\n";
   s << "<text x=\"" << left + 24 << "\" y=\"" << ly << "\">"
-    << xml("tube [q2], " + r.parameters.name + " parameters, x0 +- data uncertainty (" +
-           std::to_string(r.steps) + " steps, " + to_string(r.status) + ", reached " +
-           fixed(r.t_reached_s, 3) + " of " + fixed(r.scenario.duration_s, 1) + " s)")
+    << text::xml_escape("tube [q2], " + r.parameters.name +
+                        " parameters, x0 +- data uncertainty (" + std::to_string(r.steps) +
+                        " steps, " + to_string(r.status) + ", reached " + fixed(r.t_reached_s, 3) +
+                        " of " + fixed(r.scenario.duration_s, 1) + " s)")
     << "</text>\n";
   s << "<circle cx=\"" << left + 9 << "\" cy=\"" << ly + 13 << "\" r=\"2.5\" fill=\"black\"/>\n";
   s << "<circle cx=\"" << left + 15 << "\" cy=\"" << ly + 13 << "\" r=\"2.5\" fill=\"#cc0000\"/>\n";
   s << "<text x=\"" << left + 24 << "\" y=\"" << ly + 17 << "\">"
-    << xml("measured q2 (simulated rig, every " +
-           short_number(m.t_s.size() > 1 ? (m.t_s[1] - m.t_s[0]) * 1000 : 0.0) +
-           " ms, quantised); red: outside the paper's test")
+    << text::xml_escape("measured q2 (simulated rig, every " +
+                        short_number(m.t_s.size() > 1 ? (m.t_s[1] - m.t_s[0]) * 1000 : 0.0) +
+                        " ms, quantised); red: outside the paper's test")
     << "</text>\n";
   s << "<text x=\"" << left << "\" y=\"" << ly + 36 << "\">"
-    << xml("coverage of q2: step (paper) " + percent(r.q2_step.rate()) + " of all samples, " +
-           percent(r.q2_step.rate_in_time()) + " of those reached; interpolated " +
-           percent(r.q2_interpolated.rate()) + " (" + percent(r.q2_interpolated.rate_in_time()) +
-           ")")
+    << text::xml_escape("coverage of q2: step (paper) " + percent(r.q2_step.rate()) +
+                        " of all samples, " + percent(r.q2_step.rate_in_time()) +
+                        " of those reached; interpolated " + percent(r.q2_interpolated.rate()) +
+                        " (" + percent(r.q2_interpolated.rate_in_time()) + ")")
     << "</text>\n";
   s << "</g>\n</svg>\n";
   return s.str();
