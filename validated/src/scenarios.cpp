@@ -180,7 +180,7 @@ std::vector<const Tube*> ScenarioTubes::views() const {
 
 IntegratorOptions scenario_integrator_options() {
   IntegratorOptions o;
-  o.tolerance = 1e-10;
+  o.tolerance = 1e-11;
   o.max_inflation = 1.0;
   o.max_width = 2 * std::numbers::pi;
   return o;
