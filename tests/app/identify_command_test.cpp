@@ -12,6 +12,7 @@
 #include "furuta/config/rig_config.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/session_log/session_log.hpp"
+#include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::app {
@@ -22,20 +23,7 @@ using furuta::testing::TempDir;
 
 // A default session (the configuration's bang-bang, 10 s) with the given seed.
 fs::path simulated_session(const fs::path& logs, std::int64_t seed) {
-  RunOptions options;
-  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
-  options.simulated = true;
-  options.virtual_time = true;
-  options.logs_dir = logs;
-  options.lcm_url = "memq://";
-  options.session.seed = seed;
-  options.session.label = "seed" + std::to_string(seed);
-  std::ostringstream out, err;
-  EXPECT_EQ(run_session_command(options, out, err), 0) << out.str() << err.str();
-  const std::string text = out.str();
-  const auto at = text.find("; log ");
-  if (at == std::string::npos) return {};
-  return fs::path(text.substr(at + 6, text.find('\n', at) - at - 6));
+  return furuta::testing::simulated_session_log(logs, "seed" + std::to_string(seed), seed);
 }
 
 struct Fit {

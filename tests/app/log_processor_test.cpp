@@ -20,6 +20,7 @@
 
 #include "commands.hpp"
 #include "furuta/identification/identify.hpp"
+#include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
 extern char** environ;
@@ -42,21 +43,7 @@ std::string read_file(const fs::path& path) {
 // A session as `furuta run --sim --virtual-time --label LABEL` makes it.
 fs::path session(const fs::path& logs, const std::string& label, std::int64_t seed,
                  double duration_s) {
-  RunOptions options;
-  options.config_path = kRigConfig;
-  options.simulated = true;
-  options.virtual_time = true;
-  options.logs_dir = logs;
-  options.lcm_url = "memq://";
-  options.session.label = label;
-  options.session.seed = seed;
-  options.session.duration_s = duration_s;
-  std::ostringstream out, err;
-  EXPECT_EQ(run_session_command(options, out, err), 0) << out.str() << err.str();
-  const std::string text = out.str();
-  const auto at = text.find("; log ");
-  if (at == std::string::npos) return {};
-  return fs::path(text.substr(at + 6, text.find('\n', at) - at - 6));
+  return furuta::testing::simulated_session_log(logs, label, seed, duration_s);
 }
 
 std::vector<std::string> logs_in(const fs::path& dir) {

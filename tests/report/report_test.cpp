@@ -16,6 +16,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::report {
@@ -215,21 +216,7 @@ TEST(ReportTableTwo, WithoutSiviaTheIntervalsItWouldStartFrom) {
 
 // A session of the simulated rig (the configuration's bang-bang), in virtual time.
 fs::path simulated_session(const fs::path& logs, std::int64_t seed) {
-  app::RunOptions options;
-  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
-  options.simulated = true;
-  options.virtual_time = true;
-  options.logs_dir = logs;
-  options.lcm_url = "memq://";
-  options.session.seed = seed;
-  options.session.duration_s = 6.0;
-  options.session.label = "seed" + std::to_string(seed);
-  std::ostringstream out, err;
-  EXPECT_EQ(app::run_session_command(options, out, err), 0) << out.str() << err.str();
-  const std::string text = out.str();
-  const auto at = text.find("; log ");
-  if (at == std::string::npos) return {};
-  return fs::path(text.substr(at + 6, text.find('\n', at) - at - 6));
+  return furuta::testing::simulated_session_log(logs, "seed" + std::to_string(seed), seed, 6.0);
 }
 
 // Measures what the browser laid out, into an element --dump-dom serialises.
