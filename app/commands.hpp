@@ -111,6 +111,7 @@ struct SimulateCommandOptions {
       false;  // the simulated rig's truth as point parameters (the default without results)
   std::optional<double> relative_pct;  // with the truth: also the truth +- this % as intervals
   std::optional<double> seconds;       // each scenario's duration (default: the paper's 4 s)
+  std::size_t pieces = 1;  // tubes per run: 1, or a power of two split at 0.5 s (tighter, slower)
   std::filesystem::path output_dir = "simulation";
 };
 // Writes simulate.json, table3.txt and scenario_<n>_<parameters>.svg; prints Table III.
@@ -130,7 +131,7 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
                                           const std::vector<validated::ParameterSet>& sets,
                                           const bridge::ModelParameters& truth,
                                           const std::filesystem::path& figures_dir,
-                                          const std::string& truth_source);
+                                          const std::string& truth_source, std::size_t pieces = 1);
 
 // --- the identification trigger (log_processor.hpp) ---
 struct ProcessLogsOptions {

@@ -136,6 +136,9 @@ int main(int argc, char** argv) {
                            "With the truth: also the truth +- this percent as interval parameters");
   simulate_cmd->add_option("--seconds", simulate.seconds,
                            "Each scenario's duration [s] (default: the paper's 4)");
+  simulate_cmd->add_option("--pieces", simulate.pieces,
+                           "Tubes per run: 1 (default), or 2, 4, ... 64: the initial box split "
+                           "at 0.5 s, tighter tubes for that many times the work");
   simulate_cmd->add_option("-o,--output", simulate.output_dir, "Directory for results and figures");
 
   furuta::app::ProcessLogsOptions process_logs;

@@ -178,7 +178,7 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
                                           const std::vector<validated::ParameterSet>& sets,
                                           const bridge::ModelParameters& truth,
                                           const std::filesystem::path& figures_dir,
-                                          const std::string& truth_source) {
+                                          const std::string& truth_source, std::size_t pieces) {
   const validated::MeasurementOptions measurement_options;
   const validated::IntegratorOptions integrator = validated::scenario_integrator_options();
   const validated::StateUncertainty uncertainty;
@@ -196,8 +196,9 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
                      scenario.label().c_str(), set.name.c_str(), scenario.duration_s);
         std::fflush(stderr);
       }
-      results.push_back(
-          validated::evaluate_scenario(scenario, set, measurement, uncertainty, integrator));
+      results.push_back(validated::evaluate_scenario(
+          scenario, set, measurement, uncertainty, integrator,
+          validated::scenario_split_options(pieces, scenario.duration_s)));
       const std::string file =
           "scenario_" + std::to_string(scenario.number) + "_" + slug(set.name) + ".svg";
       write_text(figures_dir / file, validated::svg_scenario(results.back()));
@@ -219,7 +220,8 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
        << ", \"integrator\": {\"order\": " << integrator.order
        << ", \"tolerance\": " << json_number(integrator.tolerance)
        << ", \"h_min\": " << json_number(integrator.h_min)
-       << ", \"max_width\": " << json_number(integrator.max_width) << "}"
+       << ", \"max_width\": " << json_number(integrator.max_width) << ", \"pieces\": " << pieces
+       << "}"
        << ", \"figures\": " << nlohmann::json(report.figures).dump()
        << ",\n  \"results\": " << validated::scenarios_json(results) << "}";
   report.json = json.str();
@@ -245,6 +247,11 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
   }
   if (options.seconds && !(*options.seconds > 0 && *options.seconds <= 60)) {
     err << "furuta simulate: --seconds " << *options.seconds << ": expected in (0, 60]\n";
+    return 2;
+  }
+  if (options.pieces == 0 || options.pieces > 64 || (options.pieces & (options.pieces - 1)) != 0) {
+    err << "furuta simulate: --pieces " << options.pieces
+        << ": expected 1, 2, 4, 8, 16, 32 or 64 (the split is a bisection)\n";
     return 2;
   }
   std::vector<validated::Scenario> scenarios;
@@ -291,8 +298,8 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
   }
 
   std::filesystem::create_directories(options.output_dir);
-  const SimulationReport report =
-      run_scenario_simulations(scenarios, sets, truth, options.output_dir, truth_source);
+  const SimulationReport report = run_scenario_simulations(
+      scenarios, sets, truth, options.output_dir, truth_source, options.pieces);
   std::string json = "{\"software_version\": \"" + std::string(daemon::kSoftwareVersion) + "\"";
   if (!options.results.empty()) {
     json += ", \"parameters_from\": " + nlohmann::json(options.results.string()).dump();

@@ -145,13 +145,17 @@ v::IntegratorOptions furuta_options() {
   return options;
 }
 
-v::SplitOptions split_options() {
+v::SplitOptions split_options(int planned_depth = 0) {
   v::SplitOptions split;
   split.max_pieces = static_cast<std::size_t>(env_or("FURUTA_SPLIT_PIECES", 16));
+  split.planned_depth = planned_depth;
+  split.planned_split_s = env_or("FURUTA_PLANNED_SPLIT_S", 0.5);
+  split.max_pieces = std::max(split.max_pieces, std::size_t{1} << planned_depth);
   return split;
 }
 
-// (2) Point parameters (the truth), state box +-1e-3 (q2 +-1.6e-3), the 4-dimensional system.
+// (2) Point parameters (the truth), state box +-1e-3 (q2 +-1.6e-3), the 4-dimensional system;
+// second argument: the planned split's depth (2^depth pieces from FURUTA_PLANNED_SPLIT_S, 0.5 s).
 void BM_FurutaPointParameters(benchmark::State& state) {
   const Scenario& s = kScenarios[state.range(0)];
   const Box x0 = initial_state(s);
@@ -160,13 +164,14 @@ void BM_FurutaPointParameters(benchmark::State& state) {
       Interval(s.tau_nm));
   v::SplitResult r;
   for (auto _ : state) {
-    r = v::integrate_split(system, x0, furuta_options(), split_options());
+    r = v::integrate_split(system, x0, furuta_options(),
+                           split_options(static_cast<int>(state.range(1))));
     benchmark::DoNotOptimize(r);
   }
   report(state, r, v::FurutaStateDynamics::q2, sampled_q2_spread(s, x0, nullptr, 1000));
 }
 BENCHMARK(BM_FurutaPointParameters)
-    ->DenseRange(0, 3)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 2, 3}})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

@@ -111,5 +111,57 @@ TEST(Split, CapsEndTheRunWithTheFailedPieces) {
                std::invalid_argument);
 }
 
+// A planned split: one tube to 0.5 s, then four pieces from there (q1 and q2 halved), each sound
+// on its own (their tubes share the first 0.5 s), together covering x0; the failure-driven
+// splitting still works on the pieces after it.
+TEST(Split, PlannedSplitContinuesFourPiecesFromMidRun) {
+  const SimplePendulum pendulum;
+  const IntegratorOptions options = wide_pendulum_options();
+  SplitOptions split;
+  split.max_pieces = 32;
+  split.planned_depth = 2;
+  split.planned_split_s = 0.5;
+  const SplitResult r = integrate_split(pendulum, kWide, options, split);
+  ASSERT_TRUE(r.ok()) << r.reason;
+  ASSERT_GE(r.pieces.size(), 4U);
+  EXPECT_EQ(r.splits + 1, r.pieces.size());
+  // The four planned pieces are the quarters of x0 (both components halved once).
+  for (const Tube& piece : r.pieces) {
+    EXPECT_LE(piece.initial[0].width(), 0.5 * kWide[0].width() + 1e-15);
+    EXPECT_LE(piece.initial[1].width(), 0.5 * kWide[1].width() + 1e-15);
+    // The shared prefix: the steps before 0.5 s are the first tube's (the same boxes).
+    ASSERT_FALSE(piece.steps.empty());
+    EXPECT_LT(piece.steps.front().t0, 0.5);
+    EXPECT_EQ(piece.steps.front().end, r.pieces.front().steps.front().end);
+  }
+  std::mt19937_64 rng(7);
+  testing::SoundnessCount total;
+  for (const Tube& piece : r.pieces) {
+    const testing::SoundnessCount c =
+        testing::check_tube(pendulum, piece, testing::sample_box<2>(piece.initial, 60, rng), 8);
+    total.points += c.points;
+    total.checks += c.checks;
+    total.violations += c.violations;
+  }
+  EXPECT_EQ(total.violations, 0U);
+  EXPECT_GT(total.checks, 10000U);
+  for (const Point<2>& x : testing::sample_box<2>(kWide, 200, rng)) {
+    EXPECT_TRUE(std::any_of(r.pieces.begin(), r.pieces.end(),
+                            [&](const Tube& t) { return testing::inside(x, t.initial); }));
+    const Point<2> y = testing::simulate(pendulum, x, 0.0, 3.0, 1e-3);
+    EXPECT_TRUE(testing::inside(y, r.enclosure_at(3.0)));
+  }
+  std::printf(
+      "[ measured ] planned split pendulum +-0.1 (4 pieces at 0.5 s), 3 s: %zu pieces, %zu "
+      "runs, %zu steps, %.3f s wall; %zu checks, %zu violations\n",
+      r.pieces.size(), r.runs, r.steps, r.seconds, total.checks, total.violations);
+
+  split.planned_split_s = 3.0;  // not before t_end
+  EXPECT_THROW((void)integrate_split(pendulum, kWide, options, split), std::invalid_argument);
+  split.planned_split_s = 0.5;
+  split.max_pieces = 2;  // fewer than the planned pieces
+  EXPECT_THROW((void)integrate_split(pendulum, kWide, options, split), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace furuta::validated

@@ -1,6 +1,7 @@
 #include "furuta/validated/scenarios.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -186,6 +187,20 @@ IntegratorOptions scenario_integrator_options() {
   return o;
 }
 
+SplitOptions scenario_split_options(std::size_t pieces, double duration_s) {
+  if (pieces == 1) return single_tube();
+  if (pieces == 0 || (pieces & (pieces - 1)) != 0 || pieces > 64) {
+    throw std::invalid_argument("pieces: " + std::to_string(pieces) +
+                                " is not one of 1, 2, 4, 8, 16, 32, 64");
+  }
+  SplitOptions o;
+  o.max_pieces = pieces;
+  o.planned_depth = std::countr_zero(pieces);
+  o.max_depth = o.planned_depth;
+  o.planned_split_s = std::min(0.5, duration_s / 8);
+  return o;
+}
+
 namespace {
 
 bool all_points(const FurutaParameters& p) {
@@ -266,9 +281,9 @@ ScenarioResult evaluate_tubes(const Scenario& scenario, const ParameterSet& para
 ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& parameters,
                                  const ScenarioMeasurement& measurement,
                                  const StateUncertainty& uncertainty,
-                                 const IntegratorOptions& options) {
+                                 const IntegratorOptions& options, const SplitOptions& split) {
   const ScenarioTubes tubes =
-      run_scenario_tubes(scenario, parameters.parameters, uncertainty, options);
+      run_scenario_tubes(scenario, parameters.parameters, uncertainty, options, split);
   return evaluate_tubes(scenario, parameters, uncertainty, measurement, tubes);
 }
 

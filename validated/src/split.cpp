@@ -45,15 +45,26 @@ std::vector<bool> read_components(const std::vector<Tape>& tapes, std::size_t n)
   return read;
 }
 
-// The widths of C r0 and B r (the exact and the error part of the doubleton) at a step's t0.
+// The widths of C r0 + P(r0) and B r (the exactly carried and the error part of the doubleton)
+// at a step's t0.
 void part_widths(const TubeStep& s, std::size_t n, std::vector<double>& exact,
                  std::vector<double>& error) {
   exact.assign(n, 0.0);
   error.assign(n, 0.0);
+  const std::size_t pairs = n * (n + 1) / 2;
   for (std::size_t v = 0; v < n; ++v) {
     for (std::size_t j = 0; j < n; ++j) {
       exact[v] += std::abs(s.c[v * n + j]) * s.r0[j].width();
       error[v] += std::abs(s.b[v * n + j]) * s.r[j].width();
+    }
+    if (s.quad.size() != n * pairs) continue;
+    // The quadratic part's width, bounded above by its coefficients times the ranges: the
+    // criterion only needs its size.
+    std::size_t k = 0;
+    for (std::size_t a = 0; a < n; ++a) {
+      for (std::size_t b = a; b < n; ++b, ++k) {
+        exact[v] += std::abs(s.quad[v * pairs + k]) * s.r0[a].mag() * s.r0[b].mag() * 2.0;
+      }
     }
   }
 }
@@ -116,6 +127,15 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
   if (split.max_pieces == 0 || split.max_depth < 0 || !(split.restart_excess >= 0.0)) {
     throw std::invalid_argument("split options: max_pieces >= 1, max_depth >= 0, excess >= 0");
   }
+  if (split.planned_depth < 0 || split.planned_depth > split.max_depth ||
+      split.planned_depth >= 63 || (std::size_t{1} << split.planned_depth) > split.max_pieces) {
+    throw std::invalid_argument(
+        "split options: planned_depth in [0, max_depth] with 2^planned_depth <= max_pieces");
+  }
+  if (split.planned_depth > 0 &&
+      !(split.planned_split_s >= options.t_start && split.planned_split_s < options.t_end)) {
+    throw std::invalid_argument("split options: planned_split_s in [t_start, t_end)");
+  }
   const auto started = std::chrono::steady_clock::now();
   const std::vector<bool> read = read_components(tapes, x0.size());
   tbb::task_arena arena(split.threads > 0 ? split.threads : tbb::task_arena::automatic);
@@ -128,6 +148,43 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
   std::vector<Done> done;
   std::vector<Job> jobs{Job{x0, nullptr, 0, 0, ""}};
   std::size_t leaves = 1;
+  if (split.planned_depth > 0) {
+    // One tube up to the planned time, then 2^depth pieces from its last step (which starts
+    // before that time: the pieces redo it, re-centred on themselves).
+    std::shared_ptr<const IntegrationResult> root;
+    std::size_t step = 0;
+    if (split.planned_split_s > options.t_start) {
+      IntegratorOptions first = options;
+      first.t_end = split.planned_split_s;
+      root = std::make_shared<const IntegrationResult>(integrate_tapes(tapes, switches, x0, first));
+      ++out.runs;
+      out.steps += root->steps;
+      if (root->tube.steps.empty()) {
+        root = nullptr;
+      } else {
+        step = root->ok() ? root->tube.steps.size() - 1
+                          : restart_step(root->tube, split.restart_excess);
+      }
+    }
+    jobs.clear();
+    std::vector<Box> boxes{x0};
+    for (int level = 0; level < split.planned_depth; ++level) {
+      std::vector<Box> halves;
+      for (const Box& b : boxes) {
+        const auto [lower, upper] = b.bisect(split_component(b, x0, read));
+        halves.push_back(lower);
+        halves.push_back(upper);
+      }
+      boxes = std::move(halves);
+    }
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      std::string path;
+      for (int level = split.planned_depth; level-- > 0;) path += ((i >> level) & 1U) ? '1' : '0';
+      jobs.push_back(Job{boxes[i], root, step, split.planned_depth, path});
+    }
+    leaves = boxes.size();
+    out.splits = boxes.size() - 1;
+  }
   while (!jobs.empty()) {
     // Each job's run depends only on the job: the generation's results do not depend on the
     // schedule.
