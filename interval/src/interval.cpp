@@ -40,14 +40,18 @@ constexpr double kTrigLimit = 0x1p40;
 // Errors in Math Functions", generated from sysdeps/x86_64/fpu/libm-test-ulps); 4 is a margin.
 constexpr int kLibmUlps = 4;
 
+// std::nextafter(x, +-inf), inline (interval.hpp).
 double next_up(double x) {
-  return std::nextafter(x, kInf);
+  return detail::next_up(x);
 }
 double next_down(double x) {
-  return std::nextafter(x, -kInf);
+  return detail::next_down(x);
 }
 
 // ---- Addition (TwoSum) --------------------------------------------------------------------------
+//
+// These out-of-line forms of + - * are the general ones: the inline code in interval.hpp computes
+// the same bounds for the common cases and calls them (through detail::) for the rest.
 
 // The rounded sum and the sign of (exact - rounded): -1, 0, +1; 2 when unknown (then stepping
 // both ways is needed).
@@ -58,7 +62,7 @@ int sum_error_sign(double a, double b, double s) {
   return err > 0 ? 1 : (err < 0 ? -1 : 0);
 }
 
-double add_down(double a, double b) {
+double add_down_any(double a, double b) {
   const double s = a + b;
   if (std::isnan(s)) return -kInf;  // inf - inf: cannot happen for valid bounds; sound anyway
   if (std::isinf(s)) {
@@ -69,7 +73,7 @@ double add_down(double a, double b) {
   return (e < 0 || e == 2) ? next_down(s) : s;
 }
 
-double add_up(double a, double b) {
+double add_up_any(double a, double b) {
   const double s = a + b;
   if (std::isnan(s)) return kInf;
   if (std::isinf(s)) {
@@ -80,11 +84,8 @@ double add_up(double a, double b) {
   return e > 0 ? next_up(s) : s;
 }
 
-double sub_down(double a, double b) {
-  return add_down(a, -b);
-}
 double sub_up(double a, double b) {
-  return add_up(a, -b);
+  return add_up_any(a, -b);
 }
 
 // ---- Multiplication (FMA residual), with 0 * inf = 0 as set-based bounds need ----------------
@@ -103,7 +104,7 @@ int mul_error_sign(double a, double b, double p) {
   return e > 0 ? 1 : (e < 0 ? -1 : 0);
 }
 
-double mul_down(double a, double b) {
+double mul_down_any(double a, double b) {
   if (a == 0 || b == 0) return 0.0;
   const double p = a * b;
   if (std::isinf(p)) {
@@ -113,7 +114,7 @@ double mul_down(double a, double b) {
   return mul_error_sign(a, b, p) < 0 ? next_down(p) : p;
 }
 
-double mul_up(double a, double b) {
+double mul_up_any(double a, double b) {
   if (a == 0 || b == 0) return 0.0;
   const double p = a * b;
   if (std::isinf(p)) {
@@ -185,9 +186,9 @@ double pow_down(double a, unsigned n) {
   double r = 1.0;
   double base = a;
   while (n != 0) {
-    if (n & 1U) r = std::max(0.0, mul_down(r, base));
+    if (n & 1U) r = std::max(0.0, mul_down_any(r, base));
     n >>= 1U;
-    if (n != 0) base = std::max(0.0, mul_down(base, base));
+    if (n != 0) base = std::max(0.0, mul_down_any(base, base));
   }
   return r;
 }
@@ -196,9 +197,9 @@ double pow_up(double a, unsigned n) {
   double r = 1.0;
   double base = a;
   while (n != 0) {
-    if (n & 1U) r = mul_up(r, base);
+    if (n & 1U) r = mul_up_any(r, base);
     n >>= 1U;
-    if (n != 0) base = mul_up(base, base);
+    if (n != 0) base = mul_up_any(base, base);
   }
   return r;
 }
@@ -278,55 +279,13 @@ bool empty_out(const Interval& x, Interval& a, Interval& b) {
 
 // ---- Interval members ---------------------------------------------------------------------------
 
-Interval::Interval() : lo_(-kInf), hi_(kInf) {}
-
-Interval::Interval(double x) : Interval(x, x) {}
-
-Interval::Interval(double lo, double hi) : lo_(lo + 0.0), hi_(hi + 0.0) {
-  // Intervals are sets of reals: a NaN bound, lo > hi, lo = +inf or hi = -inf is the empty set.
-  // (x + 0.0 turns -0 into +0 so that bounds print and compare plainly.)
-  if (!(lo <= hi) || lo == kInf || hi == -kInf) {
-    lo_ = kInf;
-    hi_ = -kInf;
-  }
-}
-
-Interval Interval::empty() {
-  return Interval(kInf, -kInf);
-}
-Interval Interval::entire() {
-  return Interval();
-}
 Interval Interval::pi() {
   return Interval(kPiLo, kPiHi);
-}
-
-bool Interval::is_empty() const {
-  return lo_ > hi_;
-}
-bool Interval::is_entire() const {
-  return lo_ == -kInf && hi_ == kInf;
-}
-bool Interval::is_bounded() const {
-  return !is_empty() && std::isfinite(lo_) && std::isfinite(hi_);
-}
-bool Interval::is_point() const {
-  return lo_ == hi_;
 }
 
 double Interval::width() const {
   if (is_empty()) return 0.0;
   return sub_up(hi_, lo_);
-}
-
-double Interval::mid() const {
-  if (is_empty()) return kNaN;
-  if (lo_ == -kInf) return hi_ == kInf ? 0.0 : -kMax;
-  if (hi_ == kInf) return kMax;
-  if (lo_ == hi_) return lo_;
-  double m = (lo_ + hi_) * 0.5;
-  if (!std::isfinite(m)) m = lo_ * 0.5 + hi_ * 0.5;
-  return std::clamp(m, lo_, hi_) + 0.0;
 }
 
 double Interval::rad() const {
@@ -387,15 +346,6 @@ std::pair<Interval, Interval> Interval::bisect(double ratio) const {
   return {Interval(lo_, m), Interval(m, hi_)};
 }
 
-Interval& Interval::operator+=(const Interval& y) {
-  return *this = *this + y;
-}
-Interval& Interval::operator-=(const Interval& y) {
-  return *this = *this - y;
-}
-Interval& Interval::operator*=(const Interval& y) {
-  return *this = *this * y;
-}
 Interval& Interval::operator/=(const Interval& y) {
   return *this = *this / y;
 }
@@ -407,29 +357,31 @@ bool operator==(const Interval& a, const Interval& b) {
 
 // ---- Arithmetic ---------------------------------------------------------------------------------
 
-Interval operator-(const Interval& x) {
-  if (x.is_empty()) return x;
-  return Interval(-x.hi(), -x.lo());
+// Unary minus, + - * and sqr are inline (interval.hpp); these are their out-of-line parts.
+
+double detail::add_down_special(double a, double b) {
+  return add_down_any(a, b);
+}
+double detail::add_up_special(double a, double b) {
+  return add_up_any(a, b);
+}
+double detail::mul_down_special(double a, double b) {
+  return mul_down_any(a, b);
+}
+double detail::mul_up_special(double a, double b) {
+  return mul_up_any(a, b);
 }
 
-Interval operator+(const Interval& x, const Interval& y) {
-  if (x.is_empty() || y.is_empty()) return Interval::empty();
-  return Interval(add_down(x.lo(), y.lo()), add_up(x.hi(), y.hi()));
-}
-
-Interval operator-(const Interval& x, const Interval& y) {
-  if (x.is_empty() || y.is_empty()) return Interval::empty();
-  return Interval(sub_down(x.lo(), y.hi()), sub_up(x.hi(), y.lo()));
-}
-
-Interval operator*(const Interval& x, const Interval& y) {
+// The general product (infinite bounds, bounds beyond 2^500, empty operands): all four corners.
+Interval detail::mul_general(const Interval& x, const Interval& y) {
   if (x.is_empty() || y.is_empty()) return Interval::empty();
   // The bounds are among the four corner products (with 0 * inf = 0, IEEE 1788's rule for
   // bounds: [0, 0] * [-inf, inf] = [0, 0]).
   const double xl = x.lo(), xh = x.hi(), yl = y.lo(), yh = y.hi();
-  const double lo =
-      std::min({mul_down(xl, yl), mul_down(xl, yh), mul_down(xh, yl), mul_down(xh, yh)});
-  const double hi = std::max({mul_up(xl, yl), mul_up(xl, yh), mul_up(xh, yl), mul_up(xh, yh)});
+  const double lo = std::min(
+      {mul_down_any(xl, yl), mul_down_any(xl, yh), mul_down_any(xh, yl), mul_down_any(xh, yh)});
+  const double hi =
+      std::max({mul_up_any(xl, yl), mul_up_any(xl, yh), mul_up_any(xh, yl), mul_up_any(xh, yh)});
   return Interval(lo, hi);
 }
 
@@ -478,11 +430,11 @@ Interval operator&(const Interval& a, const Interval& b) {
 
 // ---- Elementary functions ----------------------------------------------------------------------
 
-Interval sqr(const Interval& x) {
+Interval detail::sqr_general(const Interval& x) {
   if (x.is_empty()) return x;
   const double m = x.mig();
   const double M = x.mag();
-  return Interval(std::max(0.0, mul_down(m, m)), mul_up(M, M));
+  return Interval(std::max(0.0, mul_down_any(m, m)), mul_up_any(M, M));
 }
 
 Interval sqrt(const Interval& x) {
