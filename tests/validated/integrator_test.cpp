@@ -341,6 +341,72 @@ TEST(Integrator, FurutaQuadraticModelSoundness) {
       options.t_end, r.seconds, r.steps, end[2].width(), c.points, c.checks, c.violations);
 }
 
+// Interval parameters carried as state (the 11-dimensional system): the error part B r stays on
+// the four live components (the parameters' rows of the field are zero) and the quadratic jets
+// run over (rho, r_L), 15 coordinates. The paper's scenario box (+-1e-3, q2 +-1.6e-3) with all
+// seven parameters +-0.1 % (scenario (a), 0.7 s) and +-2 % (scenario (c), u = 0.17, until the
+// tube passes a width of 1): every sampled point carries its own parameters (a quarter of them
+// at vertices of the 11-dimensional box, 3/16 on a face).
+TEST(Integrator, FurutaIntervalParametersCarriedAsStateSoundness) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  struct Case {
+    double relative;
+    double q2_deg;
+    double tau;
+    double t_end;
+    double max_width;
+    std::size_t points;
+  };
+  for (const Case& k :
+       {Case{1e-3, -100.0, 0.0, 0.7, 1e3, 1200}, Case{2e-2, -90.0, 0.17, 4.0, 1.0, 2000}}) {
+    const double q2 = k.q2_deg * 3.14159265358979323846 / 180.0;
+    const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3),
+                    Interval(q2 - 1.6e-3, q2 + 1.6e-3), Interval(-1e-3, 1e-3)};
+    const Box x0 = FurutaDynamics::initial_box(state, FurutaParameters::around(p, k.relative));
+    const FurutaDynamics system(Interval(k.tau));
+    IntegratorOptions options;
+    options.t_end = k.t_end;
+    options.tolerance = 1e-11;
+    options.max_inflation = 1.0;
+    options.max_width = k.max_width;
+    const IntegrationResult r = integrate(system, x0, options);
+    if (k.max_width >= 1e3) {
+      ASSERT_TRUE(r.ok()) << r.reason;
+    } else {
+      EXPECT_GT(r.tube.t_end(), 0.1) << r.reason;
+    }
+    ASSERT_GT(r.tube.steps.size(), 10U);
+    // The error part never reaches the parameters: their r entries are exactly 0 and the frame
+    // is the identity on them.
+    for (const TubeStep& s : r.tube.steps) {
+      for (std::size_t v = FurutaDynamics::mu1; v <= FurutaDynamics::fv2; ++v) {
+        ASSERT_EQ(s.r[v].lo(), 0.0);
+        ASSERT_EQ(s.r[v].hi(), 0.0);
+        for (std::size_t w = 0; w < 11; ++w) {
+          ASSERT_EQ(s.b[v * 11 + w], v == w ? 1.0 : 0.0);
+          ASSERT_EQ(s.b[w * 11 + v], v == w ? 1.0 : 0.0);
+        }
+      }
+    }
+    std::mt19937_64 rng(2026);
+    std::vector<Point<11>> points = testing::sample_box<11>(x0, k.points * 3 / 4, rng);
+    std::bernoulli_distribution coin(0.5);
+    for (std::size_t i = 0; i < k.points / 4; ++i) {
+      Point<11> vertex;
+      for (std::size_t v = 0; v < 11; ++v) vertex[v] = coin(rng) ? x0[v].hi() : x0[v].lo();
+      points.push_back(vertex);
+    }
+    const testing::SoundnessCount c = testing::check_tube(system, r.tube, points, 16);
+    EXPECT_EQ(c.violations, 0U);
+    const Box end = r.tube.steps.back().end;
+    std::printf(
+        "[ measured ] Furuta 11-dim params +-%g %% (state +-1e-3, %g deg): %.3f s of %.2f s (%s), "
+        "%.3f s wall, %zu steps, q2 width %.3g; %zu points, %zu checks, %zu violations\n",
+        k.relative * 100, k.q2_deg, r.tube.t_end(), k.t_end, to_string(r.status), r.seconds,
+        r.steps, end[2].width(), c.points, c.checks, c.violations);
+  }
+}
+
 // A restart on a sub-box (the splitting's building block) keeps the tube sound: halves of the
 // pendulum's box continued from the middle of the whole box's run.
 TEST(Integrator, SubBoxRestartIsSound) {
@@ -370,6 +436,55 @@ TEST(Integrator, SubBoxRestartIsSound) {
   EXPECT_THROW(
       (void)integrate_sub_box(tapes, {}, whole.tube, whole.tube.steps.size(), lower, options),
       std::invalid_argument);
+}
+
+// A sub-box restart of the 11-dimensional Furuta system (what the split driver runs) keeps the
+// parameters free of error part (their centre is the piece's midpoint, no rounding residual), from
+// t_start and from the middle of a run, and stays sound: halves of a +-1 % parameter box (split
+// in mu4 and in fv1).
+TEST(Integrator, FurutaSubBoxRestartKeepsTheParametersExact) {
+  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const double q2 = 50.0 * 3.14159265358979323846 / 180.0;
+  const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
+                  Interval(-1e-3, 1e-3)};
+  const Box x0 = FurutaDynamics::initial_box(state, FurutaParameters::around(p, 1e-2));
+  const FurutaDynamics system(Interval(0.0));
+  const std::vector<Tape> tapes = record_system(system);
+  IntegratorOptions options;
+  options.t_end = 4.0;
+  options.tolerance = 1e-11;
+  options.max_inflation = 1.0;
+  options.max_width = 1.0;
+  const IntegrationResult whole = integrate_tapes(tapes, {}, x0, options);
+  ASSERT_GT(whole.tube.steps.size(), 20U);
+  std::mt19937_64 rng(11);
+  const std::size_t middle = whole.tube.steps.size() / 3;
+  for (const auto& [step, component] :
+       {std::pair<std::size_t, std::size_t>{0, FurutaDynamics::mu4},
+        std::pair<std::size_t, std::size_t>{middle, FurutaDynamics::fv1}}) {
+    const auto halves = x0.bisect(component);
+    for (const Box& piece : {halves.first, halves.second}) {
+      const IntegrationResult r = integrate_sub_box(tapes, {}, whole.tube, step, piece, options);
+      ASSERT_GT(r.tube.steps.size(), step + 5) << r.reason;
+      for (std::size_t i = step; i < r.tube.steps.size(); ++i) {
+        for (std::size_t v = FurutaDynamics::mu1; v <= FurutaDynamics::fv2; ++v) {
+          ASSERT_EQ(r.tube.steps[i].r[v].lo(), 0.0);
+          ASSERT_EQ(r.tube.steps[i].r[v].hi(), 0.0);
+        }
+      }
+      const testing::SoundnessCount c =
+          testing::check_tube(system, r.tube, testing::sample_box<11>(piece, 200, rng), 16);
+      EXPECT_EQ(c.violations, 0U);
+      // From t_start a half lasts about as long as the whole box's tube or longer.
+      if (step == 0) {
+        EXPECT_GE(r.tube.t_end(), whole.tube.t_end() * 0.9);
+      }
+      std::printf(
+          "[ measured ] Furuta 11-dim +-1 %% sub-box (component %zu) from step %zu: %.3f s (whole "
+          "box %.3f s); %zu points, %zu checks, %zu violations\n",
+          component, step, r.tube.t_end(), whole.tube.t_end(), c.points, c.checks, c.violations);
+    }
+  }
 }
 
 // x' = x^2, x(0) = 1 blows up at t = 1: the run must stop before, with a status.

@@ -13,15 +13,17 @@
 //     a linear form in rho), so that T(x0) is in T(m) + J (C rho + B r) + q. With the quadratic
 //     model (options.quadratic_model) the set is m + C rho + P(rho) + B r, P a quadratic form
 //     in rho per component (point coefficients): the jets of orders 0..quadratic_order carry the
-//     second-order term as a quadratic form over the coordinates (rho, r) (n <= 6; else rho
-//     only), the rho-rho block's midpoint, with J P, becomes P', and only the variation of its
-//     coefficients over the set (third order), the blocks with r, the terms with P(r0) and the
-//     higher orders' second-order terms go into the error part;
+//     second-order term as a quadratic form over the coordinates (rho, r_L) (n + |L| <= 15; else
+//     rho only; L the live components, below), the rho-rho block's midpoint, with J P, becomes
+//     P', and only the variation of its coefficients over the set (third order), the blocks with
+//     r, the terms with P(r0) and the higher orders' second-order terms go into the error part;
 //  5. Lohner: z = T(m) + q + R, m' = mid(z), C' = mid(J C), B' = mid(J B) (parallelepiped) while
 //     its condition number is small, else Q of the QR factorisation of mid(J B) (columns pivoted
 //     by length times the width of r); r' = (B'^-1 J B) r + B'^-1 (z - m' + (J C - C') r0), with
 //     an interval enclosure of B'^-1. The tight enclosure is m' + C' r0 + B' r' intersected with
-//     z + J C r0 + J B r.
+//     z + J C r0 + J B r. Components whose derivative is the constant 0 (parameters carried as
+//     state) get no error part: B = blockdiag(B_LL, I), r = (r_L, 0), the frame chosen on the
+//     live block L alone (checked each step: their rows of J exact unit rows, their rest 0).
 
 #include "furuta/validated/integrator.hpp"
 
@@ -253,7 +255,7 @@ std::vector<Jet> direction_jets(const Box& y, const Matrix& c, const std::vector
 template <std::size_t N>
 void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
                     const std::vector<Interval>& r0, const std::vector<Interval>& e, int order,
-                    int quadratic_order, std::vector<Interval>& second,
+                    int quadratic_order, bool quadratic_part, std::vector<Interval>& second,
                     std::vector<Interval>* forms, std::vector<Interval>* d2e) {
   constexpr std::size_t kPairs = QuadJet<N>::kPairs;
   const auto count = static_cast<std::size_t>(order) + 1;
@@ -274,7 +276,7 @@ void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
       }
     }
   }
-  if (low >= 0) {
+  if (low >= 0 && quadratic_part) {
     const std::vector<QuadJet<N>> x0 = direction_jets<QuadJet<N>, N>(y, c, r0, e);
     TaylorRunner<QuadJet<N>> runner;
     runner.run(tape, std::span<const QuadJet<N>>(x0), low);
@@ -300,79 +302,68 @@ template <std::size_t... Is>
 void second_order_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
                            const Matrix& c, const std::vector<Interval>& r0,
                            const std::vector<Interval>& e, int order, int quadratic_order,
-                           std::vector<Interval>& second, std::vector<Interval>* forms,
-                           std::vector<Interval>* d2e) {
+                           bool quadratic_part, std::vector<Interval>& second,
+                           std::vector<Interval>* forms, std::vector<Interval>* d2e) {
   const std::size_t n = y.size();
-  (void)((n == Is + 1 ? (second_order_n<Is + 1>(tape, y, c, r0, e, order, quadratic_order, second,
-                                                forms, d2e),
+  (void)((n == Is + 1 ? (second_order_n<Is + 1>(tape, y, c, r0, e, order, quadratic_order,
+                                                quadratic_part, second, forms, d2e),
                          true)
                       : false) ||
          ...);
 }
 
+// quadratic_part false: only the orders above quadratic_order (Jet2); the caller computes the
+// others (second_order_extended_m).
 void second_order_coefficients(const Tape& tape, const Box& y, const Matrix& c,
                                const std::vector<Interval>& r0, const std::vector<Interval>& e,
                                int order, int quadratic_order, std::vector<Interval>& second,
                                std::vector<Interval>* forms = nullptr,
-                               std::vector<Interval>* d2e = nullptr) {
+                               std::vector<Interval>* d2e = nullptr, bool quadratic_part = true) {
   second_order_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, y, c, r0, e, order,
-                        quadratic_order, second, forms, d2e);
+                        quadratic_order, quadratic_part, second, forms, d2e);
 }
 
-// The same with the error part's coordinates r in the jets' linear form: the direction is
-// delta = C rho + B r + e (e: the interval vector P(r0)), the QuadJet orders run on the 2N
-// coordinates (rho, r), so that the products of first-order terms with B r are kept as a form
-// too (the field's large terms cancel in them as in the rho terms). forms: the rho-rho block
-// (as second_order_n); d2e: the jets' d2e plus the range of the blocks with r over (r0, r).
-template <std::size_t N>
-void second_order_extended_n(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
-                             const std::vector<Interval>& r0, const std::vector<Interval>& r,
-                             const std::vector<Interval>& e_quadratic,
-                             const std::vector<Interval>& e_all, int order, int quadratic_order,
+// The orders 0..quadratic_order with the error part's live coordinates r_L in the jets' linear
+// form too: the direction is delta = C rho + B r + e (e: the interval vector P(r0)), the QuadJet
+// runs on the coordinates (rho (all n), r_l for l in `live`), padded with zero coordinates up to
+// M, so that the products of first-order terms with B r are kept as a form too (the field's large
+// terms cancel in them as in the rho terms). B's columns outside `live` must meet r entries that
+// are exactly 0 (the constant components, see run()). forms (sized by the caller as
+// second_order_n): the rho-rho block; d2e: the jets' d2e plus the range of the blocks with r over
+// (r0, r).
+template <std::size_t M>
+void second_order_extended_m(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
+                             const std::vector<std::size_t>& live, const std::vector<Interval>& r0,
+                             const std::vector<Interval>& r,
+                             const std::vector<Interval>& e_quadratic, int quadratic_order,
                              std::vector<Interval>& second, std::vector<Interval>& forms,
                              std::vector<Interval>& d2e) {
-  constexpr std::size_t M = 2 * N;
-  constexpr std::size_t kPairs = QuadJet<N>::kPairs;
-  const auto count = static_cast<std::size_t>(order) + 1;
-  second.resize(count * N);
-  forms.assign(count * N * kPairs, Interval(0.0));
-  d2e.assign(count * N, Interval(0.0));
-  const int low = std::min(order, quadratic_order);
-  if (low < order) {
-    const std::vector<Jet2<N>> x0 = direction_jets<Jet2<N>, N>(y, c, r0, e_all);
-    TaylorRunner<Jet2<N>> runner;
-    runner.run(tape, std::span<const Jet2<N>>(x0), order);
-    for (std::size_t i = static_cast<std::size_t>(low) + 1; i < count; ++i) {
-      for (std::size_t v = 0; v < N; ++v) {
-        second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
-        d2e[i * N + v] = second[i * N + v];
-      }
-    }
-  }
-  if (low < 0) return;
-  std::vector<Interval> coordinates(r0.begin(), r0.end());
-  coordinates.insert(coordinates.end(), r.begin(), r.end());
-  std::vector<QuadJet<M>> x0(N);
-  for (std::size_t v = 0; v < N; ++v) {
+  const std::size_t n = y.size();
+  const std::size_t kPairs = n * (n + 1) / 2;
+  const std::size_t used = n + live.size();
+  std::vector<Interval> coordinates(M, Interval(0.0));
+  std::copy(r0.begin(), r0.end(), coordinates.begin());
+  for (std::size_t l = 0; l < live.size(); ++l) coordinates[n + l] = r[live[l]];
+  std::vector<QuadJet<M>> x0(n);
+  for (std::size_t v = 0; v < n; ++v) {
     const auto ev = static_cast<Eigen::Index>(v);
     x0[v] = QuadJet<M>(y[v]);
-    for (std::size_t a = 0; a < N; ++a) {
-      const auto ea = static_cast<Eigen::Index>(a);
-      x0[v].g[a] = Interval(c(ev, ea));
-      x0[v].g[N + a] = Interval(b(ev, ea));
+    for (std::size_t a = 0; a < n; ++a) x0[v].g[a] = Interval(c(ev, static_cast<Eigen::Index>(a)));
+    for (std::size_t l = 0; l < live.size(); ++l) {
+      x0[v].g[n + l] = Interval(b(ev, static_cast<Eigen::Index>(live[l])));
     }
     x0[v].e = e_quadratic[v];
     x0[v].rho = coordinates.data();
     x0[v].changed();
   }
   TaylorRunner<QuadJet<M>> runner;
-  runner.run(tape, std::span<const QuadJet<M>>(x0), low);
-  for (std::size_t i = 0; i <= static_cast<std::size_t>(low); ++i) {
-    for (std::size_t v = 0; v < N; ++v) {
+  runner.run(tape, std::span<const QuadJet<M>>(x0), quadratic_order);
+  for (std::size_t i = 0; i <= static_cast<std::size_t>(quadratic_order); ++i) {
+    for (std::size_t v = 0; v < n; ++v) {
       const QuadJet<M>& jet = runner.coefficient(v, static_cast<int>(i));
-      second[i * N + v] = jet.range();
+      second[i * n + v] = jet.range();
       if (jet.rho == nullptr) {
-        d2e[i * N + v] = second[i * N + v];
+        d2e[i * n + v] = second[i * n + v];
         continue;
       }
       Interval rest = jet.d2e;
@@ -380,8 +371,10 @@ void second_order_extended_n(const Tape& tape, const Box& y, const Matrix& c, co
       std::size_t kk = 0;
       for (std::size_t a = 0; a < M; ++a) {
         for (std::size_t bb = a; bb < M; ++bb, ++k) {
-          if (bb < N) {
-            forms[(i * N + v) * kPairs + kk++] = jet.q[k];
+          if (bb < n) {
+            forms[(i * n + v) * kPairs + kk++] = jet.q[k];
+          } else if (bb >= used) {
+            continue;  // padding: zero coordinates
           } else if (a == bb) {
             rest += jet.q[k] * sqr(coordinates[a]);
           } else {
@@ -389,28 +382,51 @@ void second_order_extended_n(const Tape& tape, const Box& y, const Matrix& c, co
           }
         }
       }
-      d2e[i * N + v] = rest;
+      d2e[i * n + v] = rest;
     }
   }
 }
 
-constexpr std::size_t kMaxExtended = 6;
+// The jets over (rho, r_L) run for n + |L| coordinates up to this, padded to the next of
+// kExtendedSizes (each size is an instantiation of the QuadJet runner: QuadJet<15> has 120
+// pairs, about 3x the cost of QuadJet<8> per operation). 15 = the Furuta model with its seven
+// parameters carried as state (11 coordinates of rho, 4 of r).
+constexpr std::size_t kExtendedSizes[] = {2, 4, 6, 8, 10, 12, 15};
+constexpr std::size_t kMaxExtended = 15;
 
 template <std::size_t... Is>
-void second_order_extended_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
-                                    const Matrix& c, const Matrix& b,
+void second_order_extended_dispatch(std::index_sequence<Is...>, std::size_t size, const Tape& tape,
+                                    const Box& y, const Matrix& c, const Matrix& b,
+                                    const std::vector<std::size_t>& live,
                                     const std::vector<Interval>& r0, const std::vector<Interval>& r,
-                                    const std::vector<Interval>& e_quadratic,
-                                    const std::vector<Interval>& e_all, int order,
-                                    int quadratic_order, std::vector<Interval>& second,
-                                    std::vector<Interval>& forms, std::vector<Interval>& d2e) {
-  const std::size_t n = y.size();
-  (void)((n == Is + 1
-              ? (second_order_extended_n<Is + 1>(tape, y, c, b, r0, r, e_quadratic, e_all, order,
-                                                 quadratic_order, second, forms, d2e),
+                                    const std::vector<Interval>& e_quadratic, int quadratic_order,
+                                    std::vector<Interval>& second, std::vector<Interval>& forms,
+                                    std::vector<Interval>& d2e) {
+  (void)((size <= kExtendedSizes[Is]
+              ? (second_order_extended_m<kExtendedSizes[Is]>(
+                     tape, y, c, b, live, r0, r, e_quadratic, quadratic_order, second, forms, d2e),
                  true)
               : false) ||
          ...);
+}
+
+// The second-order term of the Taylor coefficients 0..order over the set m + C rho + P(rho) +
+// B r inside y, with the quadratic forms of orders 0..quadratic_order over (rho, r_L) (n + |L|
+// <= kMaxExtended; e_all = B r + P(r0), e_quadratic = P(r0)).
+void second_order_extended(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
+                           const std::vector<std::size_t>& live, const std::vector<Interval>& r0,
+                           const std::vector<Interval>& r, const std::vector<Interval>& e_quadratic,
+                           const std::vector<Interval>& e_all, int order, int quadratic_order,
+                           std::vector<Interval>& second, std::vector<Interval>& forms,
+                           std::vector<Interval>& d2e) {
+  // The orders above quadratic_order from Jet2 (and the sizes of forms and d2e).
+  second_order_coefficients(tape, y, c, r0, e_all, order, quadratic_order, second, &forms, &d2e,
+                            false);
+  const int low = std::min(order, quadratic_order);
+  if (low < 0) return;
+  second_order_extended_dispatch(std::make_index_sequence<std::size(kExtendedSizes)>{},
+                                 y.size() + live.size(), tape, y, c, b, live, r0, r, e_quadratic,
+                                 low, second, forms, d2e);
 }
 
 // ---- Quadratic forms in rho ---------------------------------------------------------------------
@@ -606,6 +622,60 @@ Box Tube::enclosure_over(double ta, double tb) const {
 
 namespace {
 
+// The live components: those whose derivative is not the constant 0 in some piece's field (the
+// recorder marks the others: parameters carried as state). All of them when none is constant or
+// all are (the frame then spans everything, as for a field without constant components).
+std::vector<std::size_t> live_components(const std::vector<Tape>& tapes, std::size_t n) {
+  std::vector<std::size_t> live;
+  for (std::size_t v = 0; v < n; ++v) {
+    const bool constant = std::all_of(tapes.begin(), tapes.end(), [&](const Tape& tape) {
+      return tape.nodes[v].op == Op::variable && tape.nodes[v].time_constant;
+    });
+    if (!constant) live.push_back(v);
+  }
+  if (live.empty()) {
+    live.resize(n);
+    std::iota(live.begin(), live.end(), std::size_t{0});
+  }
+  return live;
+}
+
+// Whether the error part B r is confined to the live components: B block-diagonal with the
+// identity on the constant ones (no coupling either way) and their r exactly 0.
+bool confined_to_live(const Matrix& b, const std::vector<Interval>& r,
+                      const std::vector<bool>& is_live) {
+  const std::size_t n = r.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (is_live[i]) continue;
+    if (!(r[i].lo() == 0.0 && r[i].hi() == 0.0)) return false;
+    for (std::size_t j = 0; j < n; ++j) {
+      const double want = i == j ? 1.0 : 0.0;
+      const auto ei = static_cast<Eigen::Index>(i);
+      const auto ej = static_cast<Eigen::Index>(j);
+      if (b(ei, ej) != want || b(ej, ei) != want) return false;
+    }
+  }
+  return true;
+}
+
+// Whether the step keeps the constant components constant: their rows of J are exactly the unit
+// rows (thin 0 and 1) and their rest (the new errors) is exactly 0. True by construction for
+// variables of zero derivative (their Taylor coefficients of order >= 1 are exact zeros); checked
+// so that the confined frame is only used where it is sound.
+bool constant_rows_exact(const IMatrix& j, const std::vector<Interval>& rest,
+                         const std::vector<bool>& is_live) {
+  const std::size_t n = rest.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (is_live[i]) continue;
+    if (!(rest[i].lo() == 0.0 && rest[i].hi() == 0.0)) return false;
+    for (std::size_t col = 0; col < n; ++col) {
+      const double want = i == col ? 1.0 : 0.0;
+      if (!(j(i, col).lo() == want && j(i, col).hi() == want)) return false;
+    }
+  }
+  return true;
+}
+
 // Where a run stands at a step boundary: every solution from x0 = origin + rho, rho in r0, is at
 // time t in m + C rho + B r (for some point of r), and in the box x.
 struct Doubleton {
@@ -656,6 +726,21 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
   Matrix b = std::move(state.b);
   std::vector<Interval> r = std::move(state.r);
   Box x = std::move(state.x);
+  // The error part B r is kept on the live components (those of nonzero field; the constant
+  // ones, parameters carried as state, never get new errors): B = blockdiag(B_LL, I), r_K = 0.
+  // The frame is then chosen on the live block alone and the quadratic jets run over (rho, r_L):
+  // n + |L| coordinates instead of 2n. Without constant components L is everything (as before).
+  // A start that does not have this form (a restart from a tube that fell back), or a step
+  // whose constant rows are not exact, falls back to the full frame for the rest of the run.
+  std::vector<std::size_t> live = live_components(tapes, n);
+  std::vector<bool> is_live(n, false);
+  for (std::size_t v : live) is_live[v] = true;
+  auto all_live = [&] {
+    live.resize(n);
+    std::iota(live.begin(), live.end(), std::size_t{0});
+    is_live.assign(n, true);
+  };
+  if (live.size() < n && !confined_to_live(b, r, is_live)) all_live();
 
   TaylorRunner<Interval> runner;
   double t = state.t;
@@ -747,10 +832,9 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
       for (std::size_t v = 0; v < n; ++v) e[v] += p_range[v];
       Box y = x;
       for (std::size_t v = 0; v < n; ++v) y[v] = y[v] | Interval(m[v]);
-      if (options.quadratic_model && n <= kMaxExtended) {
-        second_order_extended_dispatch(std::make_index_sequence<kMaxExtended>{}, tape, y, c, b, r0,
-                                       r, p_range, e, k, options.quadratic_order, step.second,
-                                       forms, d2e);
+      if (options.quadratic_model && n + live.size() <= kMaxExtended) {
+        second_order_extended(tape, y, c, b, live, r0, r, p_range, e, k, options.quadratic_order,
+                              step.second, forms, d2e);
       } else {
         second_order_coefficients(tape, y, c, r0, e, k, options.quadratic_order, step.second,
                                   options.quadratic_model ? &forms : nullptr,
@@ -821,33 +905,55 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     // B' = mid(J B) (the parallelepiped method: r is not wrapped, only the rest is, through
     // B'^-1) while it is well conditioned, else Q of the QR of mid(J B) with columns pivoted by
     // their length times the width of r (Lohner's QR method); r' = (B'^-1 J B) r + B'^-1 rest.
-    const Matrix p = mid(jb);
+    // On a field with constant components the frame is chosen on the live block alone (B' =
+    // blockdiag(B'_LL, I), r'_K = 0): with r_K = 0 and the constant rows of J exact unit rows,
+    // (J B) r + rest is ((J B)_LL r_L + rest_L, 0) exactly.
+    if (live.size() < n && !constant_rows_exact(j, rest, is_live)) all_live();
+    const std::size_t nl = live.size();
+    const auto enl = static_cast<Eigen::Index>(nl);
+    IMatrix jb_live(nl);
+    std::vector<Interval> r_live(nl);
+    std::vector<Interval> rest_live(nl);
+    for (std::size_t a = 0; a < nl; ++a) {
+      for (std::size_t col = 0; col < nl; ++col) jb_live(a, col) = jb(live[a], live[col]);
+      r_live[a] = r[live[a]];
+      rest_live[a] = rest[live[a]];
+    }
+    const Matrix p = mid(jb_live);
     const Matrix p_inv = p.partialPivLu().inverse();
     const double kappa = inflation(p, p_inv);
     Lohner parallelepiped;
     Lohner qr;
     Lohner* chosen = nullptr;
     if (kappa <= options.max_inflation) {
-      parallelepiped = lohner_candidate(p, p_inv, jb, r, rest);
+      parallelepiped = lohner_candidate(p, p_inv, jb_live, r_live, rest_live);
       if (parallelepiped.valid) chosen = &parallelepiped;
     }
     if (chosen == nullptr) {
-      qr = lohner_candidate(qr_frame(p, r), Matrix(), jb, r, rest);
+      qr = lohner_candidate(qr_frame(p, r_live), Matrix(), jb_live, r_live, rest_live);
       if (qr.valid) chosen = &qr;
     }
     Lohner identity_frame;
     if (chosen == nullptr) {  // never seen; B' = I keeps the step sound (only wider)
-      identity_frame =
-          lohner_candidate(Matrix::Identity(en, en), Matrix::Identity(en, en), jb, r, rest);
+      identity_frame = lohner_candidate(Matrix::Identity(enl, enl), Matrix::Identity(enl, enl),
+                                        jb_live, r_live, rest_live);
       chosen = &identity_frame;
     }
     if (chosen == &qr) ++result.qr_steps;
-    Matrix b_next = chosen->b;
-    std::vector<Interval> r_next = chosen->r;
+    Matrix b_next = Matrix::Identity(en, en);
+    std::vector<Interval> r_next(n, Interval(0.0));
+    std::vector<Interval> new1(n, Interval(0.0));
+    for (std::size_t a = 0; a < nl; ++a) {
+      for (std::size_t col = 0; col < nl; ++col) {
+        b_next(static_cast<Eigen::Index>(live[a]), static_cast<Eigen::Index>(live[col])) =
+            chosen->b(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(col));
+      }
+      r_next[live[a]] = chosen->r[a];
+      new1[live[a]] = chosen->box[a];
+    }
     // The tight enclosure: the new doubleton, intersected with the direct image.
     const std::vector<Interval> new0 = from_point(c_next) * r0;
     const std::vector<Interval> new_quadratic = forms_range(p_next, r0);
-    const std::vector<Interval>& new1 = chosen->box;
     const std::vector<Interval> old0 = jc * r0;
     const std::vector<Interval> old_quadratic = j * p_range;
     const std::vector<Interval> old1 = jb * r;
@@ -1006,11 +1112,48 @@ IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
       }
     }
   }
-  const std::optional<IMatrix> b_inv = frame_inverse(state.b);
-  if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
-  const std::vector<Interval> residual_r = *b_inv * residual;
+  // Constant components (method step 9) keep the confined form: such a component is x0_v at
+  // every time, so with its row of C a unit row, its row of P zero and no error part it is
+  // exactly origin'_v + rho'_v: the centre origin'_v, no residual. The live components' residual
+  // then goes to r_L through B_LL^-1 alone (r_K stays exactly 0).
+  const std::vector<std::size_t> live = live_components(tapes, n);
+  std::vector<bool> is_live(n, false);
+  for (std::size_t v : live) is_live[v] = true;
+  bool confined = live.size() < n && confined_to_live(state.b, at.r, is_live);
+  const std::size_t pairs = pair_count(n);
+  for (std::size_t v = 0; v < n && confined; ++v) {
+    if (is_live[v]) continue;
+    for (std::size_t j = 0; j < n; ++j)
+      confined = confined && at.c[v * n + j] == (v == j ? 1.0 : 0.0);
+    for (std::size_t a = 0; a < pairs && !at.quad.empty(); ++a) {
+      confined = confined && at.quad[v * pairs + a] == 0.0;
+    }
+  }
   state.r = at.r;
-  for (std::size_t v = 0; v < n; ++v) state.r[v] += residual_r[v];
+  if (confined) {
+    const auto el = static_cast<Eigen::Index>(live.size());
+    Matrix b_live(el, el);
+    for (std::size_t a = 0; a < live.size(); ++a) {
+      for (std::size_t col = 0; col < live.size(); ++col) {
+        b_live(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(col)) =
+            state.b(static_cast<Eigen::Index>(live[a]), static_cast<Eigen::Index>(live[col]));
+      }
+    }
+    const std::optional<IMatrix> b_inv = frame_inverse(b_live);
+    if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
+    std::vector<Interval> residual_live(live.size());
+    for (std::size_t a = 0; a < live.size(); ++a) residual_live[a] = residual[live[a]];
+    const std::vector<Interval> residual_r = *b_inv * residual_live;
+    for (std::size_t a = 0; a < live.size(); ++a) state.r[live[a]] += residual_r[a];
+    for (std::size_t v = 0; v < n; ++v) {
+      if (!is_live[v]) state.m[v] = state.origin[v];
+    }
+  } else {
+    const std::optional<IMatrix> b_inv = frame_inverse(state.b);
+    if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
+    const std::vector<Interval> residual_r = *b_inv * residual;
+    for (std::size_t v = 0; v < n; ++v) state.r[v] += residual_r[v];
+  }
   // The box: the re-centred doubleton, inside the parent's box at t0.
   const std::vector<Interval> part0 = from_point(state.c) * state.r0;
   const std::vector<Interval> part1 = from_point(state.b) * state.r;
