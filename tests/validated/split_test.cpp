@@ -27,6 +27,20 @@ IntegratorOptions wide_pendulum_options() {
 
 const Box kWide{Interval(-1.845, -1.645), Interval(-0.1, 0.1)};
 
+// 60 points of each piece's own initial box simulated along its tube (8 substeps a step).
+testing::SoundnessCount check_pieces(const SimplePendulum& pendulum, const SplitResult& r,
+                                     std::mt19937_64& rng) {
+  testing::SoundnessCount total;
+  for (const Tube& piece : r.pieces) {
+    const testing::SoundnessCount c =
+        testing::check_tube(pendulum, piece, testing::sample_box<2>(piece.initial, 60, rng), 8);
+    total.points += c.points;
+    total.checks += c.checks;
+    total.violations += c.violations;
+  }
+  return total;
+}
+
 TEST(Split, WidePendulumBoxIsSplitAndEveryPieceIsSound) {
   const SimplePendulum pendulum;
   const IntegratorOptions options = wide_pendulum_options();
@@ -45,15 +59,8 @@ TEST(Split, WidePendulumBoxIsSplitAndEveryPieceIsSound) {
 
   // Every piece: points of its own box along its tube.
   std::mt19937_64 rng(99);
-  testing::SoundnessCount total;
-  for (const Tube& piece : r.pieces) {
-    EXPECT_TRUE(piece.initial.is_subset(kWide));
-    const testing::SoundnessCount c =
-        testing::check_tube(pendulum, piece, testing::sample_box<2>(piece.initial, 60, rng), 8);
-    total.points += c.points;
-    total.checks += c.checks;
-    total.violations += c.violations;
-  }
+  for (const Tube& piece : r.pieces) EXPECT_TRUE(piece.initial.is_subset(kWide));
+  const testing::SoundnessCount total = check_pieces(pendulum, r, rng);
   EXPECT_EQ(total.violations, 0U);
   // The pieces cover x0: every sampled point of x0 is in some piece's initial box, and its
   // solution inside the hull at 1, 2, 3 s.
@@ -135,14 +142,7 @@ TEST(Split, PlannedSplitContinuesFourPiecesFromMidRun) {
     EXPECT_EQ(piece.steps.front().end, r.pieces.front().steps.front().end);
   }
   std::mt19937_64 rng(7);
-  testing::SoundnessCount total;
-  for (const Tube& piece : r.pieces) {
-    const testing::SoundnessCount c =
-        testing::check_tube(pendulum, piece, testing::sample_box<2>(piece.initial, 60, rng), 8);
-    total.points += c.points;
-    total.checks += c.checks;
-    total.violations += c.violations;
-  }
+  const testing::SoundnessCount total = check_pieces(pendulum, r, rng);
   EXPECT_EQ(total.violations, 0U);
   EXPECT_GT(total.checks, 10000U);
   for (const Point<2>& x : testing::sample_box<2>(kWide, 200, rng)) {
