@@ -155,7 +155,9 @@ int run_session_command(const RunOptions& options, std::ostream& out, std::ostre
   daemon::DaemonSettings settings = daemon::daemon_settings_from_config(rig);
   if (!options.logs_dir.empty()) settings.recorder.logs_dir = options.logs_dir;
   for (const auto& recovered : session_log::recover_partial_logs(settings.recorder.logs_dir)) {
-    err << "furuta run: recovered a session cut short: " << recovered.path.string() << "\n";
+    err << "furuta run: "
+        << (recovered.discarded ? "removed an empty log: " : "recovered a session cut short: ")
+        << recovered.path.string() << "\n";
   }
   daemon::ConnectOptions connect;
   if (options.simulated) connect.backend = daemon::BackendChoice::simulated;

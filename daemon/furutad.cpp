@@ -61,10 +61,23 @@ int main(int argc, char** argv) {
     if (lcm_url.empty()) lcm_url = rig.daemon.lcm_url;
     if (require_rt) settings.realtime.enabled = true;
 
-    for (const auto& recovered : session_log::recover_partial_logs(settings.recorder.logs_dir)) {
-      std::cerr << "furutad: recovered a session cut short: " << recovered.path.string() << " ("
-                << recovered.stats.events << " events kept, " << recovered.bytes_dropped
-                << " bytes of unfinished tail dropped)\n";
+    // A log that cannot be recovered now (the directory read-only, the disk gone) stays as it is
+    // for the next start; the daemon must still come up to keep the rig safe and say why.
+    try {
+      for (const auto& recovered : session_log::recover_partial_logs(settings.recorder.logs_dir)) {
+        if (recovered.discarded) {
+          std::cerr << "furutad: removed " << recovered.path.string()
+                    << ": a session killed before its log held one whole event\n";
+          continue;
+        }
+        std::cerr << "furutad: recovered a session cut short: " << recovered.path.string() << " ("
+                  << recovered.stats.events << " events kept, " << recovered.bytes_dropped
+                  << " bytes of unfinished tail dropped)\n";
+      }
+    } catch (const std::exception& e) {
+      std::cerr << "furutad: cannot recover the logs of sessions cut short (left for the next "
+                   "start): "
+                << e.what() << "\n";
     }
 
     daemon::ConnectOptions connect;

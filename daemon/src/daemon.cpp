@@ -245,6 +245,16 @@ furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command
           decision = {false, e.what()};
           break;
         }
+        // Before the loop takes it: a session whose log cannot even be created would drive the
+        // motor only to be stopped with log_error a few cycles later.
+        if (!settings_.recorder.logs_dir.empty()) {
+          if (std::string why = session_log::logs_dir_problem(
+                  settings_.recorder.logs_dir, settings_.recorder.min_free_bytes_to_start);
+              !why.empty()) {
+            decision = {false, "cannot log a session: " + why};
+            break;
+          }
+        }
         const auto wall = std::chrono::duration_cast<std::chrono::nanoseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();

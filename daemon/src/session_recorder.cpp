@@ -17,6 +17,22 @@ std::string text_of(const std::array<char, N>& chars) {
   return std::string(chars.data());
 }
 
+// What the fault record and the status say: the status name, and for the failures an operator
+// acts on, what happened and where the data is.
+std::string describe_log_failure(session_log::LogWriteStatus status,
+                                 const session_log::LcmLogWriter& log) {
+  std::string why = "session log: " + std::string(session_log::to_string(status));
+  if (status == session_log::LogWriteStatus::file_removed) {
+    why += " (deleted under the session, its directory with it?); ";
+    why += log.removal_save_error().empty()
+               ? "what was written is saved again as " + log.partial_path().string()
+               : "what was written is LOST: " + log.removal_save_error();
+  } else if (status == session_log::LogWriteStatus::disk_full) {
+    why += " (what was synced before stays in " + log.partial_path().string() + ")";
+  }
+  return why;
+}
+
 }  // namespace
 
 furuta::rig_sample_t to_lcm_sample(const RigSample& s, const std::string& session,
@@ -88,9 +104,7 @@ void SessionRecorder::log_bytes(const char* channel, const std::vector<std::uint
   // Log times are the loop's monotonic clock in microseconds: replay and virtual time stay exact;
   // wall time is inside the messages.
   const auto status = log_->write(channel, monotonic_ns / 1000, bytes);
-  if (status != session_log::LogWriteStatus::ok) {
-    fail_log("session log: " + std::string(session_log::to_string(status)));
-  }
+  if (status != session_log::LogWriteStatus::ok) fail_log(describe_log_failure(status, *log_));
 }
 
 void SessionRecorder::fail_log(const std::string& why) {
@@ -241,9 +255,7 @@ void SessionRecorder::handle(const LoopEvent& event) {
 void SessionRecorder::sync_if_due(std::chrono::steady_clock::time_point now) {
   if (!log_ || log_failed_) return;
   const auto status = log_->sync_if_due(now);
-  if (status != session_log::LogWriteStatus::ok) {
-    fail_log("session log: " + std::string(session_log::to_string(status)));
-  }
+  if (status != session_log::LogWriteStatus::ok) fail_log(describe_log_failure(status, *log_));
 }
 
 }  // namespace furuta::daemon

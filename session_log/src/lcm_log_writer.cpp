@@ -6,6 +6,8 @@
 
 #include <fcntl.h>
 #include <stdio_ext.h>  // __fpurge
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -13,6 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 #include <system_error>
+#include <vector>
 
 #include "furuta/session_log/lcm_log.hpp"
 #include "lcm_log_format.hpp"
@@ -83,6 +86,8 @@ std::string_view to_string(LogWriteStatus status) {
       return "io_error";
     case LogWriteStatus::closed:
       return "closed";
+    case LogWriteStatus::file_removed:
+      return "file_removed";
   }
   return "unknown";
 }
@@ -166,6 +171,15 @@ class LcmLogWriter::Impl {
       dirty_ = false;
     }
     last_sync_ = now;
+    // Writing to a file nobody can reach any more (its directory was deleted) succeeds and loses
+    // everything when it is closed: find out at every sync, while the data is still in hand.
+    struct stat st {};
+    if (::fstat(::fileno(file_->getFilePtr()), &st) == 0 && st.st_nlink == 0) {
+      removal_save_error_ = save_unlinked_file();
+      __fpurge(file_->getFilePtr());
+      file_.reset();
+      return LogWriteStatus::file_removed;
+    }
     return LogWriteStatus::ok;
   }
 
@@ -185,6 +199,7 @@ class LcmLogWriter::Impl {
 
   const fs::path& partial_path() const { return partial_path_; }
   std::uint64_t events_written() const { return events_written_; }
+  const std::string& removal_save_error() const { return removal_save_error_; }
 
  private:
   // After an error the file's tail may hold half an event. What stdio still buffers is dropped
@@ -196,15 +211,73 @@ class LcmLogWriter::Impl {
     return status_from_errno(err);
   }
 
+  // Copies the (synced, unlinked) file to a new .part at the old path, directories recreated, so
+  // that recovery at the next start finds it. Returns empty on success, else what failed: the
+  // caller reports the removal either way and says whether the data was saved.
+  std::string save_unlinked_file() {
+    std::error_code ec;
+    fs::create_directories(partial_dir_, ec);
+    if (ec) return "cannot recreate " + partial_dir_.string() + ": " + ec.message();
+    const detail::UniqueFd to(
+        ::open(partial_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
+    if (!to.valid()) return "cannot create " + partial_path_.string() + ": " + std::strerror(errno);
+    // The log's own descriptor is write-only; /proc reopens the unlinked file for reading.
+    const std::string self_fd = "/proc/self/fd/" + std::to_string(::fileno(file_->getFilePtr()));
+    const detail::UniqueFd from(::open(self_fd.c_str(), O_RDONLY | O_CLOEXEC));
+    if (!from.valid())
+      return "cannot reopen the removed file: " + std::string(std::strerror(errno));
+    std::vector<char> buffer(64 * 1024);
+    for (off_t offset = 0;;) {
+      const ssize_t n = ::pread(from.get(), buffer.data(), buffer.size(), offset);
+      if (n < 0) return "cannot read the removed file: " + std::string(std::strerror(errno));
+      if (n == 0) break;
+      if (::write(to.get(), buffer.data(), static_cast<std::size_t>(n)) != n) {
+        return "cannot write " + partial_path_.string() + ": " + std::strerror(errno);
+      }
+      offset += n;
+    }
+    if (::fdatasync(to.get()) != 0) {
+      return "cannot sync " + partial_path_.string() + ": " + std::strerror(errno);
+    }
+    detail::fsync_directory(partial_dir_);
+    detail::fsync_directory(options_.logs_dir);
+    return {};
+  }
+
   LogWriterOptions options_;
   fs::path partial_dir_;
   fs::path partial_path_;
   fs::path final_path_;
   std::unique_ptr<lcm::LogFile> file_;
   std::uint64_t events_written_ = 0;
+  std::string removal_save_error_;
   bool dirty_ = false;
   std::chrono::steady_clock::time_point last_sync_;
 };
+
+std::string logs_dir_problem(const fs::path& logs_dir, std::uint64_t min_free_bytes) {
+  const fs::path partial_dir = logs_dir / kPartialDir;
+  std::error_code ec;
+  fs::create_directories(partial_dir, ec);
+  if (ec) return "cannot create " + partial_dir.string() + ": " + ec.message();
+  // An unnamed file: the same permission, read-only and existence checks as the session's log,
+  // and nothing left behind whatever happens next.
+  detail::UniqueFd probe(::open(partial_dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600));
+  if (!probe.valid() && errno != EOPNOTSUPP && errno != EISDIR) {
+    return "cannot create a file in " + partial_dir.string() + ": " + std::strerror(errno);
+  }
+  struct statvfs fs_stats {};
+  if (::statvfs(partial_dir.c_str(), &fs_stats) == 0) {
+    const std::uint64_t free_bytes = static_cast<std::uint64_t>(fs_stats.f_bavail) *
+                                     static_cast<std::uint64_t>(fs_stats.f_frsize);
+    if (free_bytes < min_free_bytes) {
+      return "the file system of " + logs_dir.string() + " is full (" +
+             std::to_string(free_bytes / 1024) + " KiB free, a session needs " +
+             std::to_string(min_free_bytes / 1024) + " KiB to start)";
+    }
+  }
+  return {};
+}
 
 LcmLogWriter::LcmLogWriter(const LogWriterOptions& options, const std::string& name) {
   check_name(name);
@@ -232,6 +305,10 @@ const std::filesystem::path& LcmLogWriter::partial_path() const {
 
 std::uint64_t LcmLogWriter::events_written() const {
   return impl_->events_written();
+}
+
+const std::string& LcmLogWriter::removal_save_error() const {
+  return impl_->removal_save_error();
 }
 
 }  // namespace furuta::session_log

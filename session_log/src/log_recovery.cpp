@@ -33,6 +33,13 @@ RecoveredLog recover_one(const fs::path& logs_dir, const fs::path& part) {
     }
     recovered.stats = reader.stats();
   }
+  if (recovered.stats.events == 0) {
+    if (::unlink(part.c_str()) != 0) throw_io("remove", part, errno);
+    recovered.path = part;
+    recovered.bytes_dropped = size;
+    recovered.discarded = true;
+    return recovered;
+  }
   const std::uint64_t keep = std::min(recovered.stats.readable_prefix_bytes, size);
   recovered.bytes_dropped = size - keep;
   if (recovered.bytes_dropped > 0) {

@@ -328,16 +328,35 @@ TEST(SafetyPaths, ExceptionInTheLoopWritesTheZeroAfterItAndIsRethrown) {
   EXPECT_EQ(rig.applied_duty_later(), 0.0);
 }
 
-TEST(SafetyPaths, LogThatCannotBeCreatedStopsTheSessionWithTheMotorAtZero) {
+TEST(SafetyPaths, StartIsRefusedWhenNoLogCouldBeCreatedAndTheMotorNeverMoves) {
   Rig rig;
   // A logs directory under a regular file can never be created.
   const fs::path blocker = rig.dir.path() / "not-a-directory";
   std::ofstream(blocker) << "x";
   rig.settings.recorder.logs_dir = blocker / "logs";
+  rig.create();
+  const furuta::rig_status_t reply =
+      rig.daemon->handle_command(testing::start_command("bang_bang", 0.3, 60.0));
+  EXPECT_FALSE(reply.request_accepted);
+  EXPECT_NE(reply.request_reason.find("cannot log a session"), std::string::npos)
+      << reply.request_reason;
+  EXPECT_NE(reply.request_reason.find(blocker.string()), std::string::npos) << reply.request_reason;
+  rig.daemon->start();
+  rig.daemon->stop(StopReason::signal);
+  rig.daemon->wait();
+  EXPECT_FALSE(testing::summarize_writes(rig.motor->events()).drove_motor);
+}
+
+TEST(SafetyPaths, LogThatCannotBeCreatedStopsTheSessionWithTheMotorAtZero) {
+  Rig rig;
   // A short queue keeps the loop within a few cycles of the logger, so the failure reaches it
   // while the session runs (virtual time would otherwise run the loop far ahead).
   rig.settings.queue_capacity = 16;
   rig.create(testing::start_command("bang_bang", 0.3, 60.0));
+  // The start passed the logs directory check; the directory is replaced by a regular file before
+  // the session opens its log (a race the check cannot close).
+  fs::remove_all(rig.settings.recorder.logs_dir);
+  std::ofstream(rig.settings.recorder.logs_dir) << "x";
   rig.run();
   EXPECT_EQ(rig.last_stop(), StopReason::log_error);
   EXPECT_FALSE(rig.daemon->recorder().last_log().has_value());

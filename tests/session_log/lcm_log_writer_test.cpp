@@ -217,6 +217,74 @@ void expect_synced_prefix_readable(const fs::path& part, const FullDiskReport& r
   EXPECT_EQ(stats.damaged_regions, 0u);
 }
 
+TEST(LcmLogWriter, LogsDirectoryRemovedMidSessionIsFoundAtTheNextSyncAndTheDataSaved) {
+  // rm -r of the logs directory under a running session: writes into the unlinked file succeed
+  // and would all be lost at close. The sync notices, writes everything back to a new .part and
+  // refuses from then on; recovery at the next start makes it an incomplete log.
+  TempDir dir;
+  const fs::path logs = dir.path() / "logs";
+  const std::vector<Event> events = testing::pattern_events(8);
+  LcmLogWriter writer({logs, 1000ms}, "removed");
+  for (int i = 0; i < 5; ++i) ASSERT_EQ(write_event(writer, events[i]), LogWriteStatus::ok);
+  ASSERT_EQ(writer.sync_if_due(std::chrono::steady_clock::now(), true), LogWriteStatus::ok);
+  for (int i = 5; i < 8; ++i) ASSERT_EQ(write_event(writer, events[i]), LogWriteStatus::ok);
+  fs::remove_all(logs);
+  EXPECT_EQ(writer.sync_if_due(std::chrono::steady_clock::now(), true),
+            LogWriteStatus::file_removed);
+  EXPECT_EQ(write_event(writer, events[0]), LogWriteStatus::closed);
+  EXPECT_EQ(writer.finish(), LogWriteStatus::closed);
+  ASSERT_TRUE(fs::exists(writer.partial_path()));
+  EXPECT_EQ(writer.removal_save_error(), "");
+
+  const std::vector<RecoveredLog> recovered = recover_partial_logs(logs);
+  ASSERT_EQ(recovered.size(), 1u);
+  LogReadStats stats;
+  const std::vector<LogEvent> got = testing::read_log(recovered[0].path, stats);
+  ASSERT_EQ(got.size(), events.size());
+  EXPECT_EQ(stats.damaged_regions, 0u);
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_TRUE(testing::same_event(got[i], events[i])) << i;
+  }
+}
+
+TEST(LcmLogWriter, ARemovedLogThatCannotBeSavedAgainSaysWhy) {
+  // The logs directory removed and a regular file put in its place: the .part cannot be written
+  // again, and the writer says so instead of claiming the data was saved.
+  TempDir dir;
+  const fs::path logs = dir.path() / "logs";
+  const std::vector<Event> events = testing::pattern_events(3);
+  LcmLogWriter writer({logs, 1000ms}, "removed");
+  for (const Event& e : events) ASSERT_EQ(write_event(writer, e), LogWriteStatus::ok);
+  fs::remove_all(logs);
+  std::ofstream(logs) << "not a directory";
+  EXPECT_EQ(writer.sync_if_due(std::chrono::steady_clock::now(), true),
+            LogWriteStatus::file_removed);
+  EXPECT_NE(writer.removal_save_error().find("cannot recreate"), std::string::npos)
+      << writer.removal_save_error();
+  EXPECT_FALSE(fs::exists(writer.partial_path()));
+}
+
+TEST(LogsDirProblem, NamesWhatStopsASessionFromBeingLogged) {
+  TempDir dir;
+  // Fine, and .partial created on the way.
+  EXPECT_EQ(logs_dir_problem(dir.path() / "logs", 0), "");
+  EXPECT_TRUE(fs::is_directory(dir.path() / "logs" / ".partial"));
+  // Under a regular file: never creatable.
+  std::ofstream(dir.path() / "file") << "x";
+  EXPECT_NE(logs_dir_problem(dir.path() / "file" / "logs", 0).find("cannot create"),
+            std::string::npos);
+  // Not enough room (no file system has this much).
+  const std::string full = logs_dir_problem(dir.path() / "logs", ~std::uint64_t{0});
+  EXPECT_NE(full.find("is full"), std::string::npos) << full;
+  // Read-only: root passes permission checks, so only as another user.
+  if (::geteuid() != 0) {
+    fs::permissions(dir.path() / "logs" / ".partial", fs::perms(0555));
+    EXPECT_NE(logs_dir_problem(dir.path() / "logs", 0).find("Permission denied"),
+              std::string::npos);
+    fs::permissions(dir.path() / "logs" / ".partial", fs::perms(0755));
+  }
+}
+
 TEST(LcmLogWriterDiskFull, FileSizeLimitStopsTheWriterAndKeepsTheSyncedPrefix) {
   TempDir dir;
   testing::Pipe pipe;

@@ -3,6 +3,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <random>
 
 #include "child_process.hpp"
@@ -25,6 +26,26 @@ TEST(RecoverPartialLogs, NothingToDoWithoutAPartialDirectory) {
   TempDir dir;
   EXPECT_TRUE(recover_partial_logs(dir.path()).empty());
   EXPECT_TRUE(recover_partial_logs(dir.path() / "missing").empty());
+}
+
+TEST(RecoverPartialLogs, RemovesAPartWithoutOneWholeEvent) {
+  // furutad killed between creating its log and the first sync leaves an empty .part, or a start
+  // record cut short; lcm-logplayer refuses an empty log, and there is nothing in it to keep.
+  TempDir dir;
+  fs::create_directories(dir.path() / ".partial");
+  std::ofstream(dir.path() / ".partial" / "empty.lcmlog.part").flush();
+  const std::vector<std::uint8_t> torn{0xED, 0xA1, 0xDA, 0x01, 0, 0, 0};
+  std::ofstream(dir.path() / ".partial" / "torn.lcmlog.part", std::ios::binary)
+      .write(reinterpret_cast<const char*>(torn.data()), static_cast<std::streamsize>(torn.size()));
+  const std::vector<RecoveredLog> recovered = recover_partial_logs(dir.path());
+  ASSERT_EQ(recovered.size(), 2u);
+  for (const RecoveredLog& r : recovered) {
+    EXPECT_TRUE(r.discarded) << r.path;
+    EXPECT_FALSE(fs::exists(r.path)) << r.path;
+  }
+  EXPECT_EQ(recovered[1].bytes_dropped, torn.size());
+  EXPECT_TRUE(fs::is_empty(dir.path() / ".partial"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
 }
 
 TEST(RecoverPartialLogs, CutsATornTailAndMarksTheLogIncomplete) {
@@ -174,6 +195,14 @@ TrialResult run_crash_trial(const TrialSetup& setup) {
   EXPECT_EQ(recovered.size(), 1u);
   if (recovered.size() != 1) return result;
   result.bytes_dropped = recovered[0].bytes_dropped;
+  if (recovered[0].discarded) {
+    // Killed before one whole event reached the file: nothing to keep, nothing may have synced.
+    EXPECT_EQ(result.synced, 0u);
+    EXPECT_EQ(recovered[0].stats.events, 0u);
+    EXPECT_FALSE(fs::exists(recovered[0].path));
+    EXPECT_TRUE(recover_partial_logs(dir.path()).empty());
+    return result;
+  }
   EXPECT_EQ(recovered[0].path, dir.path() / "crash.incomplete.lcmlog");
   EXPECT_EQ(recovered[0].stats.damaged_regions, 0u);
 

@@ -29,6 +29,10 @@ struct RecorderSettings {
   std::string motor_device;  // usb trace device lines, for replay
   std::string encoder_device;
   int pendulum_channel = 0;
+  // A start is refused while the logs file system has less than this available: about 8 s of a
+  // session (some 30 KiB/s at 16 ms), so a full disk refuses instead of starting the motor for a
+  // log that fails at once.
+  std::uint64_t min_free_bytes_to_start = 256 * 1024;
 };
 
 class SessionRecorder {

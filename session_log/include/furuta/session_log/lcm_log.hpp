@@ -58,7 +58,9 @@ std::vector<LogEvent> read_lcm_log_bytes(std::span<const std::uint8_t> bytes, Lo
 
 // --- writing ---
 
-enum class LogWriteStatus : std::uint8_t { ok, disk_full, io_error, closed };
+// file_removed: the .part lost its last link (the logs directory or the file was deleted under a
+// running session); the writer has written what it had synced to a new .part at the same path.
+enum class LogWriteStatus : std::uint8_t { ok, disk_full, io_error, closed, file_removed };
 std::string_view to_string(LogWriteStatus status);
 
 struct LogWriterOptions {
@@ -86,19 +88,31 @@ class LcmLogWriter {
 
   const std::filesystem::path& partial_path() const;
   std::uint64_t events_written() const;
+  // After file_removed: empty when what was synced was written again to partial_path(), else
+  // why it could not be (the session's data is then lost).
+  const std::string& removal_save_error() const;
 
  private:
   class Impl;
   std::unique_ptr<Impl> impl_;
 };
 
+// Why a session could not be logged in `logs_dir` now, or "" when it can: creates `.partial/` if
+// missing, probes that a file can be created there (a directory removed, read-only or not ours is
+// found here, not after the motor has started) and that the file system has at least
+// `min_free_bytes` available. Cheap enough to ask before every session.
+std::string logs_dir_problem(const std::filesystem::path& logs_dir, std::uint64_t min_free_bytes);
+
 struct RecoveredLog {
-  std::filesystem::path path;  // <logs_dir>/<name>.incomplete.lcmlog
+  std::filesystem::path path;  // <logs_dir>/<name>.incomplete.lcmlog (discarded: the .part removed)
   LogReadStats stats;
   std::uint64_t bytes_dropped = 0;  // the unreadable tail cut off
+  // Not one whole event (a kill before the first sync): removed rather than kept as an empty log,
+  // which lcm-logplayer refuses ("Failed to read first event") and which holds nothing.
+  bool discarded = false;
 };
 // For each .part left by a session cut short: keep the readable prefix, rename it into logs_dir
-// marked incomplete. Safe to run at every start.
+// marked incomplete (or remove it when it holds no whole event). Safe to run at every start.
 std::vector<RecoveredLog> recover_partial_logs(const std::filesystem::path& logs_dir);
 
 }  // namespace furuta::session_log
