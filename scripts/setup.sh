@@ -21,6 +21,9 @@ packages=(
   chromium
   # packaging: cpack -G DEB, dpkg-shlibdeps for the package's dependencies (scripts/build_deb.sh)
   dpkg-dev file
+  # fuzzing (scripts/fuzz.sh): clang, and libFuzzer with the sanitizer runtimes (only recommended by
+  # clang-14, so named here as recommends are not installed)
+  clang libclang-rt-14-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # benchmarks: the LP bound of the seven-unknown problem (bench/sivia_lp_hull)

@@ -339,7 +339,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     dc.period_ns = std::llround(period_ms * 1e6);
     dc.lcm_url = d.text("lcm_url", dc.lcm_url);
     dc.logs_dir = d.text("logs_dir", dc.logs_dir);
-    if (dc.logs_dir.empty()) d.fail("logs_dir", nullptr, "must not be empty");
+    if (dc.logs_dir.empty()) d.fail("logs_dir", d.node("logs_dir"), "must not be empty");
     dc.flush_interval_ms = d.integer(
         "flush_interval_ms", dc.flush_interval_ms,
         [](std::int64_t v) { return v >= 10 && v <= 60'000; }, "in [10, 60000]");
@@ -375,7 +375,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     // The boards report every 8 ms: fewer than two report periods of silence is not a fault.
     if (static_cast<double>(sc.stale_report_cycles) * static_cast<double>(c.daemon.period_ns) <
         16e6) {
-      s.fail("stale_report_cycles", nullptr,
+      s.fail("stale_report_cycles", s.node("stale_report_cycles"),
              std::to_string(sc.stale_report_cycles) + " cycles of " +
                  std::to_string(c.daemon.period_ns / 1000) +
                  " us are shorter than two 8 ms report periods");
@@ -383,7 +383,11 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     sc.min_supply_v = s.number("min_supply_v", sc.min_supply_v, non_negative, ">= 0");
     sc.max_supply_v = s.number("max_supply_v", sc.max_supply_v, positive, "> 0");
     if (sc.max_supply_v <= sc.min_supply_v) {
-      s.fail("max_supply_v", nullptr, "must be above min_supply_v");
+      // Blame the value the file gave: a min_supply_v above the default max is the min's fault.
+      if (s.has("max_supply_v") || !s.has("min_supply_v")) {
+        s.fail("max_supply_v", s.node("max_supply_v"), "must be above min_supply_v");
+      }
+      s.fail("min_supply_v", s.node("min_supply_v"), "must be below max_supply_v");
     }
     sc.stop_braking_fraction = s.number(
         "stop_braking", sc.stop_braking_fraction, [](double v) { return v >= 0 && v <= 1; },
@@ -396,14 +400,15 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     lc.max_amplitude_duty =
         l.number("max_amplitude_duty", lc.max_amplitude_duty, fraction, "in (0, 1]");
     if (lc.max_amplitude_duty > c.safety.max_duty) {
-      l.fail("max_amplitude_duty", nullptr, "must not exceed safety.max_duty");
+      l.fail("max_amplitude_duty", l.node("max_amplitude_duty"), "must not exceed safety.max_duty");
     }
     lc.max_duration_s = l.number("max_duration_s", lc.max_duration_s, positive, "> 0");
     lc.max_arm_switch_rad =
         l.number("max_arm_switch_deg", lc.max_arm_switch_rad / kDegToRad, positive, "> 0") *
         kDegToRad;
     if (lc.max_arm_switch_rad >= c.safety.arm_limit_rad) {
-      l.fail("max_arm_switch_deg", nullptr, "must be below safety.arm_limit_deg");
+      l.fail("max_arm_switch_deg", l.node("max_arm_switch_deg"),
+             "must be below safety.arm_limit_deg");
     }
     lc.max_commands_per_s = static_cast<int>(l.integer(
         "max_commands_per_s", lc.max_commands_per_s,
@@ -417,7 +422,8 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
                           {"bang_bang", "free_decay", "step", "prbs", "chirp", "multisine"});
     ec.amplitude_duty = e.number("amplitude_duty", ec.amplitude_duty, fraction, "in (0, 1]");
     if (ec.amplitude_duty > c.limits.max_amplitude_duty) {
-      e.fail("amplitude_duty", nullptr, "must not exceed limits.max_amplitude_duty");
+      e.fail("amplitude_duty", e.node("amplitude_duty"),
+             "must not exceed limits.max_amplitude_duty");
     }
     ec.duration_s = e.number("duration_s", ec.duration_s, positive, "> 0");
     ec.seed = e.integer(
@@ -429,7 +435,8 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     ec.arm_switch_rad =
         e.number("arm_switch_deg", ec.arm_switch_rad / kDegToRad, non_negative, ">= 0") * kDegToRad;
     if (ec.arm_switch_rad > c.limits.max_arm_switch_rad) {
-      e.fail("arm_switch_deg", nullptr, "must not exceed limits.max_arm_switch_deg");
+      e.fail("arm_switch_deg", e.node("arm_switch_deg"),
+             "must not exceed limits.max_arm_switch_deg");
     }
     ec.step_time_s = e.number("step_time_s", ec.step_time_s, non_negative, ">= 0");
     ec.prbs_bit_period_s = e.number("prbs_bit_period_s", ec.prbs_bit_period_s, positive, "> 0");
@@ -474,12 +481,13 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     SiviaConfig& sc = c.sivia;
     sc.unknowns =
         s.choices("unknowns", sc.unknowns, {"mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"});
-    if (sc.unknowns.empty()) s.fail("unknowns", nullptr, "must name at least one parameter");
+    if (sc.unknowns.empty())
+      s.fail("unknowns", s.node("unknowns"), "must name at least one parameter");
     sc.mu_uncertainty_pct =
         s.numbers("mu_uncertainty_pct", sc.mu_uncertainty_pct, non_negative, ">= 0");
     const auto ordered_prior = [&](const char* key, std::array<double, 2> fallback) {
       const std::array<double, 2> v = s.numbers(key, fallback);
-      if (!(v[0] < v[1])) s.fail(key, nullptr, "must be [low, high] with low < high");
+      if (!(v[0] < v[1])) s.fail(key, s.node(key), "must be [low, high] with low < high");
       return v;
     };
     sc.fv1_prior = ordered_prior("fv1", sc.fv1_prior);
@@ -506,7 +514,8 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     Section s = top.child("automation");
     AutomationConfig& ac = c.automation;
     ac.fit_labels = s.names("fit_labels", ac.fit_labels);
-    if (ac.fit_labels.empty()) s.fail("fit_labels", nullptr, "must name at least one label");
+    if (ac.fit_labels.empty())
+      s.fail("fit_labels", s.node("fit_labels"), "must name at least one label");
     ac.fit_sessions = static_cast<int>(s.integer(
         "fit_sessions", ac.fit_sessions, [](std::int64_t v) { return v >= 1 && v <= 100; },
         "in [1, 100]"));

@@ -1,5 +1,6 @@
 #include "furuta/daemon/control_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <exception>
@@ -27,6 +28,14 @@ std::int64_t wall_time_ns() noexcept {
   timespec ts{};
   clock_gettime(CLOCK_REALTIME, &ts);
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+// The largest 1065 duty step that is not above max_duty (0 for a NaN or negative limit).
+std::uint8_t max_duty_raw(double max_duty) {
+  if (!(max_duty > 0.0)) return 0;
+  if (max_duty >= 1.0) return 255;
+  // The slack keeps a limit that is an exact step (0.6 = 153/255) on that step despite rounding.
+  return static_cast<std::uint8_t>(std::floor(max_duty * 255.0 + 1e-9));
 }
 
 }  // namespace
@@ -104,6 +113,10 @@ bool ControlLoop::write_command(double duty, double braking_fraction, RawReport*
   command.acceleration_pct_per_s = settings_.acceleration_pct_per_s;
   bridge::MotorOutput1065 output;
   if (bridge::to_output_1065(command, output) != bridge::CodecStatus::ok) return false;
+  // |duty| travels in steps of 1/255 rounded to nearest, so a duty the supervisor passed at exactly
+  // max_duty (a command limit may equal it) could reach the board half a step above it. The wire
+  // never carries more than the limit: round down onto it instead.
+  output.duty_raw = std::min(output.duty_raw, max_duty_raw(settings_.safety.max_duty));
   std::array<std::uint8_t, bridge::kMaxReportBytes> bytes{};
   const std::size_t length = motor_.device_info().output_report_bytes;
   if (length < bridge::k1065OutputReportMinBytes || length > bytes.size()) return false;

@@ -105,8 +105,11 @@ std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
     const double margin = std::max(0.15 * (hi - lo), 1e-12);
     return std::pair{lo - margin, hi + margin};
   };
-  const auto [x_lo, x_hi] = range(xp);
-  const auto [y_lo, y_hi] = range(yp);
+  // Plain variables, not structured bindings: lambdas capturing those need clang 16, and the fuzz
+  // build (scripts/fuzz.sh) compiles this with Debian 12's clang 14.
+  const std::pair<double, double> x_range = range(xp), y_range = range(yp);
+  const double x_lo = x_range.first, x_hi = x_range.second;
+  const double y_lo = y_range.first, y_hi = y_range.second;
   auto X = [&](double v) { return left + (v - x_lo) / (x_hi - x_lo) * pw; };
   auto Y = [&](double v) { return top + ph - (v - y_lo) / (y_hi - y_lo) * ph; };
   std::ostringstream s;

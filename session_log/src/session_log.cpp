@@ -10,9 +10,11 @@ namespace furuta::session_log {
 
 namespace {
 
-// lcm-gen's decoders check each field against the buffer, but a negative array count reaches
-// std::vector::resize and throws; either way the event is not a message of its type. Trailing bytes
-// are refused too: an intact message fills its event exactly.
+// lcm-gen's decoders check each field against the buffer; the lengths and counts they trusted (a
+// negative array count reached std::vector::resize and threw, a string length of 0 or INT32_MIN
+// threw or read past the buffer) are decode errors since lcmtypes/harden_generated.cmake. The catch
+// stays for what is left (an allocation failing). Trailing bytes are refused too: an intact message
+// fills its event exactly.
 template <typename Message>
 bool decode_exactly(const std::vector<std::uint8_t>& data, Message& message) {
   if (data.size() > static_cast<std::size_t>(INT_MAX)) return false;

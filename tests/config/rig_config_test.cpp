@@ -178,3 +178,105 @@ TEST(RigConfig, AutomationErrorsNameLineAndField) {
 
 }  // namespace
 }  // namespace furuta::config
+
+namespace furuta::config {
+namespace {
+
+// Issue 8: every limit the daemon's safety rests on refuses a bad value with file, line and field,
+// whatever the kind of bad (wrong type, NaN, infinity, out of range), and never falls back to its
+// default. Policy: a key left out takes the documented default (rig.toml lists them all); a key
+// given with a bad value is always an error.
+TEST(RigConfig, EverySafetyLimitRefusesBadValuesWithFileLineAndField) {
+  struct Limit {
+    const char* section;
+    const char* key;
+    std::vector<const char*> bad;  // besides the wrong types and non-finite values tried for all
+  };
+  const std::vector<Limit> limits = {
+      {"safety", "arm_limit_deg", {"0", "-10", "721", "1e308"}},
+      {"safety", "max_duty", {"0", "-0.5", "1.01", "1e308"}},
+      {"safety", "stale_report_cycles", {"0", "-1", "1001", "4.0", "9223372036854775807"}},
+      {"safety", "min_supply_v", {"-1", "40"}},
+      {"safety", "max_supply_v", {"0", "-1", "5"}},
+      {"safety", "stop_braking", {"-0.1", "1.5"}},
+      {"limits", "max_amplitude_duty", {"0", "-0.1", "0.7", "1.5"}},
+      {"limits", "max_duration_s", {"0", "-1"}},
+      {"limits", "max_arm_switch_deg", {"0", "-1", "150", "1e308"}},
+      {"limits", "max_commands_per_s", {"0", "-5", "1001", "5.5"}},
+      {"excitation", "amplitude_duty", {"0", "0.6", "1e308"}},
+      {"excitation", "arm_switch_deg", {"-1", "136"}},
+      {"excitation", "board_acceleration_pct_per_s", {"0", "6251", "-6250"}},
+      {"daemon", "period_ms", {"0", "0.05", "1001"}},
+  };
+  const std::vector<const char*> always_bad = {"nan",  "-nan",  "inf",       "-inf",      "\"0.5\"",
+                                               "true", "[0.5]", "{ x = 1 }", "1979-05-27"};
+  for (const Limit& limit : limits) {
+    std::vector<const char*> values = limit.bad;
+    values.insert(values.end(), always_bad.begin(), always_bad.end());
+    for (const char* value : values) {
+      // The key on line 3, after a comment line, so the line number cannot be the section's.
+      const std::string text =
+          std::string("[") + limit.section + "]\n# the limit\n" + limit.key + " = " + value + "\n";
+      SCOPED_TRACE(text);
+      const ConfigError e = error_of(text);
+      EXPECT_EQ(e.file(), "rig.toml");
+      EXPECT_EQ(e.line(), 3) << e.what();
+      EXPECT_EQ(e.field(), std::string(limit.section) + "." + limit.key) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("rig.toml:3: " + e.field() + ": ", 0), 0u) << e.what();
+    }
+  }
+}
+
+TEST(RigConfig, AMissingSafetyLimitTakesTheDocumentedDefault) {
+  const RigConfig c = parse_rig_config("[safety]\n", "rig.toml");
+  const SafetyConfig defaults;
+  EXPECT_EQ(c.safety.max_duty, defaults.max_duty);
+  EXPECT_EQ(c.safety.stale_report_cycles, defaults.stale_report_cycles);
+  EXPECT_EQ(c.safety.min_supply_v, defaults.min_supply_v);
+  EXPECT_EQ(c.safety.max_supply_v, defaults.max_supply_v);
+  EXPECT_EQ(c.limits.max_commands_per_s, CommandLimitsConfig{}.max_commands_per_s);
+  // The shipped file states the same values.
+  const RigConfig shipped = load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  EXPECT_EQ(shipped.safety.max_duty, defaults.max_duty);
+  EXPECT_EQ(shipped.safety.stale_report_cycles, defaults.stale_report_cycles);
+  EXPECT_NEAR(shipped.safety.arm_limit_rad, 150 * std::numbers::pi / 180, 1e-12);
+}
+
+// rig.toml says "the values below are the defaults", so a key left out must mean what the file
+// shows. The arm limit defaulted to 2.6 rad (149.0 deg) against the file's 150, and
+// max_arm_switch_deg to 2.4 rad (137.5 deg) against 135: a file without max_arm_switch_deg accepted
+// arm_switch_deg = 136, which the shipped documentation says is refused.
+TEST(RigConfig, TheShippedFileStatesTheDefaults) {
+  const RigConfig empty = parse_rig_config("", "empty.toml");
+  const RigConfig shipped = load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  EXPECT_NEAR(empty.safety.arm_limit_rad, shipped.safety.arm_limit_rad, 1e-12);
+  EXPECT_EQ(empty.safety.max_duty, shipped.safety.max_duty);
+  EXPECT_EQ(empty.safety.stale_report_cycles, shipped.safety.stale_report_cycles);
+  EXPECT_EQ(empty.safety.min_supply_v, shipped.safety.min_supply_v);
+  EXPECT_EQ(empty.safety.max_supply_v, shipped.safety.max_supply_v);
+  EXPECT_EQ(empty.safety.stop_braking_fraction, shipped.safety.stop_braking_fraction);
+  EXPECT_EQ(empty.limits.max_amplitude_duty, shipped.limits.max_amplitude_duty);
+  EXPECT_EQ(empty.limits.max_duration_s, shipped.limits.max_duration_s);
+  EXPECT_NEAR(empty.limits.max_arm_switch_rad, shipped.limits.max_arm_switch_rad, 1e-12);
+  EXPECT_EQ(empty.limits.max_commands_per_s, shipped.limits.max_commands_per_s);
+  EXPECT_EQ(empty.excitation.amplitude_duty, shipped.excitation.amplitude_duty);
+  EXPECT_NEAR(empty.excitation.arm_switch_rad, shipped.excitation.arm_switch_rad, 1e-12);
+  EXPECT_EQ(empty.excitation.board_acceleration_pct_per_s,
+            shipped.excitation.board_acceleration_pct_per_s);
+  EXPECT_EQ(empty.daemon.period_ns, shipped.daemon.period_ns);
+  EXPECT_EQ(empty.daemon.rest_check_s, shipped.daemon.rest_check_s);
+}
+
+TEST(RigConfig, ALimitMisspelledOrInTheWrongSectionIsAnError) {
+  for (const char* text : {"[safety]\nmax_dutty = 0.5\n", "[limits]\nmax_duty = 0.5\n",
+                           "max_duty = 0.5\n", "[Safety]\nmax_duty = 0.5\n", "safety = 1\n",
+                           "[safety]\nmax_duty = 0.5\nmax_duty = 0.4\n"}) {
+    SCOPED_TRACE(text);
+    const ConfigError e = error_of(text);
+    EXPECT_EQ(e.file(), "rig.toml");
+    EXPECT_GT(e.line(), 0) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace furuta::config

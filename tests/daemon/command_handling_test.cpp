@@ -283,6 +283,119 @@ TEST(CommandHandling, AFloodIsRateLimitedAndAnEstopAlwaysGetsThrough) {
   EXPECT_TRUE(later.request_accepted) << later.request_reason;
 }
 
+// Hostile input on RIG_COMMAND (issue 8): bytes that are no rig_command_t at all, then a flood of
+// about 5000 bad start commands a second in virtual time while a session runs at the largest
+// amplitude a command may ask for. The daemon keeps answering, refuses each with a reason, accepts
+// no more than the token bucket allows, lets the e-stop through, and the motor is never written a
+// duty beyond the configured limits.
+TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.start(dir.path());
+
+  // Malformed messages (found by fuzz_command_decode): a string length of 0 used to throw out of
+  // LCM's dispatch and end the process; INT32_MIN read past the buffer.
+  furuta::rig_command_t valid = testing::start_command("bang_bang", 0.3, 10.0);
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(valid.getEncodedSize()));
+  valid.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  for (std::uint32_t length : {0u, 0x80000000u, 0xFFFFFFFFu}) {
+    std::vector<std::uint8_t> bad = bytes;
+    for (int i = 0; i < 4; ++i) bad[17 + i] = static_cast<std::uint8_t>(length >> (24 - 8 * i));
+    rig.lcm.publish(session_log::kChannelCommand, bad.data(), static_cast<unsigned>(bad.size()));
+  }
+  const std::vector<std::uint8_t> junk(3, 0xEE);
+  rig.lcm.publish(session_log::kChannelCommand, junk.data(), static_cast<unsigned>(junk.size()));
+  const rig_status_t alive = rig.ask(status_request());
+  EXPECT_TRUE(alive.request_accepted) << alive.request_reason;
+
+  rig.step_cycles(70);  // past the rest check
+  const double limit = rig.settings.command_limits.max_amplitude_duty;
+  const rig_status_t started = rig.ask(testing::start_command("bang_bang", limit, 30.0, "max"));
+  ASSERT_TRUE(started.request_accepted) << started.request_reason;
+
+  std::vector<rig_command_t> hostile;
+  for (double amplitude :
+       {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(), -0.5,
+        1e308, std::nextafter(limit, 1.0), 2.0}) {
+    hostile.push_back(testing::start_command("bang_bang", amplitude, 10.0));
+  }
+  for (double duration : {-1.0, 0.0, 1e308, std::numeric_limits<double>::infinity(),
+                          std::numeric_limits<double>::quiet_NaN()}) {
+    hostile.push_back(testing::start_command("chirp", 0.2, duration));
+  }
+  hostile.push_back(testing::start_command(std::string(100000, 'p'), 0.2, 10.0));
+  hostile.push_back(testing::start_command("bang_bang\n", 0.2, 10.0));
+  hostile.push_back(testing::start_command("prbs", 0.2, 10.0, std::string(100000, 'l')));
+  rig_command_t seed = testing::start_command("step", 0.2, 10.0);
+  seed.seed = std::numeric_limits<std::int64_t>::min();
+  hostile.push_back(seed);
+  hostile.push_back(testing::simple_command(std::numeric_limits<std::int8_t>::min()));
+
+  // 63 cycles of 16 ms (about a second), 80 commands each: about 5000 a second.
+  const int cycles = 63, per_cycle = 80;
+  int accepted = 0, rate_limited = 0, refused_with_field = 0;
+  std::vector<std::int64_t> ids;
+  for (int c = 0; c < cycles; ++c) {
+    ids.clear();
+    for (int i = 0; i < per_cycle; ++i)
+      ids.push_back(rig.send(hostile[(c * per_cycle + i) % hostile.size()]));
+    for (const std::int64_t id : ids) {
+      const rig_status_t reply = rig.inbox.reply_to(id);
+      if (reply.request_accepted) {
+        ++accepted;
+        continue;
+      }
+      ASSERT_FALSE(reply.request_reason.empty());
+      ASSERT_LT(reply.request_reason.size(), 300u) << reply.request_reason;
+      if (reply.request_reason.rfind("rate limit: ", 0) == 0) {
+        ++rate_limited;
+      } else {
+        ++refused_with_field;
+      }
+    }
+    rig.step_cycles(1);
+  }
+  EXPECT_EQ(accepted, 0);  // every one of them is bad
+  // The bucket: 5 at once (one spent on the start), then 5 a second.
+  const double seconds = cycles * rig.settings.loop.period_ns * 1e-9;
+  EXPECT_LE(refused_with_field, 4 + static_cast<int>(seconds * 5) + 1);
+  EXPECT_GE(refused_with_field, 4);
+  EXPECT_EQ(rate_limited + refused_with_field, cycles * per_cycle);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
+
+  const rig_status_t estop = rig.ask(testing::simple_command(rig_command_t::KIND_ESTOP));
+  EXPECT_TRUE(estop.request_accepted) << estop.request_reason;
+  rig.step_cycles(1);
+  EXPECT_EQ(rig.daemon->loop().counters().last_stop.load(), StopReason::estop_command);
+
+  // Every write to the 1065 during the session, from its log.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (rig.daemon->sessions_logged() < 1 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(rig.daemon->sessions_logged(), 1);
+  fs::path log_path;
+  for (const auto& entry : fs::directory_iterator(dir.path())) {
+    if (entry.path().extension() == ".lcmlog") log_path = entry.path();
+  }
+  ASSERT_FALSE(log_path.empty());
+  const session_log::SessionLog log = session_log::load_session_log(log_path);
+  const int max_raw = static_cast<int>(std::floor(rig.config.safety.max_duty * 255 + 1e-9));
+  const int amplitude_raw = static_cast<int>(std::lround(limit * 255));
+  int writes = 0, peak = 0;
+  for (const auto& r : log.usb_reports) {
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
+        r.kind != furuta::rig_usb_report_t::KIND_OUTPUT) {
+      continue;
+    }
+    ++writes;
+    peak = std::max(peak, testing::duty_raw_of(r.bytes));
+  }
+  EXPECT_GT(writes, cycles);
+  EXPECT_EQ(peak, amplitude_raw);  // the session drove the motor at its amplitude, no further
+  EXPECT_LE(peak, max_raw);
+}
+
 TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;

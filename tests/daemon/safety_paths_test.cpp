@@ -482,5 +482,23 @@ TEST(SafetyPaths, EstopWhileIdleBrakesEvenWithAnotherStopPending) {
   EXPECT_EQ(brakes, 1);
 }
 
+// A command limit may equal the safety limit. A duty of exactly max_duty = 0.5 used to go out as
+// raw 128 (round(127.5), 0.502): past the limit by half a wire step although the supervisor, which
+// sees the double, passed it. The wire now rounds down onto the limit (found writing the command
+// handler fuzz target's invariant: the duty the 1065 carries never exceeds max_duty).
+TEST(SafetyPaths, TheWireNeverCarriesADutyAboveTheLimit) {
+  Rig rig;
+  rig.settings.loop.safety.max_duty = 0.5;
+  rig.settings.command_limits.max_amplitude_duty = 0.5;
+  rig.create(testing::start_command("bang_bang", 0.5, 0.5));
+  rig.run();
+  EXPECT_EQ(rig.last_stop(), StopReason::duration_reached);
+  int peak = 0;
+  for (const auto& e : rig.motor->events()) {
+    if (e.kind == HookedLink::Event::Kind::write) peak = std::max(peak, e.duty_raw);
+  }
+  EXPECT_EQ(peak, 127);  // floor(0.5 * 255): 0.498, the largest step not above 0.5
+}
+
 }  // namespace
 }  // namespace furuta::daemon

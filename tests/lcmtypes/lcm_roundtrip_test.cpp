@@ -1,12 +1,16 @@
 // The generated message types encode and decode through LCM itself (memq://, no network).
 #include <gtest/gtest.h>
 
+#include <climits>
+#include <cstdint>
 #include <lcm/lcm-cpp.hpp>
+#include <vector>
 
 #include "furuta/rig_command_t.hpp"
 #include "furuta/rig_sample_t.hpp"
 #include "furuta/rig_session_t.hpp"
 #include "furuta/rig_status_t.hpp"
+#include "furuta/rig_usb_report_t.hpp"
 
 namespace {
 
@@ -81,6 +85,113 @@ TEST(LcmTypes, CommandStatusAndSessionCarryTheirConstants) {
   session.encode(session_bytes.data(), 0, static_cast<int>(session_bytes.size()));
   furuta::rig_status_t wrong{};
   EXPECT_LT(wrong.decode(session_bytes.data(), 0, static_cast<int>(session_bytes.size())), 0);
+}
+
+}  // namespace
+
+namespace {
+
+template <typename Message>
+std::vector<std::uint8_t> encoded(const Message& m) {
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(m.getEncodedSize()));
+  EXPECT_EQ(m.encode(out.data(), 0, static_cast<int>(out.size())), static_cast<int>(out.size()));
+  return out;
+}
+
+void put_i32(std::vector<std::uint8_t>& bytes, std::size_t at, std::int32_t v) {
+  const auto u = static_cast<std::uint32_t>(v);
+  for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<std::uint8_t>(u >> (24 - 8 * i));
+}
+
+furuta::rig_command_t a_command() {
+  furuta::rig_command_t c{};
+  c.request_id = 5;
+  c.kind = furuta::rig_command_t::KIND_START_SESSION;
+  c.profile = "step";
+  c.label = "x";
+  return c;
+}
+
+// Offset of rig_command_t.profile's length: fingerprint (8), request_id (8), kind (1).
+constexpr std::size_t kProfileLength = 17;
+
+// Found by fuzz_command_decode: lcm-gen 1.3.1 trusts string lengths and array counts. A length of 0
+// threw std::length_error out of LCM's dispatch (which ended furutad), INT32_MIN overflowed and
+// read far past the buffer. lcmtypes/harden_generated.cmake makes them decode errors.
+TEST(LcmTypes, HostileStringLengthsAreDecodeErrors) {
+  for (std::int32_t length : {0, -1, -4, INT_MIN, INT_MAX}) {
+    std::vector<std::uint8_t> bytes = encoded(a_command());
+    put_i32(bytes, kProfileLength, length);
+    furuta::rig_command_t out;
+    int used = 0;
+    EXPECT_NO_THROW(used = out.decode(bytes.data(), 0, static_cast<int>(bytes.size()))) << length;
+    EXPECT_EQ(used, -1) << length;
+  }
+  // The smallest valid string (just the NUL) still decodes.
+  furuta::rig_command_t empty = a_command();
+  empty.profile.clear();
+  const std::vector<std::uint8_t> bytes = encoded(empty);
+  furuta::rig_command_t out;
+  EXPECT_EQ(out.decode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  EXPECT_EQ(out.profile, "");
+}
+
+// Found by fuzz_command_decode: a string with a NUL inside decoded whole, but the encoder writes
+// strlen() bytes, so the message did not survive a round trip (decode(encode(m)) != m). A string
+// without its terminating NUL was taken too. Both are malformed: decode errors.
+TEST(LcmTypes, StringsWithANulInsideOrNoTerminatorAreDecodeErrors) {
+  const std::vector<std::uint8_t> good = encoded(a_command());  // profile "step": length 5
+  ASSERT_EQ(good[kProfileLength + 3], 5);
+  std::vector<std::uint8_t> inside = good;
+  inside[kProfileLength + 4 + 1] = 0;  // "s\0ep"
+  std::vector<std::uint8_t> unterminated = good;
+  unterminated[kProfileLength + 4 + 4] = 'x';  // "stepx" with no NUL
+  for (const auto* bytes : {&inside, &unterminated}) {
+    furuta::rig_command_t out;
+    EXPECT_EQ(out.decode(bytes->data(), 0, static_cast<int>(bytes->size())), -1);
+  }
+  furuta::rig_command_t out;
+  EXPECT_EQ(out.decode(good.data(), 0, static_cast<int>(good.size())),
+            static_cast<int>(good.size()));
+  EXPECT_EQ(out.profile, "step");
+}
+
+TEST(LcmTypes, NegativeArrayCountsAreDecodeErrors) {
+  furuta::rig_usb_report_t report{};
+  report.status = "";
+  report.length = 2;
+  report.bytes = {1, 2};
+  std::vector<std::uint8_t> bytes = encoded(report);
+  // fingerprint 8, time 8, board 1, kind 1, status length 4 + NUL 1: the count is at 23.
+  bytes[23] = 0xFF;
+  bytes[24] = 0xFE;  // -2
+  furuta::rig_usb_report_t out;
+  int used = 0;
+  EXPECT_NO_THROW(used = out.decode(bytes.data(), 0, static_cast<int>(bytes.size())));
+  EXPECT_EQ(used, -1);
+}
+
+struct CommandSink {
+  int received = 0;
+  void on_command(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_command_t*) {
+    ++received;
+  }
+};
+
+TEST(LcmTypes, AHostileMessageIsDroppedByATypedSubscription) {
+  lcm::LCM lcm("memq://");
+  CommandSink sink;
+  lcm.subscribe("RIG_COMMAND", &CommandSink::on_command, &sink);
+  std::vector<std::uint8_t> bytes = encoded(a_command());
+  put_i32(bytes, kProfileLength, 0);
+  lcm.publish("RIG_COMMAND", bytes.data(), static_cast<unsigned>(bytes.size()));
+  EXPECT_NO_THROW(lcm.handleTimeout(1000));
+  EXPECT_EQ(sink.received, 0);
+  const std::vector<std::uint8_t> good = encoded(a_command());
+  lcm.publish("RIG_COMMAND", good.data(), static_cast<unsigned>(good.size()));
+  lcm.handleTimeout(1000);
+  EXPECT_EQ(sink.received, 1);
 }
 
 }  // namespace

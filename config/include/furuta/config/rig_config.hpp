@@ -51,8 +51,9 @@ struct DaemonConfig {
 };
 
 // [safety]: what stops a session.
+// The defaults are the values config/rig.toml states (RigConfig.TheShippedFileStatesTheDefaults).
 struct SafetyConfig {
-  double arm_limit_rad = 2.6;
+  double arm_limit_rad = 150.0 * 3.14159265358979323846 / 180.0;
   double max_duty = 0.6;
   int stale_report_cycles = 4;
   double min_supply_v = 7.0;
@@ -64,7 +65,7 @@ struct SafetyConfig {
 struct CommandLimitsConfig {
   double max_amplitude_duty = 0.5;
   double max_duration_s = 600.0;
-  double max_arm_switch_rad = 2.4;
+  double max_arm_switch_rad = 135.0 * 3.14159265358979323846 / 180.0;
   int max_commands_per_s = 5;
 };
 

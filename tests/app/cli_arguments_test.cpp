@@ -1,0 +1,105 @@
+// Bad command lines to `furuta` and `furutad` (issue 8): each ends with a message naming what is
+// wrong and a non-zero exit, never a crash and never a session started on a value out of range.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "temp_dir.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int exit_code = -1;  // -1: killed by a signal (a crash)
+  std::string output;  // stdout and stderr together
+};
+
+Outcome run(const std::string& command_line) {
+  Outcome o;
+  FILE* pipe = popen((command_line + " 2>&1").c_str(), "r");
+  if (!pipe) return o;
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) o.output += buffer.data();
+  const int status = pclose(pipe);
+  if (WIFEXITED(status)) o.exit_code = WEXITSTATUS(status);
+  return o;
+}
+
+bool has(const Outcome& o, const std::string& text) {
+  return o.output.find(text) != std::string::npos;
+}
+
+std::string run_options(const fs::path& logs) {
+  return std::string(FURUTA_CLI) + " run --sim --virtual-time --lcm-url memq:// --config " +
+         FURUTA_SOURCE_DIR "/config/rig.toml --logs-dir " + logs.string();
+}
+
+TEST(CliArguments, FurutaRunRefusesOutOfRangeSessionValuesWithTheField) {
+  furuta::testing::TempDir logs;
+  const std::pair<const char*, const char*> cases[] = {
+      {"--amplitude nan", "amplitude_duty: nan is not a finite number"},
+      {"--amplitude inf", "amplitude_duty: inf is not a finite number"},
+      {"--amplitude 0.9", "amplitude_duty: 0.9 above the limit 0.5"},
+      {"--amplitude -0.2", "amplitude_duty: -0.2 is not above 0"},
+      {"--duration -1", "duration_s: -1 is not above 0"},
+      {"--duration 1e308", "duration_s: 1e+308 above the limit 600"},
+      {"--profile sawtooth", "profile: \"sawtooth\" is not one of"},
+      {"--seed -1", "seed: -1 is negative"},
+      {"--label ../../etc", "label: \"../../etc\" has 0x2f"},
+  };
+  for (const auto& [args, reason] : cases) {
+    const Outcome o = run(run_options(logs.path()) + " " + args);
+    EXPECT_EQ(o.exit_code, 1) << args << "\n" << o.output;
+    EXPECT_TRUE(has(o, "furuta run: refused: ")) << args << "\n" << o.output;
+    EXPECT_TRUE(has(o, reason)) << args << "\n" << o.output;
+  }
+  // Nothing ran: no log was written.
+  EXPECT_TRUE(fs::is_empty(logs.path()));
+}
+
+TEST(CliArguments, FurutaRejectsMalformedArgumentsBeforeDoingAnything) {
+  furuta::testing::TempDir logs;
+  const std::pair<std::string, const char*> cases[] = {
+      {run_options(logs.path()) + " --amplitude abc", "--amplitude"},
+      {run_options(logs.path()) + " --seed 1.5", "--seed"},
+      {run_options(logs.path()) + " --duration", "--duration"},
+      {std::string(FURUTA_CLI) + " run --config /nonexistent/rig.toml", "/nonexistent/rig.toml"},
+      {std::string(FURUTA_CLI) + " status --timeout 0", "--timeout"},
+      // CLI11 checks for the missing subcommand first, so these do not name the stray word.
+      {std::string(FURUTA_CLI) + " --no-such-option", "A subcommand is required"},
+      {std::string(FURUTA_CLI) + " no-such-command", "A subcommand is required"},
+      {std::string(FURUTA_CLI) + " status --no-such-option", "--no-such-option"},
+  };
+  for (const auto& [line, mention] : cases) {
+    const Outcome o = run(line);
+    EXPECT_GT(o.exit_code, 0) << line << "\n" << o.output;
+    EXPECT_TRUE(has(o, mention)) << line << "\n" << o.output;
+  }
+  EXPECT_TRUE(fs::is_empty(logs.path()));
+}
+
+TEST(CliArguments, FurutadRejectsBadArgumentsAndBadConfigurations) {
+  furuta::testing::TempDir dir;
+  const fs::path bad = dir.path() / "rig.toml";
+  std::ofstream(bad) << "[safety]\n# the limit\nmax_duty = nan\n";
+  const std::string daemon = FURUTA_DAEMON;
+  const std::pair<std::string, const char*> cases[] = {
+      {daemon + " --sim --config " + bad.string(), "rig.toml:3: safety.max_duty: must be finite"},
+      {daemon + " --sim --config /nonexistent/rig.toml", "/nonexistent/rig.toml"},
+      {daemon + " --no-such-option", "--no-such-option"},
+      {daemon + " --sim --replay /nonexistent.lcmlog", "/nonexistent.lcmlog"},
+  };
+  for (const auto& [line, mention] : cases) {
+    const Outcome o = run(line);
+    EXPECT_GT(o.exit_code, 0) << line << "\n" << o.output;
+    EXPECT_TRUE(has(o, mention)) << line << "\n" << o.output;
+  }
+}
+
+}  // namespace
