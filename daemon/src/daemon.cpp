@@ -219,68 +219,75 @@ bool Daemon::start_replayed_session(const furuta::rig_session_t& start) {
   copy_to(request.label, start.label);
   request.has_arm_zero = true;
   request.arm_zero_counts = start.arm_zero_counts;
+  std::lock_guard lock(command_mutex_);  // the request queue has a single producer at a time
   return loop_->request_session(request);
 }
 
 furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command) {
   CommandDecision decision;
   {
+    // Held until the request is queued too: the loop's request queue is single-producer, and
+    // commands come from the LCM thread and from callers of handle_command alike.
     std::lock_guard lock(command_mutex_);
     // The loop's time, not the clock's: this runs on the LCM thread. Rate limiting on the time
     // of the loop's last wake-up is at most a period behind, and exact in virtual time.
     decision = validator_.validate(command, loop_->counters().clock_ns.load());
-  }
-  if (decision.accepted) {
-    switch (command.kind) {
-      case furuta::rig_command_t::KIND_START_SESSION: {
-        SessionRequest request;
-        try {
-          const ExcitationSpec spec = spec_from_command(command, settings_.default_excitation);
-          if (std::string why = check_spec_limits(spec, settings_.command_limits); !why.empty()) {
-            decision = {false, why};
-            break;
-          }
-          request.excitation = Excitation(spec);
-        } catch (const std::exception& e) {
-          decision = {false, e.what()};
-          break;
-        }
-        // Before the loop takes it: a session whose log cannot even be created would drive the
-        // motor only to be stopped with log_error a few cycles later.
-        if (!settings_.recorder.logs_dir.empty()) {
-          if (std::string why = session_log::logs_dir_problem(
-                  settings_.recorder.logs_dir, settings_.recorder.min_free_bytes_to_start);
-              !why.empty()) {
-            decision = {false, "cannot log a session: " + why};
-            break;
-          }
-        }
-        const auto wall = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                              std::chrono::system_clock::now().time_since_epoch())
-                              .count();
-        copy_to(request.session, unique_session_name(session_name(wall, command.label),
-                                                     settings_.recorder.logs_dir));
-        copy_to(request.label, command.label);
-        if (!loop_->request_session(request)) {
-          decision = {false, "a start request is already waiting"};
-        }
-        break;
-      }
-      case furuta::rig_command_t::KIND_STOP:
-        loop_->request_stop(StopReason::stop_command);
-        break;
-      case furuta::rig_command_t::KIND_ESTOP:
-        loop_->request_stop(StopReason::estop_command);
-        break;
-      default:
-        break;  // status request: the reply is the answer
-    }
+    if (decision.accepted) decision = carry_out(command);
   }
   furuta::rig_status_t reply = status_message();
   reply.reply_to_request_id = command.request_id;
   reply.request_accepted = decision.accepted;
   reply.request_reason = decision.reason;
   return reply;
+}
+
+CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {
+  CommandDecision decision{true, {}};
+  switch (command.kind) {
+    case furuta::rig_command_t::KIND_START_SESSION: {
+      SessionRequest request;
+      try {
+        const ExcitationSpec spec = spec_from_command(command, settings_.default_excitation);
+        if (std::string why = check_spec_limits(spec, settings_.command_limits); !why.empty()) {
+          decision = {false, why};
+          break;
+        }
+        request.excitation = Excitation(spec);
+      } catch (const std::exception& e) {
+        decision = {false, e.what()};
+        break;
+      }
+      // Before the loop takes it: a session whose log cannot even be created would drive the
+      // motor only to be stopped with log_error a few cycles later.
+      if (!settings_.recorder.logs_dir.empty()) {
+        if (std::string why = session_log::logs_dir_problem(
+                settings_.recorder.logs_dir, settings_.recorder.min_free_bytes_to_start);
+            !why.empty()) {
+          decision = {false, "cannot log a session: " + why};
+          break;
+        }
+      }
+      const auto wall = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                            std::chrono::system_clock::now().time_since_epoch())
+                            .count();
+      copy_to(request.session,
+              unique_session_name(session_name(wall, command.label), settings_.recorder.logs_dir));
+      copy_to(request.label, command.label);
+      if (!loop_->request_session(request)) {
+        decision = {false, "a start request is already waiting"};
+      }
+      break;
+    }
+    case furuta::rig_command_t::KIND_STOP:
+      loop_->request_stop(StopReason::stop_command);
+      break;
+    case furuta::rig_command_t::KIND_ESTOP:
+      loop_->request_stop(StopReason::estop_command);
+      break;
+    default:
+      break;  // status request: the reply is the answer
+  }
+  return decision;
 }
 
 }  // namespace furuta::daemon

@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "furuta/common/tsan.hpp"
+
 namespace furuta::interval {
 namespace {
 
@@ -226,9 +228,12 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
     std::mutex error_mutex;
     std::exception_ptr error;
     std::size_t error_index = n;
+    ParallelEdges edges;  // for ThreadSanitizer only (furuta/common/tsan.hpp)
+    edges.start();
     arena.execute([&] {
       tbb::parallel_for(
           tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
+            edges.body_begins();
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
               if (failed.load(std::memory_order_relaxed) || cancelled()) {
                 continue;  // skipped: stays pending, goes to boundary
@@ -244,8 +249,10 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
                 }
               }
             }
+            edges.body_ends();
           });
     });
+    edges.finish();
     if (error) {
       std::rethrow_exception(error);
     }

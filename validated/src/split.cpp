@@ -14,6 +14,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "furuta/common/tsan.hpp"
+
 namespace furuta::validated {
 namespace {
 
@@ -189,9 +191,12 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
     // Each job's run depends only on the job: the generation's results do not depend on the
     // schedule.
     std::vector<std::shared_ptr<const IntegrationResult>> results(jobs.size());
+    ParallelEdges edges;  // for ThreadSanitizer only (furuta/common/tsan.hpp)
+    edges.start();
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 1),
                         [&](const tbb::blocked_range<std::size_t>& range) {
+                          edges.body_begins();
                           for (std::size_t i = range.begin(); i < range.end(); ++i) {
                             const Job& job = jobs[i];
                             results[i] = std::make_shared<const IntegrationResult>(
@@ -200,8 +205,10 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
                                     : integrate_sub_box(tapes, switches, job.parent->tube, job.step,
                                                         job.box, options));
                           }
+                          edges.body_ends();
                         });
     });
+    edges.finish();
     std::vector<Job> next;
     for (std::size_t i = 0; i < jobs.size(); ++i) {
       const IntegrationResult& r = *results[i];

@@ -75,6 +75,8 @@ class Daemon {
   void io_thread_main();
   void lcm_thread_main();
   void on_command(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_command_t* msg);
+  // An accepted command's action, under command_mutex_; a start may still be refused.
+  CommandDecision carry_out(const furuta::rig_command_t& command);
 
   DaemonSettings settings_;
   lcm::LCM& lcm_;
@@ -82,7 +84,9 @@ class Daemon {
   std::unique_ptr<ControlLoop> loop_;
   std::unique_ptr<SessionRecorder> recorder_;
   CommandValidator validator_;
-  std::mutex command_mutex_;  // validator state; commands come from LCM and from handle_command
+  // Validator state and the loop's single-producer request queue: commands come from LCM and
+  // from handle_command, replays from start_replayed_session.
+  std::mutex command_mutex_;
   mutable std::mutex snapshot_mutex_;
   StatusSnapshot snapshot_;
   std::function<void(const std::filesystem::path&)> on_logged_;
