@@ -49,11 +49,7 @@ fail() {
   exit 1
 }
 
-ip link set lo up || fail "cannot bring lo up in the namespace"
-ip route add 224.0.0.0/4 dev lo || fail "cannot route multicast to lo"
-GROUP="239.255.$((RANDOM % 250 + 1)).$((RANDOM % 250 + 1))"
-PORT=$((20000 + RANDOM % 20000))
-URL="udpm://$GROUP:$PORT?ttl=0"
+. "$(dirname "$0")/loopback_multicast.sh"
 
 CONFIG="$TMP/rig.toml"
 sed -e "s|^lcm_url = .*|lcm_url = \"$URL\"|" \

@@ -50,14 +50,7 @@ fail() {
   exit 1
 }
 
-ip link set lo up || fail "cannot bring lo up in the namespace"
-ip route add 224.0.0.0/4 dev lo || fail "cannot route multicast to lo"
-
-# A group and port of this run's own (the namespace isolates it already; this keeps the logs apart
-# from anything else that might be listening on the default).
-GROUP="239.255.$((RANDOM % 250 + 1)).$((RANDOM % 250 + 1))"
-PORT=$((20000 + RANDOM % 20000))
-URL="udpm://$GROUP:$PORT?ttl=0"
+. "$(dirname "$0")/loopback_multicast.sh"
 PLAY_URL="udpm://$GROUP:$((PORT + 1))?ttl=0"
 
 CONFIG="$TMP/rig.toml"
