@@ -147,6 +147,13 @@ class LcmLogWriter::Impl {
                                   " bytes on channel '" + std::string(channel) +
                                   "', more than LCM carries");
     }
+    // Bound what a crash loses by the data's own span too, not only by the wall clock: a writer
+    // that fell behind (a stalled thread, a slow disk) catches up in a burst, and a burst written
+    // between two wall-clock syncs could hold more than flush_interval of data.
+    if (dirty_ && utime - first_unsynced_utime_ > flush_interval_us()) {
+      const LogWriteStatus synced = sync_if_due(std::chrono::steady_clock::now(), true);
+      if (synced != LogWriteStatus::ok) return synced;
+    }
     lcm::LogEvent event{};
     event.timestamp = utime;
     event.channel.assign(channel);
@@ -156,6 +163,7 @@ class LcmLogWriter::Impl {
     errno = 0;
     if (file_->writeEvent(&event) != 0) return fail(errno);
     ++events_written_;
+    if (!dirty_) first_unsynced_utime_ = utime;
     dirty_ = true;
     return LogWriteStatus::ok;
   }
@@ -251,7 +259,12 @@ class LcmLogWriter::Impl {
   std::unique_ptr<lcm::LogFile> file_;
   std::uint64_t events_written_ = 0;
   std::string removal_save_error_;
+  std::int64_t flush_interval_us() const {
+    return std::chrono::duration_cast<std::chrono::microseconds>(options_.flush_interval).count();
+  }
+
   bool dirty_ = false;
+  std::int64_t first_unsynced_utime_ = 0;  // the oldest event not yet on disk
   std::chrono::steady_clock::time_point last_sync_;
 };
 

@@ -77,6 +77,27 @@ TEST(LcmLogWriter, SyncsWhenDueOrForced) {
   for (std::size_t i = 0; i < 4; ++i) EXPECT_TRUE(testing::same_event(got[i], events[i]));
 }
 
+TEST(LcmLogWriter, NeverHoldsMoreThanTheFlushIntervalOfDataUnsynced) {
+  // A writer that fell behind writes a burst with no wall-clock sync between its events; what a
+  // crash can lose must still span at most flush_interval of the events' own time (16 ms apart).
+  TempDir dir;
+  LcmLogWriter writer({dir.path(), 50ms}, "s");
+  std::vector<Event> events = testing::pattern_events(9);
+  for (Event& e : events) e.data.resize(40);  // all nine fit in LogFile's stdio buffer
+  LogReadStats stats;
+  auto on_disk = [&] { return testing::read_log(writer.partial_path(), stats).size(); };
+  for (int i = 0; i < 4; ++i) ASSERT_EQ(write_event(writer, events[i]), LogWriteStatus::ok);
+  EXPECT_EQ(on_disk(), 0u);  // 0..48 ms: within the interval, still buffered
+  ASSERT_EQ(write_event(writer, events[4]), LogWriteStatus::ok);
+  EXPECT_EQ(on_disk(), 4u);  // 64 ms would make 64 ms unsynced: the first four went to disk first
+  for (int i = 5; i < 8; ++i) ASSERT_EQ(write_event(writer, events[i]), LogWriteStatus::ok);
+  EXPECT_EQ(on_disk(), 4u);
+  ASSERT_EQ(write_event(writer, events[8]), LogWriteStatus::ok);
+  const std::vector<LogEvent> got = testing::read_log(writer.partial_path(), stats);
+  ASSERT_EQ(got.size(), 8u);
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_TRUE(testing::same_event(got[i], events[i]));
+}
+
 TEST(LcmLogWriter, RejectsUnsafeNamesNamingThem) {
   TempDir dir;
   // Each with how the message shows it (control characters escaped, a NUL would end it).

@@ -69,8 +69,10 @@ struct LogWriterOptions {
 };
 
 // One session's log. Written as <logs_dir>/.partial/<name>.lcmlog.part, flushed and fdatasync'd at
-// least every flush_interval, renamed to <logs_dir>/<name>.lcmlog by finish(). On any write error
-// the writer stops accepting events; what reached the disk before stays readable.
+// least every flush_interval of wall time and before the unsynced events would span more than
+// flush_interval of their own timestamps (utime), renamed to <logs_dir>/<name>.lcmlog by finish().
+// On any write error the writer stops accepting events; what reached the disk before stays
+// readable.
 class LcmLogWriter {
  public:
   // Throws std::runtime_error naming the path when the file cannot be created.
