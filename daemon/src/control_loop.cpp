@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <exception>
 #include <thread>
@@ -130,17 +131,94 @@ bool ControlLoop::write_command(double duty, double braking_fraction, RawReport*
     record->length = static_cast<std::uint8_t>(length);
     record->bytes = bytes;
   }
-  if (status != TransportStatus::ok && usb_failure_ == TransportStatus::ok) usb_failure_ = status;
+  if (status != TransportStatus::ok) mark_down(motor_, status);
   return status == TransportStatus::ok;
+}
+
+void ControlLoop::mark_down(BoardLink& board, TransportStatus status) noexcept {
+  if (usb_failure_ == TransportStatus::ok) usb_failure_ = status;
+  bool& down = &board == &motor_ ? motor_down_ : encoder_down_;
+  if (down) return;
+  down = true;
+  counters_.disconnects.fetch_add(1, std::memory_order_relaxed);
+  // The first attempt waits an interval: a board that has just gone is rarely back at once.
+  if (!(motor_down_ && encoder_down_)) {
+    down_since_ns_ = clock_.now_ns();
+    next_reconnect_ns_ = down_since_ns_ + settings_.reconnect_interval_ns;
+  }
+}
+
+void ControlLoop::report_lost_boards(std::int64_t now_ns) noexcept {
+  if (motor_down_ && !motor_down_reported_) {
+    motor_down_reported_ = true;
+    emit_fault("disconnected", "1065 motor board lost; reconnecting", StopReason::none, false,
+               now_ns);
+  }
+  if (encoder_down_ && !encoder_down_reported_) {
+    encoder_down_reported_ = true;
+    emit_fault("disconnected", "1047 encoder board lost; reconnecting", StopReason::none, false,
+               now_ns);
+  }
+}
+
+bool ControlLoop::initialise_boards() {
+  std::array<std::uint8_t, bridge::k1047OutputReportBytes> enable{};
+  bridge::encode_output_1047(static_cast<std::uint8_t>(1u << settings_.pendulum_channel), enable);
+  const TransportStatus encoder_status = encoder_.write(enable);
+  if (encoder_status != TransportStatus::ok) mark_down(encoder_, encoder_status);
+  const bool motor_ok = write_command(0.0, settings_.stop_braking_fraction, nullptr);
+  return encoder_status == TransportStatus::ok && motor_ok;
+}
+
+void ControlLoop::try_reconnect(std::int64_t now_ns) {
+  if (now_ns < next_reconnect_ns_) return;
+  next_reconnect_ns_ = now_ns + settings_.reconnect_interval_ns;
+  if (motor_down_ && motor_.reconnect() == TransportStatus::ok) {
+    motor_down_ = false;
+    motor_down_reported_ = false;  // lost again before the other is back: reported again
+    // The 1065 back without a power-up (a USB error, not an unplug) may still drive: zero it now.
+    write_command(0.0, settings_.stop_braking_fraction, nullptr);
+  }
+  if (encoder_down_ && encoder_.reconnect() == TransportStatus::ok) {
+    encoder_down_ = false;
+    encoder_down_reported_ = false;
+  }
+  if (motor_down_ || encoder_down_) return;
+  if (!initialise_boards()) return;  // marked down again: the next attempt after the interval
+
+  // Both boards are new as far as the loop knows: the counters restart, the supply and flags are
+  // unknown until their first report, and the pendulum must be seen at rest afresh before a start.
+  motor_counter_.reset();
+  encoder_timing_.reset();
+  have_supply_ = false;
+  motor_flags_ = 0;
+  encoder_flags_ = 0;
+  cycles_without_motor_ = 0;
+  cycles_without_encoder_ = 0;
+  rest_anchor_counts_ = pendulum_counts_;
+  rest_anchor_ns_ = now_ns;
+  usb_failure_ = TransportStatus::ok;
+  motor_down_reported_ = false;
+  encoder_down_reported_ = false;
+  counters_.reconnects.fetch_add(1, std::memory_order_relaxed);
+  counters_.state.store(LoopState::idle);
+  char detail[kDetailChars];
+  std::snprintf(detail, sizeof detail, "both boards open and initialised again after %lld ms",
+                static_cast<long long>((now_ns - down_since_ns_) / 1'000'000));
+  emit_fault("reconnected", detail, StopReason::none, false, now_ns);
 }
 
 void ControlLoop::drain_boards(RigSample& sample, std::int64_t& newest_arm_counts) {
   sample.motor_in.count = 0;
   sample.encoder_in.count = 0;
-  const TransportStatus motor_status = motor_.drain(sample.motor_in);
-  const TransportStatus encoder_status = encoder_.drain(sample.encoder_in);
-  if (usb_failure_ == TransportStatus::ok) {
-    usb_failure_ = motor_status != TransportStatus::ok ? motor_status : encoder_status;
+  // A board that is down is left alone until it is reconnected.
+  if (!motor_down_) {
+    const TransportStatus status = motor_.drain(sample.motor_in);
+    if (status != TransportStatus::ok) mark_down(motor_, status);
+  }
+  if (!encoder_down_) {
+    const TransportStatus status = encoder_.drain(sample.encoder_in);
+    if (status != TransportStatus::ok) mark_down(encoder_, status);
   }
 
   int motor_fresh = 0;
@@ -189,16 +267,10 @@ void ControlLoop::drain_boards(RigSample& sample, std::int64_t& newest_arm_count
   if (encoder_fresh == 0) sample.flags |= kSampleEncoderStale;
   if (motor_lost > 0) sample.flags |= kSampleMotorLost;
   if (encoder_lost > 0) sample.flags |= kSampleEncoderLost;
-  if (running_) {
-    session_motor_lost_ += motor_lost;
-    session_encoder_lost_ += encoder_lost;
-    if (motor_lost > 0)
-      emit_fault("lost_reports", "1065 packet counter gap", StopReason::none, false,
-                 sample.monotonic_ns);
-    if (encoder_lost > 0)
-      emit_fault("lost_reports", "1047 report timing gap: counts lost", StopReason::none, false,
-                 sample.monotonic_ns);
-  }
+  // Accounted to the session (and reported) in cycle(), once it is known whether this cycle's
+  // sample belongs to one: a start in this very cycle makes it the session's first.
+  cycle_motor_lost_ = motor_lost;
+  cycle_encoder_lost_ = encoder_lost;
 }
 
 void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_ns) {
@@ -290,6 +362,7 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
   sample.monotonic_ns = deadline_ns;
   sample.wake_latency_ns = wake_ns - deadline_ns;
   drain_boards(sample, arm_counts_);
+  report_lost_boards(deadline_ns);
 
   if (std::llabs(pendulum_counts_ - rest_anchor_counts_) > settings_.rest_tolerance_counts) {
     rest_anchor_counts_ = pendulum_counts_;
@@ -317,10 +390,21 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
   }
   consider_pending_request(deadline_ns);
   if (!running_) {
-    if (usb_failure_ != TransportStatus::ok) counters_.state.store(LoopState::fault);
+    if (usb_failure_ != TransportStatus::ok) {
+      counters_.state.store(LoopState::fault);
+      report_lost_boards(deadline_ns);  // a failed idle e-stop write
+      try_reconnect(deadline_ns);
+    }
     return;
   }
 
+  session_motor_lost_ += cycle_motor_lost_;
+  session_encoder_lost_ += cycle_encoder_lost_;
+  if (cycle_motor_lost_ > 0)
+    emit_fault("lost_reports", "1065 packet counter gap", StopReason::none, false, deadline_ns);
+  if (cycle_encoder_lost_ > 0)
+    emit_fault("lost_reports", "1047 report timing gap: counts lost", StopReason::none, false,
+               deadline_ns);
   session_overruns_ += missed;
   if (missed > 0) {
     sample.flags |= kSampleOverrun;
@@ -380,12 +464,10 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
 }
 
 void ControlLoop::run() {
-  // Start-up (may allocate): enable the pendulum channel, make sure the motor is at zero.
-  std::array<std::uint8_t, bridge::k1047OutputReportBytes> enable{};
-  bridge::encode_output_1047(static_cast<std::uint8_t>(1u << settings_.pendulum_channel), enable);
-  if (encoder_.write(enable) != TransportStatus::ok) usb_failure_ = TransportStatus::io_error;
-  write_command(0.0, settings_.stop_braking_fraction, nullptr);
-  counters_.state.store(LoopState::idle);
+  // Start-up (may allocate): enable the pendulum channel, make sure the motor is at zero. A board
+  // that fails here is reconnected like one lost later.
+  initialise_boards();
+  counters_.state.store(usb_failure_ == TransportStatus::ok ? LoopState::idle : LoopState::fault);
 
   std::int64_t deadline = clock_.now_ns() + settings_.period_ns;
   rest_anchor_ns_ = clock_.now_ns();

@@ -180,6 +180,7 @@ class SimulatedRig::Impl {
     return physics_ns_;
   }
   const std::vector<TruthRecord>& truth() const { return truth_; }
+  const std::vector<MotorCommandRecord>& motor_commands() const { return motor_commands_; }
   void advance_to_now() {
     std::lock_guard lock(mutex_);
     advance_locked(clock_.now_ns());
@@ -238,6 +239,7 @@ class SimulatedRig::Impl {
   std::normal_distribution<double> standard_normal_{0.0, 1.0};
 
   std::vector<TruthRecord> truth_;
+  std::vector<MotorCommandRecord> motor_commands_;
   std::uint64_t next_handle_id_ = 1;
 };
 
@@ -622,6 +624,9 @@ TransportStatus SimulatedRig::Impl::write(std::uint64_t handle, RigBoard board,
     }
     motor_output_ = output;
     target_duty_ = output.duty_cycle();
+    if (config_.record_motor_commands) {
+      motor_commands_.push_back({clock_.now_ns(), target_duty_, false});
+    }
   } else {
     if (bytes.size() != k1047OutputReportBytes) return TransportStatus::invalid_argument;
     std::uint8_t mask = 0;
@@ -676,7 +681,10 @@ void SimulatedRig::Impl::disconnect(RigBoard board) {
   b.owner = 0;
   b.queue.clear();
   // Inferred: the 1065's logic is powered from USB, so unplugging it stops the H-bridge (coast).
-  if (board == RigBoard::motor_1065) reset_motor();
+  if (board == RigBoard::motor_1065) {
+    reset_motor();
+    if (config_.record_motor_commands) motor_commands_.push_back({clock_.now_ns(), 0.0, true});
+  }
 }
 
 void SimulatedRig::Impl::reconnect(RigBoard board) {
@@ -819,6 +827,9 @@ std::int64_t SimulatedRig::physics_time_ns() const {
 }
 const std::vector<TruthRecord>& SimulatedRig::truth() const {
   return impl_->truth();
+}
+const std::vector<MotorCommandRecord>& SimulatedRig::motor_commands() const {
+  return impl_->motor_commands();
 }
 void SimulatedRig::advance_to_now() {
   impl_->advance_to_now();

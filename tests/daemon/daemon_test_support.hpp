@@ -126,6 +126,7 @@ class HookedLink final : public BoardLink {
         {Event::Kind::write, duty_raw_of(report), cycles_, running_cycles_, running()});
     return inner_.write(report);
   }
+  bridge::TransportStatus reconnect() override { return inner_.reconnect(); }
   const bridge::DeviceInfo& device_info() const noexcept override { return inner_.device_info(); }
 
   // Read after the loop thread has been joined.

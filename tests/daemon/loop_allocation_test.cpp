@@ -60,6 +60,7 @@ class CountingLink final : public BoardLink {
   bridge::TransportStatus write(std::span<const std::uint8_t> report) override {
     return inner_.write(report);
   }
+  bridge::TransportStatus reconnect() override { return inner_.reconnect(); }
   const bridge::DeviceInfo& device_info() const noexcept override { return inner_.device_info(); }
 
   // Read after the loop thread has been joined.

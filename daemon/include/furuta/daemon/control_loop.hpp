@@ -43,6 +43,9 @@ struct LoopSettings {
   // Virtual-time runs outpace the logger thread: wait for room in the queue instead of treating a
   // full queue as a stuck logger (which, in real time, stops the session with log_error).
   bool wait_when_queue_full = false;
+  // After a board is lost (unplugged, USB error), how often the loop tries to reopen it. A board
+  // that comes back is open again within this (plus a period) and initialised as at start-up.
+  std::int64_t reconnect_interval_ns = 200'000'000;
 };
 
 // Built off the loop thread (constructing the Excitation validates and precomputes), copied in.
@@ -67,6 +70,10 @@ struct LoopCounters {
   std::atomic<LoopState> state{LoopState::starting};
   std::atomic<StopReason> last_stop{StopReason::none};
   std::atomic<std::int64_t> sessions_completed{0};
+  // Boards lost (each board counted once per loss) and reconnections (both boards open again and
+  // initialised).
+  std::atomic<std::int64_t> disconnects{0};
+  std::atomic<std::int64_t> reconnects{0};
   // Set once the first decodable report of each board has come in (systemd's READY waits for it).
   std::atomic<bool> motor_reports_seen{false};
   std::atomic<bool> encoder_reports_seen{false};
@@ -111,6 +118,16 @@ class ControlLoop {
   void emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
                   std::int64_t now_ns) noexcept;
   bool queue_has_room(std::size_t events) noexcept;
+  // A board's link failed: it is down until reconnected. Records the first failure's status.
+  void mark_down(BoardLink& board, bridge::TransportStatus status) noexcept;
+  // Reports each board newly down (a "disconnected" fault event, in the running session's log).
+  void report_lost_boards(std::int64_t now_ns) noexcept;
+  // While idle with a board down: every reconnect interval, try to reopen and re-initialise.
+  void try_reconnect(std::int64_t now_ns);
+  // Enables the pendulum's channel and writes the zero command: at start-up and after a
+  // reconnect (the 1065 resets on power-up, the 1047's channels come up disabled). False if a
+  // write failed (the board is marked down again).
+  bool initialise_boards();
 
   LoopSettings settings_;
   BoardLink& motor_;
@@ -142,6 +159,8 @@ class ControlLoop {
   std::int64_t session_overruns_ = 0;
   std::int64_t session_motor_lost_ = 0;
   std::int64_t session_encoder_lost_ = 0;
+  int cycle_motor_lost_ = 0;  // found by this cycle's drain
+  int cycle_encoder_lost_ = 0;
   // Board state carried across cycles.
   std::int64_t arm_counts_ = 0;
   std::int64_t pendulum_counts_ = 0;  // running sum of 1047 deltas since the channel was enabled
@@ -153,7 +172,14 @@ class ControlLoop {
   std::uint8_t encoder_flags_ = 0;
   int cycles_without_motor_ = 0;
   int cycles_without_encoder_ = 0;
+  // The first USB failure since the boards were last all up (ok: both are up).
   bridge::TransportStatus usb_failure_ = bridge::TransportStatus::ok;
+  bool motor_down_ = false;
+  bool encoder_down_ = false;
+  bool motor_down_reported_ = false;
+  bool encoder_down_reported_ = false;
+  std::int64_t down_since_ns_ = 0;
+  std::int64_t next_reconnect_ns_ = 0;
   // Rest detection: the pendulum count and when it last moved beyond the tolerance.
   std::int64_t rest_anchor_counts_ = 0;
   std::int64_t rest_anchor_ns_ = 0;

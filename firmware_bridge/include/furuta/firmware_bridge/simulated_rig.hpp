@@ -55,6 +55,9 @@ struct SimulatedRigConfig {
 
   bool record_truth =
       true;  // keep a TruthRecord per generated report (allocates; off for RT tests)
+  // Keep a MotorCommandRecord per command the 1065 takes (allocates): what a soak checks the
+  // daemon's stops against.
+  bool record_motor_commands = false;
 };
 
 // What really happened at each report: for tests that check decoded data against the truth.
@@ -66,6 +69,14 @@ struct TruthRecord {
   double applied_duty = 0.0;
   double arm_torque_nm = 0.0;
   bool delivered = true;  // false when a fault dropped it
+};
+
+// What the 1065 was told to do, and when it took it.
+struct MotorCommandRecord {
+  std::int64_t time_ns = 0;
+  double duty = 0.0;  // the target duty written, -1..1
+  // Not a command: the board lost its USB power (unplugged) and stopped driving; duty is 0.
+  bool power_loss = false;
 };
 
 class SimulatedRig {
@@ -105,6 +116,8 @@ class SimulatedRig {
   PendulumState true_state() const;  // at the time physics has reached
   std::int64_t physics_time_ns() const;
   const std::vector<TruthRecord>& truth() const;
+  // Empty unless config.record_motor_commands. Read while no transport is in use.
+  const std::vector<MotorCommandRecord>& motor_commands() const;
   // Brings physics up to the clock's time (reads and writes do this themselves).
   void advance_to_now();
 
