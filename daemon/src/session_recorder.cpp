@@ -25,7 +25,8 @@ std::string describe_log_failure(session_log::LogWriteStatus status,
   if (status == session_log::LogWriteStatus::file_removed) {
     why += " (deleted under the session, its directory with it?); ";
     why += log.removal_save_error().empty()
-               ? "what was written is saved again as " + log.partial_path().string()
+               ? "what was written is saved again as " + log.partial_path().string() +
+                     (log.is_open() ? " and the session's log goes on there" : "")
                : "what was written is LOST: " + log.removal_save_error();
   } else if (status == session_log::LogWriteStatus::disk_full) {
     why += " (what was synced before stays in " + log.partial_path().string() + ")";
@@ -103,8 +104,21 @@ void SessionRecorder::log_bytes(const char* channel, const std::vector<std::uint
   if (!log_ || log_failed_) return;
   // Log times are the loop's monotonic clock in microseconds: replay and virtual time stay exact;
   // wall time is inside the messages.
-  const auto status = log_->write(channel, monotonic_ns / 1000, bytes);
-  if (status != session_log::LogWriteStatus::ok) fail_log(describe_log_failure(status, *log_));
+  on_log_status(log_->write(channel, monotonic_ns / 1000, bytes));
+}
+
+void SessionRecorder::on_log_status(session_log::LogWriteStatus status) {
+  if (status == session_log::LogWriteStatus::ok) return;
+  const std::string why = describe_log_failure(status, *log_);
+  // A log written again after its directory was removed goes on: the session is still stopped
+  // (someone removed the logs), but what comes until it has stopped is kept.
+  if (log_->is_open()) {
+    log_failure_ = why;
+    last_fault_ = why;
+    if (on_log_failure_) on_log_failure_(last_fault_);
+    return;
+  }
+  fail_log(why);
 }
 
 void SessionRecorder::fail_log(const std::string& why) {
@@ -146,7 +160,9 @@ void SessionRecorder::start_session(const SessionStartEvent& start) {
   m.arm_zero_counts = start.arm_zero_counts;
   m.pendulum_zero_counts = start.pendulum_zero_counts;
   publish_and_log(session_log::kChannelSession, m, start.monotonic_ns);
-  if (log_) log_->sync_if_due(std::chrono::steady_clock::now(), /*force=*/true);
+  if (log_ && !log_failed_) {
+    on_log_status(log_->sync_if_due(std::chrono::steady_clock::now(), /*force=*/true));
+  }
 }
 
 void SessionRecorder::record_sample(const RigSample& s) {
@@ -254,8 +270,7 @@ void SessionRecorder::handle(const LoopEvent& event) {
 
 void SessionRecorder::sync_if_due(std::chrono::steady_clock::time_point now) {
   if (!log_ || log_failed_) return;
-  const auto status = log_->sync_if_due(now);
-  if (status != session_log::LogWriteStatus::ok) fail_log(describe_log_failure(status, *log_));
+  on_log_status(log_->sync_if_due(now));
 }
 
 }  // namespace furuta::daemon

@@ -1,10 +1,12 @@
-// The writer lays events out with lcm-cpp's lcm::LogFile, a thin wrapper over the lcm_eventlog code
-// lcm-logger itself writes with, so our logs are LCM logs by construction. Around it we add what a
-// session needs and LogFile lacks: an exclusive .part file, periodic fflush + fdatasync through its
-// FILE*, error classification, refusal after the first error, and an atomic, durable rename when
-// the session ends.
+// The writer lays events out with LCM's lcm_eventlog, the code lcm-logger itself writes with, so
+// our logs are LCM logs by construction. Around it we add what a session needs and lcm_eventlog
+// lacks: an exclusive .part file, periodic fflush + fdatasync through its FILE*, error
+// classification, refusal after the first error, and an atomic, durable rename when the session
+// ends. The C API rather than lcm-cpp's LogFile: a log written again after its directory was
+// removed goes on in append mode, and only the C struct lets its event numbers go on too.
 
 #include <fcntl.h>
+#include <lcm/eventlog.h>
 #include <stdio_ext.h>  // __fpurge
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -12,7 +14,6 @@
 
 #include <cerrno>
 #include <cstring>
-#include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 #include <system_error>
 #include <vector>
@@ -29,6 +30,11 @@ namespace {
 using detail::kFinalSuffix;
 using detail::kPartialDir;
 using detail::kPartSuffix;
+
+struct EventLogCloser {
+  void operator()(lcm_eventlog_t* log) const { lcm_eventlog_destroy(log); }
+};
+using EventLog = std::unique_ptr<lcm_eventlog_t, EventLogCloser>;
 
 // NAME_MAX is 255; leave room for the longest suffix a log ever wears (".incomplete.lcmlog" and a
 // collision counter from recovery).
@@ -118,18 +124,15 @@ class LcmLogWriter::Impl {
                                (err == EEXIST ? " (left by an earlier session: recover it)" : ""));
     }
     created_fd.reset();
-    file_ = std::make_unique<lcm::LogFile>(partial_path_.string(), "w");
-    if (!file_->good()) {
+    file_.reset(lcm_eventlog_create(partial_path_.c_str(), "w"));
+    if (!file_) {
       const int err = errno;
       file_.reset();
       ::unlink(partial_path_.c_str());
       throw std::runtime_error("cannot open LCM log " + partial_path_.string() + ": " +
                                std::strerror(err));
     }
-    // LogFile's fopen does not ask for close-on-exec; whatever the daemon starts must not inherit
-    // the log.
-    const int fd = ::fileno(file_->getFilePtr());
-    ::fcntl(fd, F_SETFD, ::fcntl(fd, F_GETFD) | FD_CLOEXEC);
+    set_close_on_exec();
     detail::fsync_directory(partial_dir_);
     last_sync_ = std::chrono::steady_clock::now();
   }
@@ -154,14 +157,16 @@ class LcmLogWriter::Impl {
       const LogWriteStatus synced = sync_if_due(std::chrono::steady_clock::now(), true);
       if (synced != LogWriteStatus::ok) return synced;
     }
-    lcm::LogEvent event{};
+    lcm_eventlog_event_t event{};
     event.timestamp = utime;
-    event.channel.assign(channel);
+    event.channellen = static_cast<std::int32_t>(channel.size());
+    // The struct is for reading and writing alike; writing only reads the channel (by its length,
+    // no terminator needed) and the data.
+    event.channel = const_cast<char*>(channel.data());
     event.datalen = static_cast<std::int32_t>(data.size());
-    // LogFile takes a non-const pointer for reading and writing alike; writing only reads it.
     event.data = const_cast<std::uint8_t*>(data.data());
     errno = 0;
-    if (file_->writeEvent(&event) != 0) return fail(errno);
+    if (lcm_eventlog_write_event(file_.get(), &event) != 0) return fail(errno);
     ++events_written_;
     if (!dirty_) first_unsynced_utime_ = utime;
     dirty_ = true;
@@ -172,7 +177,7 @@ class LcmLogWriter::Impl {
     if (!file_) return LogWriteStatus::closed;
     if (!force && now - last_sync_ < options_.flush_interval) return LogWriteStatus::ok;
     if (dirty_) {
-      FILE* f = file_->getFilePtr();
+      FILE* f = file_->f;
       errno = 0;
       if (std::fflush(f) != 0) return fail(errno);
       if (::fdatasync(::fileno(f)) != 0) return fail(errno);
@@ -182,10 +187,13 @@ class LcmLogWriter::Impl {
     // Writing to a file nobody can reach any more (its directory was deleted) succeeds and loses
     // everything when it is closed: find out at every sync, while the data is still in hand.
     struct stat st {};
-    if (::fstat(::fileno(file_->getFilePtr()), &st) == 0 && st.st_nlink == 0) {
+    if (::fstat(::fileno(file_->f), &st) == 0 && st.st_nlink == 0) {
       removal_save_error_ = save_unlinked_file();
-      __fpurge(file_->getFilePtr());
+      __fpurge(file_->f);
       file_.reset();
+      // Saved again: the rest of the session goes on into the new file, so the events that come
+      // while the session is being stopped (its end record too) are not lost as well.
+      if (removal_save_error_.empty()) reopen_for_append();
       return LogWriteStatus::file_removed;
     }
     return LogWriteStatus::ok;
@@ -208,15 +216,33 @@ class LcmLogWriter::Impl {
   const fs::path& partial_path() const { return partial_path_; }
   std::uint64_t events_written() const { return events_written_; }
   const std::string& removal_save_error() const { return removal_save_error_; }
+  bool is_open() const { return file_ != nullptr; }
 
  private:
   // After an error the file's tail may hold half an event. What stdio still buffers is dropped
-  // rather than flushed by LogFile's close, so nothing lands after the failure and what was synced
-  // before stays a readable prefix. Closing now also hands the descriptor back.
+  // rather than flushed by lcm_eventlog's close, so nothing lands after the failure and what was
+  // synced before stays a readable prefix. Closing now also hands the descriptor back.
   LogWriteStatus fail(int err) {
-    __fpurge(file_->getFilePtr());
+    __fpurge(file_->f);
     file_.reset();
     return status_from_errno(err);
+  }
+
+  // lcm_eventlog's fopen does not ask for close-on-exec; whatever the daemon starts must not
+  // inherit the log.
+  void set_close_on_exec() {
+    const int fd = ::fileno(file_->f);
+    ::fcntl(fd, F_SETFD, ::fcntl(fd, F_GETFD) | FD_CLOEXEC);
+  }
+
+  void reopen_for_append() {
+    EventLog file(lcm_eventlog_create(partial_path_.c_str(), "a"));
+    if (!file) return;  // what was saved stays saved; the writer stays closed
+    // Append mode would number from 0 again: the events go on from where they were.
+    file->eventcount = static_cast<std::int64_t>(events_written_);
+    file_ = std::move(file);
+    set_close_on_exec();
+    dirty_ = false;
   }
 
   // Copies the (synced, unlinked) file to a new .part at the old path, directories recreated, so
@@ -230,7 +256,7 @@ class LcmLogWriter::Impl {
         ::open(partial_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
     if (!to.valid()) return "cannot create " + partial_path_.string() + ": " + std::strerror(errno);
     // The log's own descriptor is write-only; /proc reopens the unlinked file for reading.
-    const std::string self_fd = "/proc/self/fd/" + std::to_string(::fileno(file_->getFilePtr()));
+    const std::string self_fd = "/proc/self/fd/" + std::to_string(::fileno(file_->f));
     const detail::UniqueFd from(::open(self_fd.c_str(), O_RDONLY | O_CLOEXEC));
     if (!from.valid())
       return "cannot reopen the removed file: " + std::string(std::strerror(errno));
@@ -256,7 +282,7 @@ class LcmLogWriter::Impl {
   fs::path partial_dir_;
   fs::path partial_path_;
   fs::path final_path_;
-  std::unique_ptr<lcm::LogFile> file_;
+  EventLog file_;
   std::uint64_t events_written_ = 0;
   std::string removal_save_error_;
   std::int64_t flush_interval_us() const {
@@ -320,6 +346,9 @@ std::uint64_t LcmLogWriter::events_written() const {
   return impl_->events_written();
 }
 
+bool LcmLogWriter::is_open() const {
+  return impl_->is_open();
+}
 const std::string& LcmLogWriter::removal_save_error() const {
   return impl_->removal_save_error();
 }

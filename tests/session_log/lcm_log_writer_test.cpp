@@ -238,13 +238,14 @@ void expect_synced_prefix_readable(const fs::path& part, const FullDiskReport& r
   EXPECT_EQ(stats.damaged_regions, 0u);
 }
 
-TEST(LcmLogWriter, LogsDirectoryRemovedMidSessionIsFoundAtTheNextSyncAndTheDataSaved) {
+TEST(LcmLogWriter, LogsDirectoryRemovedMidSessionIsFoundAtTheNextSyncAndTheLogGoesOn) {
   // rm -r of the logs directory under a running session: writes into the unlinked file succeed
-  // and would all be lost at close. The sync notices, writes everything back to a new .part and
-  // refuses from then on; recovery at the next start makes it an incomplete log.
+  // and would all be lost at close. The sync notices, writes everything back to a new .part in a
+  // recreated directory and goes on writing there, so what comes while the session is being
+  // stopped is kept too.
   TempDir dir;
   const fs::path logs = dir.path() / "logs";
-  const std::vector<Event> events = testing::pattern_events(8);
+  const std::vector<Event> events = testing::pattern_events(12);
   LcmLogWriter writer({logs, 1000ms}, "removed");
   for (int i = 0; i < 5; ++i) ASSERT_EQ(write_event(writer, events[i]), LogWriteStatus::ok);
   ASSERT_EQ(writer.sync_if_due(std::chrono::steady_clock::now(), true), LogWriteStatus::ok);
@@ -252,15 +253,23 @@ TEST(LcmLogWriter, LogsDirectoryRemovedMidSessionIsFoundAtTheNextSyncAndTheDataS
   fs::remove_all(logs);
   EXPECT_EQ(writer.sync_if_due(std::chrono::steady_clock::now(), true),
             LogWriteStatus::file_removed);
-  EXPECT_EQ(write_event(writer, events[0]), LogWriteStatus::closed);
-  EXPECT_EQ(writer.finish(), LogWriteStatus::closed);
-  ASSERT_TRUE(fs::exists(writer.partial_path()));
   EXPECT_EQ(writer.removal_save_error(), "");
+  ASSERT_TRUE(writer.is_open());
+  ASSERT_TRUE(fs::exists(writer.partial_path()));
+  for (int i = 8; i < 12; ++i) ASSERT_EQ(write_event(writer, events[i]), LogWriteStatus::ok);
+  ASSERT_EQ(writer.sync_if_due(std::chrono::steady_clock::now(), true), LogWriteStatus::ok);
 
-  const std::vector<RecoveredLog> recovered = recover_partial_logs(logs);
-  ASSERT_EQ(recovered.size(), 1u);
+  // A crash now would keep all twelve, numbered on as if nothing had happened.
   LogReadStats stats;
-  const std::vector<LogEvent> got = testing::read_log(recovered[0].path, stats);
+  std::vector<LogEvent> got = testing::read_log(writer.partial_path(), stats);
+  ASSERT_EQ(got.size(), events.size());
+  EXPECT_EQ(stats.damaged_regions, 0u);
+  EXPECT_EQ(got[8].event_number, 8);
+
+  fs::path final_path;
+  ASSERT_EQ(writer.finish(&final_path), LogWriteStatus::ok);
+  EXPECT_EQ(final_path, logs / "removed.lcmlog");
+  got = testing::read_log(final_path, stats);
   ASSERT_EQ(got.size(), events.size());
   EXPECT_EQ(stats.damaged_regions, 0u);
   for (std::size_t i = 0; i < got.size(); ++i) {

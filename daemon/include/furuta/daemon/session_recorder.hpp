@@ -67,6 +67,8 @@ class SessionRecorder {
   void publish_and_log(const char* channel, const Message& message, std::int64_t monotonic_ns);
   void log_bytes(const char* channel, const std::vector<std::uint8_t>& bytes,
                  std::int64_t monotonic_ns);
+  // A write or sync that did not succeed: stops the session (log_error) with what happened.
+  void on_log_status(session_log::LogWriteStatus status);
   void fail_log(const std::string& why);  // once per session: the daemon stops it (log_error)
 
   RecorderSettings settings_;

@@ -59,7 +59,8 @@ std::vector<LogEvent> read_lcm_log_bytes(std::span<const std::uint8_t> bytes, Lo
 // --- writing ---
 
 // file_removed: the .part lost its last link (the logs directory or the file was deleted under a
-// running session); the writer has written what it had synced to a new .part at the same path.
+// running session); the writer has written what it had synced to a new .part at the same path
+// (directories recreated) and, when that worked, goes on writing there (is_open()).
 enum class LogWriteStatus : std::uint8_t { ok, disk_full, io_error, closed, file_removed };
 std::string_view to_string(LogWriteStatus status);
 
@@ -93,6 +94,8 @@ class LcmLogWriter {
   // After file_removed: empty when what was synced was written again to partial_path(), else
   // why it could not be (the session's data is then lost).
   const std::string& removal_save_error() const;
+  // False after an error, after finish(), and after a file_removed it could not write again.
+  bool is_open() const;
 
  private:
   class Impl;
