@@ -35,6 +35,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check(finite_in(s.min_supply_v, 0, 1e308) && finite_in(s.max_supply_v, 0, 1e308));
     check(s.min_supply_v < s.max_supply_v);
     check(finite_in(s.stop_braking_fraction, 0, 1));
+    check(s.stuck_arm_cycles >= 1 && s.stuck_arm_cycles <= 1000);
+    check(finite_in(s.stuck_arm_min_duty, 1e-300, 1.0));
+    check(finite_in(s.stuck_pendulum_arm_travel_rad, 1e-300, 36000 * M_PI / 180 + 1e-9));
     const CommandLimitsConfig& l = c.limits;
     check(finite_in(l.max_amplitude_duty, 1e-300, s.max_duty));
     check(finite_in(l.max_duration_s, 1e-300, 1e308));

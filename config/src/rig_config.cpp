@@ -392,6 +392,16 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     sc.stop_braking_fraction = s.number(
         "stop_braking", sc.stop_braking_fraction, [](double v) { return v >= 0 && v <= 1; },
         "in [0, 1]");
+    sc.stuck_arm_cycles = static_cast<int>(s.integer(
+        "stuck_arm_cycles", sc.stuck_arm_cycles, [](std::int64_t v) { return v >= 1 && v <= 1000; },
+        "in [1, 1000]"));
+    sc.stuck_arm_min_duty =
+        s.number("stuck_arm_min_duty", sc.stuck_arm_min_duty, fraction, "in (0, 1]");
+    sc.stuck_pendulum_arm_travel_rad =
+        s.number(
+            "stuck_pendulum_arm_travel_deg", sc.stuck_pendulum_arm_travel_rad / kDegToRad,
+            [](double v) { return v > 0 && v <= 36000; }, "in (0, 36000]") *
+        kDegToRad;
     s.reject_unknown_keys();
   }
   {

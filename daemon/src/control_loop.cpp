@@ -273,6 +273,22 @@ void ControlLoop::drain_boards(RigSample& sample, std::int64_t& newest_arm_count
   cycle_encoder_lost_ = encoder_lost;
 }
 
+void ControlLoop::watch_encoders(const RigSample& sample) noexcept {
+  // Only a fresh report says where an encoder is; a board that is late is the stale rules' case.
+  if (!(sample.flags & kSampleMotorStale)) {
+    const std::int64_t moved = arm_counts_ - watched_arm_counts_;
+    watched_arm_counts_ = arm_counts_;
+    const bool driven = std::fabs(applied_duty_) >= settings_.safety.stuck_arm_min_duty;
+    arm_still_driven_cycles_ = moved == 0 && driven ? arm_still_driven_cycles_ + 1 : 0;
+    arm_travel_pendulum_still_rad_ +=
+        std::fabs(bridge::counts_to_rad(settings_.arm_encoder, moved));
+  }
+  if (!(sample.flags & kSampleEncoderStale) && pendulum_counts_ != watched_pendulum_counts_) {
+    watched_pendulum_counts_ = pendulum_counts_;
+    arm_travel_pendulum_still_rad_ = 0.0;
+  }
+}
+
 void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_ns) {
   if (running_) {
     emit_fault("start_refused", "a session is already running", StopReason::none, false, now_ns);
@@ -292,6 +308,10 @@ void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_
   session_encoder_lost_ = 0;
   arm_zero_counts_ = request.has_arm_zero ? request.arm_zero_counts : arm_counts_;
   pendulum_zero_counts_ = pendulum_counts_;
+  watched_arm_counts_ = arm_counts_;
+  watched_pendulum_counts_ = pendulum_counts_;
+  arm_still_driven_cycles_ = 0;
+  arm_travel_pendulum_still_rad_ = 0.0;
   counters_.state.store(LoopState::running);
 
   SessionStartEvent& s = event_.start;
@@ -439,6 +459,9 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
     in.motor_status_flags = motor_flags_;
     in.supply_voltage_v = supply_voltage_v_;
     in.have_supply_reading = have_supply_;
+    watch_encoders(sample);
+    in.arm_still_driven_cycles = arm_still_driven_cycles_;
+    in.arm_travel_pendulum_still_rad = arm_travel_pendulum_still_rad_;
     reason = check_safety(settings_.safety, in);
   }
   if (reason == StopReason::none && !queue_has_room(1)) reason = StopReason::log_error;

@@ -115,6 +115,9 @@ DaemonSettings daemon_settings_from_config(const config::RigConfig& config) {
   loop.safety.stale_report_cycles = config.safety.stale_report_cycles;
   loop.safety.min_supply_v = config.safety.min_supply_v;
   loop.safety.max_supply_v = config.safety.max_supply_v;
+  loop.safety.stuck_arm_cycles = config.safety.stuck_arm_cycles;
+  loop.safety.stuck_arm_min_duty = config.safety.stuck_arm_min_duty;
+  loop.safety.stuck_pendulum_arm_travel_rad = config.safety.stuck_pendulum_arm_travel_rad;
   loop.stop_braking_fraction = config.safety.stop_braking_fraction;
   loop.arm_encoder = config.arm_encoder;
   loop.pendulum_encoder = config.pendulum_encoder;

@@ -126,6 +126,12 @@ StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) no
   }
   if (!(std::fabs(input.arm_angle_rad) <= limits.arm_limit_rad)) return StopReason::arm_angle_limit;
   if (!(std::fabs(input.commanded_duty) <= limits.max_duty)) return StopReason::duty_limit;
+  if (input.arm_still_driven_cycles >= limits.stuck_arm_cycles) {
+    return StopReason::arm_encoder_stuck;
+  }
+  if (!(input.arm_travel_pendulum_still_rad < limits.stuck_pendulum_arm_travel_rad)) {
+    return StopReason::pendulum_encoder_stuck;
+  }
   return StopReason::none;
 }
 

@@ -30,6 +30,10 @@ std::string_view to_string(StopReason reason) {
       return "over_temperature";
     case StopReason::supply_out_of_range:
       return "supply_out_of_range";
+    case StopReason::arm_encoder_stuck:
+      return "arm_encoder_stuck";
+    case StopReason::pendulum_encoder_stuck:
+      return "pendulum_encoder_stuck";
     case StopReason::log_error:
       return "log_error";
     case StopReason::exception:

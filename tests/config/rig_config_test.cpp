@@ -199,6 +199,9 @@ TEST(RigConfig, EverySafetyLimitRefusesBadValuesWithFileLineAndField) {
       {"safety", "min_supply_v", {"-1", "40"}},
       {"safety", "max_supply_v", {"0", "-1", "5"}},
       {"safety", "stop_braking", {"-0.1", "1.5"}},
+      {"safety", "stuck_arm_cycles", {"0", "-1", "1001", "4.5"}},
+      {"safety", "stuck_arm_min_duty", {"0", "-0.1", "1.01"}},
+      {"safety", "stuck_pendulum_arm_travel_deg", {"0", "-1", "36001", "1e308"}},
       {"limits", "max_amplitude_duty", {"0", "-0.1", "0.7", "1.5"}},
       {"limits", "max_duration_s", {"0", "-1"}},
       {"limits", "max_arm_switch_deg", {"0", "-1", "150", "1e308"}},
@@ -255,6 +258,10 @@ TEST(RigConfig, TheShippedFileStatesTheDefaults) {
   EXPECT_EQ(empty.safety.min_supply_v, shipped.safety.min_supply_v);
   EXPECT_EQ(empty.safety.max_supply_v, shipped.safety.max_supply_v);
   EXPECT_EQ(empty.safety.stop_braking_fraction, shipped.safety.stop_braking_fraction);
+  EXPECT_EQ(empty.safety.stuck_arm_cycles, shipped.safety.stuck_arm_cycles);
+  EXPECT_EQ(empty.safety.stuck_arm_min_duty, shipped.safety.stuck_arm_min_duty);
+  EXPECT_NEAR(empty.safety.stuck_pendulum_arm_travel_rad,
+              shipped.safety.stuck_pendulum_arm_travel_rad, 1e-12);
   EXPECT_EQ(empty.limits.max_amplitude_duty, shipped.limits.max_amplitude_duty);
   EXPECT_EQ(empty.limits.max_duration_s, shipped.limits.max_duration_s);
   EXPECT_NEAR(empty.limits.max_arm_switch_rad, shipped.limits.max_arm_switch_rad, 1e-12);

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
@@ -69,6 +70,8 @@ struct ObservedSession {
   std::int64_t first_seen_ns = 0;
   int motor_drops = 0;                          // 1065 reports dropped by the rig while it ran
   std::int64_t motor_drops_revealed_by_ns = 0;  // a later 1065 report must have come by then
+  bool arm_encoder_stuck = false;  // a frozen count while it ran: what alone may end it so
+  bool pendulum_encoder_stuck = false;
 };
 
 // A session log as read back, with what it says on its own (log_problems) and what the
@@ -227,6 +230,7 @@ class SoakDriver {
   std::vector<std::string> violations;
   std::vector<ObservedSession> sessions;
   std::vector<std::int64_t> reconnect_latency_ns;
+  std::map<std::string, std::vector<std::int64_t>> reaction_cycles;  // by what had to end it
   std::int64_t starts_refused = 0;
   std::int64_t mid_fault_commands_accepted = 0;
 
@@ -271,10 +275,13 @@ class SoakDriver {
 
     check_reaction(now, running);
     if (lasting_ && now >= lasting_->clear_ns) clear_lasting(now);
+    if (running && lasting_ && lasting_->kind == FaultKind::stuck_encoder) mark_stuck(*lasting_);
     check_reconnect(now);
 
     if (now >= end_ns_) {
-      if (!finishing_) {
+      // Not before the last fault has cleared and a board unplugged has come back: every unplug
+      // must be seen reconnected.
+      if (!finishing_ && !lasting_ && !reconnect_since_ns_) {
         finishing_ = true;
         daemon_->loop().exit_when_idle();
       }
@@ -294,6 +301,8 @@ class SoakDriver {
     if (!reaction_deadline_ns_) return;
     const bool same_session = sessions.size() == reaction_session_;
     if (!running || !same_session) {
+      // Cycles from the fault to the first step that sees the session over.
+      reaction_cycles[reaction_what_].push_back((now - reaction_start_ns_) / period_ns_);
       reaction_deadline_ns_.reset();
     } else if (now > *reaction_deadline_ns_) {
       violation(reaction_what_ + " did not end the session in time");
@@ -392,10 +401,22 @@ class SoakDriver {
                            "unplugging the " + std::string(board_name(board)));
         awaiting_start_ = false;  // a start waiting for rest is refused while a board is away
         break;
-      case FaultKind::stuck_encoder:
+      case FaultKind::stuck_encoder: {
         rig_.stick_encoder(board, true);
         lasting_ = Lasting{kind, board, now + uniform(200, 3000) * kMs, 0};
+        if (running) mark_stuck(*lasting_);
+        // A frozen arm count while the motor is driven well above the rule's minimum duty: the
+        // rule's cycles, plus up to 4 cycles of late reports (which do not count) and a bang-bang
+        // reversal (its pass through zero duty restarts the count). 24 virtual hours: at most 10.
+        const auto& commands = rig_.motor_commands();
+        const SafetyLimits limits;
+        if (board == RigBoard::motor_1065 && !commands.empty() &&
+            std::fabs(commands.back().duty) >= limits.stuck_arm_min_duty + 0.05) {
+          expect_session_end(running, now + (limits.stuck_arm_cycles + 8) * period_ns_,
+                             "the stuck arm encoder");
+        }
         break;
+      }
       case FaultKind::supply_drop:
         // A supply sagging under the 1065's lockout: it says so in its report.
         rig_.set_supply_voltage(5.5);
@@ -413,8 +434,15 @@ class SoakDriver {
     ++injected[static_cast<std::size_t>(kind)];
   }
 
+  void mark_stuck(const Lasting& fault) {
+    if (sessions.empty()) return;
+    (fault.board == RigBoard::motor_1065 ? sessions.back().arm_encoder_stuck
+                                         : sessions.back().pendulum_encoder_stuck) = true;
+  }
+
   void expect_session_end(bool running, std::int64_t by_ns, std::string what) {
     if (!running) return;
+    reaction_start_ns_ = clock_.now_ns();
     reaction_deadline_ns_ = by_ns;
     reaction_session_ = sessions.size();
     reaction_what_ = std::move(what);
@@ -477,6 +505,7 @@ class SoakDriver {
   std::optional<Lasting> lasting_;
   std::int64_t motor_drop_busy_until_ns_ = 0;
   std::optional<std::int64_t> reaction_deadline_ns_;
+  std::int64_t reaction_start_ns_ = 0;
   std::size_t reaction_session_ = 0;
   std::string reaction_what_;
   std::optional<std::int64_t> reconnect_since_ns_;
@@ -508,6 +537,8 @@ struct SoakReport {
   std::int64_t reconnects = 0;
   std::int64_t disconnects = 0;
   std::int64_t max_reconnect_ms = 0;
+  // Faults that had to end a running session: how many did, and the most cycles it took.
+  std::map<std::string, std::pair<std::int64_t, std::int64_t>> reactions;
   std::map<std::string, std::int64_t> end_reasons;
   std::vector<std::string> violations;
   double virtual_hours = 0;
@@ -597,6 +628,13 @@ SoakReport run_soak(const SoakSettings& soak) {
   } else {
     for (std::size_t i = 0; i < logs.size(); ++i) {
       const ObservedSession& s = driver.sessions[i];
+      // No false alarms: a stuck-encoder end only for a session whose encoder was frozen.
+      const std::string reason = logs[i].end_reason.substr(0, logs[i].end_reason.find(':'));
+      if ((reason == "arm_encoder_stuck" && !s.arm_encoder_stuck) ||
+          (reason == "pendulum_encoder_stuck" && !s.pendulum_encoder_stuck)) {
+        report.violations.push_back(logs[i].name + ": ended " + reason +
+                                    " with that encoder working");
+      }
       if (s.motor_drops > 0 && logs[i].end_ns >= s.motor_drops_revealed_by_ns &&
           logs[i].motor_lost < s.motor_drops) {
         report.violations.push_back(logs[i].name + ": " + std::to_string(s.motor_drops) +
@@ -663,6 +701,10 @@ SoakReport run_soak(const SoakSettings& soak) {
   for (const std::int64_t ns : driver.reconnect_latency_ns) {
     report.max_reconnect_ms = std::max(report.max_reconnect_ms, ns / kMs);
   }
+  for (const auto& [what, cycles] : driver.reaction_cycles) {
+    report.reactions[what] = {static_cast<std::int64_t>(cycles.size()),
+                              *std::max_element(cycles.begin(), cycles.end())};
+  }
   report.virtual_hours = static_cast<double>(soak.virtual_ns) / 3600e9;
   report.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -687,6 +729,10 @@ void print_report(const SoakReport& r, const SoakSettings& soak) {
       "board returned\n",
       static_cast<long long>(r.disconnects), static_cast<long long>(r.reconnects),
       static_cast<long long>(r.max_reconnect_ms));
+  for (const auto& [what, reaction] : r.reactions) {
+    std::printf("[ measured ] sessions ended by %s: %lld, in at most %lld cycles\n", what.c_str(),
+                static_cast<long long>(reaction.first), static_cast<long long>(reaction.second));
+  }
   std::printf("[ measured ] violations: %zu\n", r.violations.size());
   for (std::size_t i = 0; i < r.violations.size() && i < 20; ++i) {
     std::printf("  violation: %s\n", r.violations[i].c_str());

@@ -238,6 +238,58 @@ TEST(SafetyPaths, StaleEncoderReportsStopTheMotor) {
             [&rig] { rig.sim().stall(RigBoard::encoder_1047, 2'000'000'000); });
 }
 
+TEST(SafetyPaths, AStuckArmEncoderStopsTheMotorWithinItsCycles) {
+  // The arm limit reads the arm's count: frozen, the arm could swing to its stop unseen (at duty
+  // 0.5 it covers 150 deg in 0.2 s on this rig).
+  Rig rig;
+  const int n = rig.settings.loop.safety.stuck_arm_cycles;
+  run_fault(rig, StopReason::arm_encoder_stuck, n + 1,
+            [&rig] { rig.sim().stick_encoder(RigBoard::motor_1065, true); });
+  const auto log = session_log::load_session_log(*rig.daemon->recorder().last_log());
+  ASSERT_GE(log.samples.size(), static_cast<std::size_t>(n + 1));
+  // The last n samples carry one count: the rule fired on the n-th, not before.
+  const std::int32_t frozen = log.samples.back().arm_counts;
+  for (std::size_t i = log.samples.size() - n; i < log.samples.size(); ++i) {
+    EXPECT_EQ(log.samples[i].arm_counts, frozen) << i;
+  }
+}
+
+TEST(SafetyPaths, AStuckPendulumEncoderEndsTheSessionOnceTheArmSwingsWithoutIt) {
+  Rig rig;
+  const double travel = rig.settings.loop.safety.stuck_pendulum_arm_travel_rad;
+  // At amplitude 0.3 the arm covers a turn in well under 2 s (125 cycles).
+  run_fault(rig, StopReason::pendulum_encoder_stuck, 125,
+            [&rig] { rig.sim().stick_encoder(RigBoard::encoder_1047, true); });
+  const auto log = session_log::load_session_log(*rig.daemon->recorder().last_log());
+  // From the last pendulum count change to the end, the arm travelled at least the limit.
+  std::size_t i = log.samples.size() - 1;
+  while (i > 0 && log.samples[i - 1].pendulum_counts == log.samples.back().pendulum_counts) --i;
+  double swept = 0.0;
+  for (std::size_t k = i + 1; k < log.samples.size(); ++k) {
+    swept += std::abs(log.samples[k].arm_angle_rad - log.samples[k - 1].arm_angle_rad);
+  }
+  EXPECT_GE(swept, travel - 1e-9);
+  EXPECT_LT(swept, travel + 0.5);  // and it fired as soon as it had
+}
+
+TEST(SafetyPaths, NoProfileAtAnyAmplitudeTripsTheStuckEncoderRules) {
+  // Healthy encoders, every profile from a tenth to the full command limit: whatever ends these
+  // sessions (the arm limit, for the fast ones), it is never a stuck encoder.
+  for (const char* profile : {"bang_bang", "free_decay", "step", "prbs", "chirp", "multisine"}) {
+    for (const double amplitude : {0.05, 0.1, 0.2, 0.3, 0.5}) {
+      SCOPED_TRACE(std::string(profile) + " " + std::to_string(amplitude));
+      Rig rig;
+      rig.create(testing::start_command(profile, amplitude, 20.0));
+      rig.run();
+      const StopReason stop = rig.last_stop();
+      EXPECT_NE(stop, StopReason::arm_encoder_stuck);
+      EXPECT_NE(stop, StopReason::pendulum_encoder_stuck);
+      EXPECT_TRUE(stop == StopReason::duration_reached || stop == StopReason::arm_angle_limit)
+          << to_string(stop);
+    }
+  }
+}
+
 TEST(SafetyPaths, UnpluggedMotorBoardIsAUsbErrorAndTheZeroIsStillTried) {
   Rig rig;
   // The zero write fails (the board is gone) and is logged as a failed write. The wire check is

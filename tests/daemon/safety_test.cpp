@@ -151,6 +151,22 @@ TEST(Safety, AMissingLimitFailsSafe) {
   EXPECT_EQ(check_safety(limits, input), StopReason::supply_out_of_range);
 }
 
+TEST(Safety, StuckEncodersAtTheirThresholds) {
+  const SafetyLimits limits;
+  SafetyInput input = healthy();
+  input.arm_still_driven_cycles = limits.stuck_arm_cycles - 1;
+  EXPECT_EQ(check_safety(limits, input), StopReason::none);
+  input.arm_still_driven_cycles = limits.stuck_arm_cycles;
+  EXPECT_EQ(check_safety(limits, input), StopReason::arm_encoder_stuck);
+  input = healthy();
+  input.arm_travel_pendulum_still_rad = std::nextafter(limits.stuck_pendulum_arm_travel_rad, 0.0);
+  EXPECT_EQ(check_safety(limits, input), StopReason::none);
+  input.arm_travel_pendulum_still_rad = limits.stuck_pendulum_arm_travel_rad;
+  EXPECT_EQ(check_safety(limits, input), StopReason::pendulum_encoder_stuck);
+  input.arm_travel_pendulum_still_rad = kNan;  // an unknown travel is not taken as safe
+  EXPECT_EQ(check_safety(limits, input), StopReason::pendulum_encoder_stuck);
+}
+
 TEST(Safety, WhenSeveralRulesAreBrokenTheFirstInOrderIsReported) {
   // In the documented order; breaking rules i.. must report rule i.
   const std::vector<std::pair<StopReason, std::function<void(SafetyInput&)>>> rules = {
@@ -162,6 +178,9 @@ TEST(Safety, WhenSeveralRulesAreBrokenTheFirstInOrderIsReported) {
        [](SafetyInput& s) { s.cycles_without_encoder_report = 9; }},
       {StopReason::arm_angle_limit, [](SafetyInput& s) { s.arm_angle_rad = kNan; }},
       {StopReason::duty_limit, [](SafetyInput& s) { s.commanded_duty = 0.9; }},
+      {StopReason::arm_encoder_stuck, [](SafetyInput& s) { s.arm_still_driven_cycles = 9; }},
+      {StopReason::pendulum_encoder_stuck,
+       [](SafetyInput& s) { s.arm_travel_pendulum_still_rad = 7.0; }},
   };
   for (std::size_t first = 0; first < rules.size(); ++first) {
     SafetyInput input = healthy();

@@ -59,6 +59,9 @@ struct SafetyConfig {
   double min_supply_v = 7.0;
   double max_supply_v = 34.0;
   double stop_braking_fraction = 1.0;
+  int stuck_arm_cycles = 4;
+  double stuck_arm_min_duty = 0.1;
+  double stuck_pendulum_arm_travel_rad = 360.0 * 3.14159265358979323846 / 180.0;
 };
 
 // [limits]: what a command may ask for.

@@ -118,6 +118,8 @@ class ControlLoop {
   void emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
                   std::int64_t now_ns) noexcept;
   bool queue_has_room(std::size_t events) noexcept;
+  // Follows the counts of fresh reports for the stuck-encoder rules (SafetyLimits::stuck_*).
+  void watch_encoders(const RigSample& sample) noexcept;
   // A board's link failed: it is down until reconnected. Records the first failure's status.
   void mark_down(BoardLink& board, bridge::TransportStatus status) noexcept;
   // Reports each board newly down (a "disconnected" fault event, in the running session's log).
@@ -180,6 +182,11 @@ class ControlLoop {
   bool encoder_down_reported_ = false;
   std::int64_t down_since_ns_ = 0;
   std::int64_t next_reconnect_ns_ = 0;
+  // Stuck-encoder watch, per session: the counts last seen in a fresh report of each board.
+  std::int64_t watched_arm_counts_ = 0;
+  std::int64_t watched_pendulum_counts_ = 0;
+  int arm_still_driven_cycles_ = 0;
+  double arm_travel_pendulum_still_rad_ = 0.0;
   // Rest detection: the pendulum count and when it last moved beyond the tolerance.
   std::int64_t rest_anchor_counts_ = 0;
   std::int64_t rest_anchor_ns_ = 0;

@@ -26,8 +26,10 @@ enum class StopReason : std::uint8_t {
   under_voltage,
   over_temperature,
   supply_out_of_range,
-  log_error,  // the session log could not be written (disk full, I/O error)
-  exception,  // anything thrown inside the loop
+  arm_encoder_stuck,       // the arm's count stands still while the motor is driven
+  pendulum_encoder_stuck,  // the pendulum's count stands still while the arm swings
+  log_error,               // the session log could not be written (disk full, I/O error)
+  exception,               // anything thrown inside the loop
 };
 std::string_view to_string(StopReason reason);  // snake_case, stable: logs and tests match on it
 bool is_fault(StopReason reason);               // everything but duration/stop/none
@@ -38,6 +40,11 @@ struct SafetyLimits {
   int stale_report_cycles = 4;  // cycles without a fresh report from a board
   double min_supply_v = 7.0;    // the vendor library's "too low"
   double max_supply_v = 34.0;   // its "warning" threshold
+  // A frozen encoder: the arm limit and the bang-bang thresholds read the arm's count, so a count
+  // that stops while the motor drives must stop the session before the arm reaches its stop.
+  int stuck_arm_cycles = 4;         // fresh 1065 reports in a row with the same count...
+  double stuck_arm_min_duty = 0.1;  // ...while |applied duty| is at least this
+  double stuck_pendulum_arm_travel_rad = 6.283185307179586;  // arm travel with no pendulum count
 };
 
 // What the supervisor looks at, once per cycle.
@@ -49,9 +56,12 @@ struct SafetyInput {
   std::uint8_t motor_status_flags = 0;  // 1065 byte 1
   double supply_voltage_v = 12.0;
   bool have_supply_reading = false;  // before the first report the supply is unknown
+  int arm_still_driven_cycles = 0;   // see SafetyLimits::stuck_arm_cycles
+  double arm_travel_pendulum_still_rad = 0.0;
 };
 
-// The first rule broken, in a fixed order (board flags, supply, staleness, angle, duty), or none.
+// The first rule broken, in a fixed order (board flags, supply, staleness, angle, duty, stuck
+// encoders), or none.
 StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) noexcept;
 
 struct CommandLimits {
