@@ -345,6 +345,9 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
         [](std::int64_t v) { return v >= 10 && v <= 60'000; }, "in [10, 60000]");
     dc.rest_check_s = d.number(
         "rest_check_s", dc.rest_check_s, [](double v) { return v >= 0 && v <= 60; }, "in [0, 60]");
+    dc.reconnect_interval_ms = d.integer(
+        "reconnect_interval_ms", dc.reconnect_interval_ms,
+        [](std::int64_t v) { return v >= 10 && v <= 10'000; }, "in [10, 10000]");
     dc.queue_capacity = d.integer(
         "queue_capacity", dc.queue_capacity,
         [](std::int64_t v) { return v >= 64 && v <= 1'000'000; }, "in [64, 1000000]");

@@ -123,6 +123,7 @@ DaemonSettings daemon_settings_from_config(const config::RigConfig& config) {
   loop.pendulum_encoder = config.pendulum_encoder;
   loop.pendulum_channel = config.pendulum_channel;
   loop.rest_check_s = config.daemon.rest_check_s;
+  loop.reconnect_interval_ns = config.daemon.reconnect_interval_ms * 1'000'000;
   loop.acceleration_pct_per_s = config.excitation.board_acceleration_pct_per_s;
 
   d.recorder.logs_dir = config.daemon.logs_dir;

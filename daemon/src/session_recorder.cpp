@@ -216,7 +216,10 @@ void SessionRecorder::record_fault(const FaultEvent& f) {
   // The loop stops a session for a log failure without knowing what failed; this thread does, and
   // the fault must say it (disk full, the directory, ...) rather than a bare log_error.
   if (f.reason == StopReason::log_error && m.detail.empty()) m.detail = log_failure_;
-  if (f.fatal) last_fault_ = m.reason + (m.detail.empty() ? "" : ": " + m.detail);
+  // A board lost while idle ends no session, so no fatal fault says it; the status must.
+  if (f.fatal || m.reason == "disconnected") {
+    last_fault_ = m.reason + (m.detail.empty() ? "" : ": " + m.detail);
+  }
   publish_and_log(session_log::kChannelFault, m, f.monotonic_ns);
 }
 

@@ -5,8 +5,10 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "commands.hpp"
+#include "furuta/session_log/lcm_log.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "temp_dir.hpp"
 
@@ -93,7 +95,15 @@ TEST(RunCommand, InfoOnALogCutShortSaysSoAndFails) {
   const fs::path log = run_simulated_session(dir.path(), 2.0);
   const fs::path cut = dir.path() / "cut.lcmlog";
   fs::copy_file(log, cut);
-  fs::resize_file(cut, fs::file_size(cut) * 2 / 3);  // as if power failed mid-session
+  // As if power failed mid-session: inside an event two thirds in (a cut at a plain byte count
+  // could fall between two events, and there would be no torn tail to report).
+  std::vector<std::uint64_t> offsets;
+  {
+    session_log::LcmLogReader reader(log);
+    for (session_log::LogEvent e; reader.next(e);) offsets.push_back(e.file_offset);
+  }
+  ASSERT_GT(offsets.size(), 3u);
+  fs::resize_file(cut, offsets[offsets.size() * 2 / 3] + 10);
   std::ostringstream out, err;
   EXPECT_EQ(run_log_info_command(cut, out, err), 1);
   EXPECT_NE(out.str().find("missing: the session was cut short"), std::string::npos) << out.str();

@@ -272,6 +272,7 @@ TEST(RigConfig, TheShippedFileStatesTheDefaults) {
             shipped.excitation.board_acceleration_pct_per_s);
   EXPECT_EQ(empty.daemon.period_ns, shipped.daemon.period_ns);
   EXPECT_EQ(empty.daemon.rest_check_s, shipped.daemon.rest_check_s);
+  EXPECT_EQ(empty.daemon.reconnect_interval_ms, shipped.daemon.reconnect_interval_ms);
 }
 
 TEST(RigConfig, ALimitMisspelledOrInTheWrongSectionIsAnError) {

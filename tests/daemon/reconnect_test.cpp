@@ -32,9 +32,10 @@ struct ReconnectRun {
 
 // Unplugs `board` 50 cycles into a session, plugs it back 500 ms later, then asks for a second,
 // 2 s session. The hooks sit on the other board's link, which keeps being drained.
-ReconnectRun unplug_and_return(RigBoard board) {
+ReconnectRun unplug_and_return(RigBoard board, std::int64_t reconnect_interval_ms = 200) {
   testing::TempDir dir("furuta-reconnect");
-  const config::RigConfig config = testing::quiet_rig();
+  config::RigConfig config = testing::quiet_rig();
+  config.daemon.reconnect_interval_ms = reconnect_interval_ms;  // [daemon] in rig.toml
   RigConnection io = connect_rig(config, {BackendChoice::simulated, {}, /*virtual_time=*/true});
   HookedLink motor(*io.motor_link);
   HookedLink encoder(*io.encoder_link);
@@ -66,7 +67,7 @@ ReconnectRun unplug_and_return(RigBoard board) {
     io.simulated_rig->reconnect(board);
     returned_ns = io.clock->now_ns();
   });
-  for (int c = back_cycle + 1; c < back_cycle + 100; ++c) {
+  for (int c = back_cycle + 1; c < back_cycle + 100; ++c) {  // 1.6 s
     hooks.at_cycle(c, [&] {
       if (run.reconnect_after_return_ns < 0 && daemon.loop().counters().reconnects.load() > 0) {
         run.reconnect_after_return_ns = io.clock->now_ns() - returned_ns;
@@ -127,6 +128,41 @@ TEST(Reconnect, UnpluggedEncoderBoardIsReopenedItsChannelEnabledAndTheNextSessio
   EXPECT_EQ(run.reconnects, 1);
   ASSERT_GE(run.reconnect_after_return_ns, 0);
   EXPECT_LE(run.reconnect_after_return_ns, 1000 * kMs);
+}
+
+TEST(Reconnect, TheConfiguredIntervalSpacesTheAttempts) {
+  // Unplugged at cycle 50, back about 500 ms later. Every 200 ms (the default): attempts at 200,
+  // 400, 600 ms, so open again about 100 ms after the return. Every 900 ms: the first attempt is
+  // at 900 ms, about 400 ms after the return.
+  const ReconnectRun often = unplug_and_return(RigBoard::motor_1065, 200);
+  const ReconnectRun seldom = unplug_and_return(RigBoard::motor_1065, 900);
+  ASSERT_GE(often.reconnect_after_return_ns, 0);
+  ASSERT_GE(seldom.reconnect_after_return_ns, 0);
+  EXPECT_LE(often.reconnect_after_return_ns, 200 * kMs + 16 * kMs);
+  EXPECT_GE(seldom.reconnect_after_return_ns, 300 * kMs);
+  EXPECT_LE(seldom.reconnect_after_return_ns, 500 * kMs + 16 * kMs);
+}
+
+TEST(Reconnect, ABoardLostWhileIdleIsTheLastFaultTheStatusGives) {
+  // No session runs, so no session end says it: RIG_STATUS's last_fault must.
+  testing::TempDir dir("furuta-reconnect");
+  const config::RigConfig config = testing::quiet_rig();
+  RigConnection io = connect_rig(config, {BackendChoice::simulated, {}, /*virtual_time=*/true});
+  HookedLink motor(*io.motor_link);
+  DaemonSettings settings = daemon_settings_from_config(config);
+  settings.recorder.logs_dir = dir.path() / "logs";
+  settings.loop.wait_when_queue_full = true;
+  lcm::LCM lcm("memq://");
+  Daemon daemon(settings, motor, *io.encoder_link, *io.clock, lcm);
+  motor.watch(daemon.loop().counters());
+  motor.at_cycle(30, [&] { io.simulated_rig->disconnect(RigBoard::encoder_1047); });
+  motor.at_cycle(60, [&] { io.simulated_rig->reconnect(RigBoard::encoder_1047); });
+  motor.at_cycle(120, [&] { daemon.loop().exit_when_idle(); });
+  daemon.start();
+  daemon.wait();
+  EXPECT_EQ(daemon.loop().counters().reconnects.load(), 1);
+  const std::string& fault = daemon.recorder().last_fault();
+  EXPECT_EQ(fault.rfind("disconnected: 1047", 0), 0u) << fault;
 }
 
 // The hardware link, on the simulated rig in real time: its reader thread notices the unplug,

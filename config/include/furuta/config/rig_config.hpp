@@ -43,6 +43,7 @@ struct DaemonConfig {
   std::string logs_dir = "/var/lib/furuta/logs";
   std::int64_t flush_interval_ms = 1000;
   double rest_check_s = 1.0;
+  std::int64_t reconnect_interval_ms = 200;  // a lost board is asked for back this often
   std::int64_t queue_capacity = 4096;
   bool realtime = false;
   int fifo_priority = 80;
