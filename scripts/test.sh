@@ -2,7 +2,7 @@
 # Installs what is needed, builds with warnings as errors, and runs the whole test suite; then the
 # same suite under AddressSanitizer + UndefinedBehaviorSanitizer (preset asan) and the threaded
 # tests under ThreadSanitizer (preset tsan), docs/reliability.d/sanitizers.md. The two sanitizer
-# builds take most of the time (about 45 of 60 minutes on 2 cores); FURUTA_SANITIZERS=0 leaves them
+# builds take most of the time (28 of 41 minutes on 2 cores); FURUTA_SANITIZERS=0 leaves them
 # out for a quick local run. CI (.ci/run) runs this script as it is.
 set -euo pipefail
 cd "$(dirname "$0")/.."
