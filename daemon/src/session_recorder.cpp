@@ -109,20 +109,13 @@ void SessionRecorder::log_bytes(const char* channel, const std::vector<std::uint
 
 void SessionRecorder::on_log_status(session_log::LogWriteStatus status) {
   if (status == session_log::LogWriteStatus::ok) return;
-  const std::string why = describe_log_failure(status, *log_);
   // A log written again after its directory was removed goes on: the session is still stopped
   // (someone removed the logs), but what comes until it has stopped is kept.
-  if (log_->is_open()) {
-    log_failure_ = why;
-    last_fault_ = why;
-    if (on_log_failure_) on_log_failure_(last_fault_);
-    return;
-  }
-  fail_log(why);
+  fail_log(describe_log_failure(status, *log_), /*still_logging=*/log_->is_open());
 }
 
-void SessionRecorder::fail_log(const std::string& why) {
-  log_failed_ = true;
+void SessionRecorder::fail_log(const std::string& why, bool still_logging) {
+  log_failed_ = !still_logging;
   log_failure_ = why;
   last_fault_ = why;
   if (on_log_failure_) on_log_failure_(last_fault_);

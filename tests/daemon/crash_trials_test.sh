@@ -17,21 +17,12 @@ RIG_TOML=$3
 TRIALS=${4:-200}
 SEED=${5:-$(date +%s)}
 SCENARIOS=${6:-"kill fsize small-fs dir-removed dir-readonly"}
-SKIP=77
 # Short enough that a trial loses little, long enough that syncing is not every cycle.
 FLUSH_MS=${FURUTA_CRASH_FLUSH_MS:-50}
 
 if [ -z "${FURUTA_CRASH_TEST_IN_NS:-}" ]; then
-  for tool in unshare ip mount lcm-logplayer; do
-    if ! command -v "$tool" >/dev/null 2>&1; then
-      echo "SKIP: needs $tool"
-      exit $SKIP
-    fi
-  done
-  if ! unshare -rnm true >/dev/null 2>&1; then
-    echo "SKIP: unshare -rnm is not permitted here (no user/network/mount namespace)"
-    exit $SKIP
-  fi
+  . "$(dirname "$0")/namespace_or_skip.sh"
+  namespace_or_skip -rnm unshare ip mount lcm-logplayer
   FURUTA_CRASH_TEST_IN_NS=1 exec unshare -rnm bash "$0" "$FURUTAD" "$DRIVER" "$RIG_TOML" \
     "$TRIALS" "$SEED" "$SCENARIOS"
 fi

@@ -14,19 +14,10 @@ set -u
 FURUTAD=$1
 FURUTA=$2
 RIG_TOML=$3
-SKIP=77
 
 if [ -z "${FURUTA_UDP_TEST_IN_NETNS:-}" ]; then
-  for tool in unshare ip lcm-logplayer; do
-    if ! command -v "$tool" >/dev/null 2>&1; then
-      echo "SKIP: needs $tool"
-      exit $SKIP
-    fi
-  done
-  if ! unshare -rn true >/dev/null 2>&1; then
-    echo "SKIP: unshare -rn is not permitted here (no user/network namespace for an isolated multicast test)"
-    exit $SKIP
-  fi
+  . "$(dirname "$0")/namespace_or_skip.sh"
+  namespace_or_skip -rn unshare ip lcm-logplayer
   FURUTA_UDP_TEST_IN_NETNS=1 exec unshare -rn bash "$0" "$@"
 fi
 

@@ -69,7 +69,8 @@ class SessionRecorder {
                  std::int64_t monotonic_ns);
   // A write or sync that did not succeed: stops the session (log_error) with what happened.
   void on_log_status(session_log::LogWriteStatus status);
-  void fail_log(const std::string& why);  // once per session: the daemon stops it (log_error)
+  // The daemon stops the session (log_error); unless still_logging, nothing more is written.
+  void fail_log(const std::string& why, bool still_logging = false);
 
   RecorderSettings settings_;
   lcm::LCM* lcm_;
