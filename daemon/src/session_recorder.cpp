@@ -209,8 +209,9 @@ void SessionRecorder::record_fault(const FaultEvent& f) {
   // The loop stops a session for a log failure without knowing what failed; this thread does, and
   // the fault must say it (disk full, the directory, ...) rather than a bare log_error.
   if (f.reason == StopReason::log_error && m.detail.empty()) m.detail = log_failure_;
-  // A board lost while idle ends no session, so no fatal fault says it; the status must.
-  if (f.fatal || m.reason == "disconnected") {
+  // A board lost while idle ends no session, and a start the loop refuses (the pendulum still
+  // swings) was already answered "accepted": no fatal fault says either, so the status must.
+  if (f.fatal || m.reason == "disconnected" || m.reason == "start_refused") {
     last_fault_ = m.reason + (m.detail.empty() ? "" : ": " + m.detail);
   }
   publish_and_log(session_log::kChannelFault, m, f.monotonic_ns);

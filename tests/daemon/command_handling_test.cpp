@@ -441,6 +441,29 @@ TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
   EXPECT_EQ(stopped.cycles, 81);
 }
 
+// The command thread accepts a start it cannot judge; the loop then refuses it when the pendulum
+// has not hung still for the rest check. The status must say so, or the user sees "accepted" and
+// a rig that never starts.
+TEST(CommandHandling, AStartTheLoopRefusesSaysWhyInTheStatus) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_limits.max_commands_per_s = 1000;
+  rig.start(dir.path());
+  rig.step_cycles(20);  // a third of the one-second rest check
+  ASSERT_TRUE(rig.ask(testing::start_command("bang_bang", 0.3, 30.0, "early")).request_accepted);
+  rig.step_cycles(2);
+  // The logger thread sets the fault; ask until it has (a hang guard, not a timing check).
+  rig_status_t after;
+  for (int i = 0; i < 2000 && after.last_fault.empty(); ++i) {
+    after = rig.ask(status_request());
+    if (after.last_fault.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_EQ(after.state, +rig_status_t::STATE_IDLE);
+  EXPECT_TRUE(after.session.empty()) << after.session;
+  EXPECT_EQ(after.last_fault.rfind("start_refused: the pendulum is not at rest", 0), 0u)
+      << after.last_fault;
+}
+
 }  // namespace
 }  // namespace furuta::daemon
 
