@@ -88,15 +88,18 @@ Box initial_state(const Scenario& s) {
              Interval(-1e-3, 1e-3)};
 }
 
-// The spread of q2 at 1, 2, 3, 4 s over `count` sampled initial states (corners included) and,
-// when `params` is not null, parameters drawn in their intervals (one draw per 50 points).
+// The spread of q2 at `times` (increasing, from 0) over `count` sampled initial states (corners
+// included) and, when `params` is not null, parameters drawn in their intervals (one draw per 50
+// points).
 std::vector<double> sampled_q2_spread(const Scenario& s, const Box& x0,
-                                      const v::FurutaParameters* params, std::size_t count) {
+                                      const v::FurutaParameters* params, std::size_t count,
+                                      const std::vector<double>& times = {1.0, 2.0, 3.0, 4.0}) {
   const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
   std::mt19937_64 rng(2024);
   const std::vector<ref::Point<4>> points = ref::sample_box<4>(x0, count, rng);
-  std::vector<long double> lo(4, 1e9L);
-  std::vector<long double> hi(4, -1e9L);
+  const std::size_t m = times.size();
+  std::vector<long double> lo(m, 1e9L);
+  std::vector<long double> hi(m, -1e9L);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   auto draw = [&](const Interval& x) { return x.lo() + u(rng) * (x.hi() - x.lo()); };
   v::FurutaParameters p = v::FurutaParameters::point(truth);
@@ -108,14 +111,16 @@ std::vector<double> sampled_q2_spread(const Scenario& s, const Box& x0,
     }
     const v::FurutaStateDynamics system(p, Interval(s.tau_nm));
     ref::Point<4> x = points[i];
-    for (int second = 1; second <= 4; ++second) {
-      x = ref::simulate(system, x, second - 1.0, second, 1e-3);
-      lo[static_cast<std::size_t>(second - 1)] = std::min(lo[second - 1], x[2]);
-      hi[static_cast<std::size_t>(second - 1)] = std::max(hi[second - 1], x[2]);
+    double t = 0.0;
+    for (std::size_t k = 0; k < m; ++k) {
+      x = ref::simulate(system, x, t, times[k], 1e-3);
+      t = times[k];
+      lo[k] = std::min(lo[k], x[2]);
+      hi[k] = std::max(hi[k], x[2]);
     }
   }
-  std::vector<double> spread(4);
-  for (std::size_t k = 0; k < 4; ++k) spread[k] = static_cast<double>(hi[k] - lo[k]);
+  std::vector<double> spread(m);
+  for (std::size_t k = 0; k < m; ++k) spread[k] = static_cast<double>(hi[k] - lo[k]);
   return spread;
 }
 
@@ -177,7 +182,8 @@ BENCHMARK(BM_FurutaPointParameters)
     ->UseRealTime();
 
 // (3) Interval parameters: fv1 +-10 %, fv2 +-50 % (a stand-in for SIVIA's box), the mu's +-2 %,
-// carried as state (the 11-dimensional system) so that their correlation with the motion is kept.
+// carried as state (the 11-dimensional system) so that their correlation with the motion is kept;
+// second argument: the planned split's depth, as in (2).
 void BM_FurutaIntervalParameters(benchmark::State& state) {
   const Scenario& s = kScenarios[state.range(0)];
   const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
@@ -191,13 +197,26 @@ void BM_FurutaIntervalParameters(benchmark::State& state) {
   const v::FurutaDynamics system(Interval(s.tau_nm));
   v::SplitResult r;
   for (auto _ : state) {
-    r = v::integrate_split(system, x0, furuta_options(), split_options());
+    r = v::integrate_split(system, x0, furuta_options(),
+                           split_options(static_cast<int>(state.range(1))));
     benchmark::DoNotOptimize(r);
   }
   report(state, r, v::FurutaDynamics::q2, sampled_q2_spread(s, state_box, &p, 1000));
+  // A run that ends early still says how tight it was: q2's width against the spread at half and
+  // at nine tenths of the time it reached.
+  if (r.t_reached < 4.0 && r.t_reached > 0.0) {
+    const std::vector<double> times{0.5 * r.t_reached, 0.9 * r.t_reached};
+    const std::vector<double> spread = sampled_q2_spread(s, state_box, &p, 1000, times);
+    const char* names[] = {"half", "late"};
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      const double width = r.enclosure_at(times[k])[v::FurutaDynamics::q2].width();
+      state.counters[std::string("q2_w_") + names[k]] = width;
+      state.counters[std::string("ratio_") + names[k]] = width / spread[k];
+    }
+  }
 }
 BENCHMARK(BM_FurutaIntervalParameters)
-    ->DenseRange(0, 3)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 2}})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

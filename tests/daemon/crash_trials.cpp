@@ -197,7 +197,7 @@ class RigListener {
     command.request_id = ++last_request_id_;
     command.kind = kind;
     command.profile = "bang_bang";
-    command.amplitude_duty = 0.3;
+    command.amplitude_duty = 0.15;  // see crash_trials_test.sh: room for the loop's stalls
     command.duration_s = duration_s;
     command.label = label;
     command.seed = 7;
@@ -254,23 +254,36 @@ class RigListener {
   std::int64_t last_request_id_ = 0;
 };
 
-// Starts a session labelled `label`: retries while the loop refuses (not ready, not at rest).
-// Returns the session as heard, or null.
+// Starts a session labelled `label`: retries while the daemon or its loop refuses (not ready, not
+// at rest, rate limit). Returns the session as heard, or null. A start the daemon accepted is never
+// sent again while it may still begin: on a starved machine it can take over a second to be heard
+// of, and a second start sent then would run, after a short first one, as a second session with
+// the same label.
 HeardSession* start_session(RigListener& lcm, const std::string& label, double duration_s,
                             milliseconds limit = milliseconds(10'000)) {
   const auto end = Clock::now() + limit;
+  const auto left = [&] {
+    return std::max(milliseconds(0), std::chrono::duration_cast<milliseconds>(end - Clock::now()));
+  };
+  const auto started = [&] {
+    const HeardSession* s = lcm.session_labelled(label);
+    return s != nullptr && s->started;
+  };
   while (Clock::now() < end) {
     const std::int64_t refusals = lcm.start_refusals();
     const std::int64_t id = lcm.send(furuta::rig_command_t::KIND_START_SESSION, label, duration_s);
-    const bool answered = lcm.pump_until(milliseconds(1000), [&] {
-      const HeardSession* s = lcm.session_labelled(label);
-      return (s && s->started) || lcm.start_refusals() > refusals ||
-             (lcm.reply(id) && !lcm.reply(id)->request_accepted);
-    });
-    if (HeardSession* s = lcm.session_labelled(label); s && s->started) return s;
-    // Refused (or no answer yet): the rate limit allows 5 commands a second.
-    (void)answered;
-    lcm.pump(milliseconds(220));
+    lcm.pump_until(std::min(left(), milliseconds(5000)),
+                   [&] { return started() || lcm.reply(id).has_value(); });
+    if (!started()) {
+      const auto reply = lcm.reply(id);
+      if (!reply) continue;  // no answer (yet): ask again
+      if (reply->request_accepted) {
+        // Accepted: the loop starts it or refuses it (a fault); wait for either.
+        lcm.pump_until(left(), [&] { return started() || lcm.start_refusals() > refusals; });
+      }
+    }
+    if (started()) return lcm.session_labelled(label);
+    lcm.pump(milliseconds(220));  // the rate limit allows 5 commands a second
   }
   return nullptr;
 }

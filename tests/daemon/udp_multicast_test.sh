@@ -48,13 +48,16 @@ PLAY_URL="udpm://$GROUP:$((PORT + 1))?ttl=0"
 CONFIG="$TMP/rig.toml"
 LOGS="$TMP/logs"
 # rest_check_s 0: a session a safety rule ended leaves the pendulum swinging for minutes, and the
-# next one (below) must not wait for it.
+# next one (below) must not wait for it. The bang-bang flips at 20 deg, at duty 0.15: room for
+# loop stalls of about half a second before the arm reaches its 150 deg limit (as the crash trials).
 sed -e "s|^lcm_url = .*|lcm_url = \"$URL\"|" \
     -e "s|^logs_dir = .*|logs_dir = \"$LOGS\"|" \
-    -e "s|^rest_check_s = .*|rest_check_s = 0.0|" "$RIG_TOML" > "$CONFIG"
+    -e "s|^rest_check_s = .*|rest_check_s = 0.0|" \
+    -e "s|^arm_switch_deg = [0-9.]*|arm_switch_deg = 20|" "$RIG_TOML" > "$CONFIG"
 grep -q "^lcm_url = \"$URL\"" "$CONFIG" || fail "could not set lcm_url in the [daemon] table"
 grep -q "^logs_dir = \"$LOGS\"" "$CONFIG" || fail "could not set logs_dir in the [daemon] table"
 grep -q "^rest_check_s = 0.0$" "$CONFIG" || fail "could not set rest_check_s in the [daemon] table"
+grep -q "^arm_switch_deg = 20 " "$CONFIG" || fail "could not set arm_switch_deg in [excitation]"
 
 cli() { "$FURUTA" "$@" --config "$CONFIG" --timeout 5; }
 status_line() { cli status 2>/dev/null; }
@@ -129,14 +132,15 @@ echo "after stop: $line"
 
 # Session 2: a bang-bang, under way for about a second, then SIGTERM to furutad. The simulated
 # rig moves in wall time like the real one, so on a starved machine (the sanitizer builds in CI) a
-# loop stall can carry the arm past its limit before the signal: the safety rule then ends the
-# session, which is right, but leaves nothing for the signal to stop. Such a session's log must
+# loop stall longer than the room the configuration leaves (above) can carry the arm past its
+# limit before the signal: the safety rule then ends the session, which is right, but leaves
+# nothing for the signal to stop. Such a session's log must
 # still be complete and end on the zero command; then another one is started (three at most).
 before=$(echo "$line" | cycles_of)
 signal_label=""
 for attempt in 1 2 3; do
   label="udp_signal_$attempt"
-  cli start --profile bang_bang --amplitude 0.3 --duration 60 --label "$label" \
+  cli start --profile bang_bang --amplitude 0.15 --duration 60 --label "$label" \
     || fail "furuta start ($label) refused"
   if wait_for_status "state running" $((before + 100)) "$label" > /dev/null 2> "$TMP/wait.txt"; then
     signal_label=$label
