@@ -185,6 +185,19 @@ rig_command_t status_request() {
   return testing::simple_command(rig_command_t::KIND_STATUS_REQUEST);
 }
 
+// Asks for the status until `ready` holds: the logger thread fills some of its fields (the session
+// name, the last fault) a moment after the loop's event. A hang guard, not a timing check.
+template <class Ready>
+rig_status_t ask_until(CommandRig& rig, Ready ready) {
+  rig_status_t status;
+  for (int i = 0; i < 2000; ++i) {
+    status = rig.ask(status_request());
+    if (ready(status)) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return status;
+}
+
 TEST(CommandHandling, RejectedCommandsAreAnsweredWithTheFieldAtFault) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;
@@ -415,12 +428,8 @@ TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
   rig.step_cycles(50);  // 70 cycles: past the one-second rest check
   ASSERT_TRUE(rig.ask(testing::start_command("bang_bang", 0.3, 30.0, "status")).request_accepted);
   rig.step_cycles(5);
-  // The logger thread names the session in the status once it has opened its log; ask until then.
-  rig_status_t running;
-  for (int i = 0; i < 2000 && running.session.empty(); ++i) {
-    running = rig.ask(status_request());
-    if (running.session.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  const rig_status_t running =
+      ask_until(rig, [](const rig_status_t& s) { return !s.session.empty(); });
   EXPECT_EQ(running.state, +rig_status_t::STATE_RUNNING);
   EXPECT_EQ(running.cycles, 75);
   EXPECT_NE(running.session.find("_status"), std::string::npos) << running.session;
@@ -452,12 +461,8 @@ TEST(CommandHandling, AStartTheLoopRefusesSaysWhyInTheStatus) {
   rig.step_cycles(20);  // a third of the one-second rest check
   ASSERT_TRUE(rig.ask(testing::start_command("bang_bang", 0.3, 30.0, "early")).request_accepted);
   rig.step_cycles(2);
-  // The logger thread sets the fault; ask until it has (a hang guard, not a timing check).
-  rig_status_t after;
-  for (int i = 0; i < 2000 && after.last_fault.empty(); ++i) {
-    after = rig.ask(status_request());
-    if (after.last_fault.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  const rig_status_t after =
+      ask_until(rig, [](const rig_status_t& s) { return !s.last_fault.empty(); });
   EXPECT_EQ(after.state, +rig_status_t::STATE_IDLE);
   EXPECT_TRUE(after.session.empty()) << after.session;
   EXPECT_EQ(after.last_fault.rfind("start_refused: the pendulum is not at rest", 0), 0u)
