@@ -216,7 +216,7 @@ void BM_FurutaIntervalParameters(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FurutaIntervalParameters)
-    ->ArgsProduct({{0, 1, 2, 3}, {0, 2}})
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 2, 3}})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();
