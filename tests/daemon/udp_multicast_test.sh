@@ -62,6 +62,8 @@ grep -q "^arm_switch_deg = 20 " "$CONFIG" || fail "could not set arm_switch_deg 
 cli() { "$FURUTA" "$@" --config "$CONFIG" --timeout 5; }
 status_line() { cli status 2>/dev/null; }
 cycles_of() { sed -n 's/.*cycles \([0-9]*\),.*/\1/p'; }
+# The finished log of the session labelled $1 (none while it runs or is being finished).
+finished_logs() { ended=("$LOGS"/*_"$1".lcmlog); }
 
 # Waits (up to a minute: a hang guard, not a timing check) until `status` matches a pattern
 # and shows at least `min_cycles` cycles; prints that status line. Says why on stderr if not,
@@ -69,12 +71,9 @@ cycles_of() { sed -n 's/.*cycles \([0-9]*\),.*/\1/p'; }
 wait_for_status() {
   local pattern=$1 min_cycles=${2:-0} label=${3:-} line="" cycles ended
   for _ in $(seq 1 120); do
-    if [ -n "$label" ]; then
-      ended=("$LOGS"/*_"$label".lcmlog)
-      if [ "${#ended[@]}" -gt 0 ]; then
-        echo "session $label ended (last status: $line)" >&2
-        return 1
-      fi
+    if [ -n "$label" ] && finished_logs "$label" && [ "${#ended[@]}" -gt 0 ]; then
+      echo "session $label ended (last status: $line)" >&2
+      return 1
     fi
     line=$(status_line)
     if [[ "$line" == *"$pattern"* ]]; then
@@ -134,8 +133,8 @@ echo "after stop: $line"
 # rig moves in wall time like the real one, so on a starved machine (the sanitizer builds in CI) a
 # loop stall longer than the room the configuration leaves (above) can carry the arm past its
 # limit before the signal: the safety rule then ends the session, which is right, but leaves
-# nothing for the signal to stop. Such a session's log must
-# still be complete and end on the zero command; then another one is started (three at most).
+# nothing for the signal to stop. Such a session's log must still be complete and end on the zero
+# command; then another one is started (three at most).
 before=$(echo "$line" | cycles_of)
 signal_label=""
 for attempt in 1 2 3; do
@@ -152,13 +151,13 @@ for attempt in 1 2 3; do
   echo "session 2 ($label) ended by a safety rule before the signal: $last"
   # The recorder finishes the log on its own thread, a moment after the loop ended the session.
   for _ in $(seq 1 50); do
-    faulted=("$LOGS"/*_"$label".lcmlog)
-    [ "${#faulted[@]}" -eq 1 ] && break
+    finished_logs "$label"
+    [ "${#ended[@]}" -eq 1 ] && break
     sleep 0.2
   done
-  [ "${#faulted[@]}" -eq 1 ] || fail "expected one log of $label, found: $(ls -A "$LOGS")"
+  [ "${#ended[@]}" -eq 1 ] || fail "expected one log of $label, found: $(ls -A "$LOGS")"
   faulted_reason=$(sed -n 's/.*last fault: \([a-z_]*\).*/\1/p' <<< "$last")
-  check_log "${faulted[0]}" "$faulted_reason"
+  check_log "${ended[0]}" "$faulted_reason"
   before=$(echo "$last" | cycles_of)
 done
 [ -n "$signal_label" ] || fail "three sessions in a row ended by a safety rule before the signal"
