@@ -221,4 +221,43 @@ BENCHMARK(BM_FurutaIntervalParameters)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();
 
+// (3b) Where the interval-parameter tubes end: one tube of the 50 deg scenario with a single
+// parameter an interval (the others the truth as points), at the bench-(3) width for that
+// parameter (mu's 2 %, fv1 10 %, fv2 50 %) divided by 10^decades. First argument: the parameter
+// (0..6 = mu1, mu2, mu3, mu4, mug, fv1, fv2), second: decades (0..3).
+void BM_FurutaOneIntervalParameter(benchmark::State& state) {
+  const Scenario& s = kScenarios[1];
+  const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
+  v::FurutaParameters p = v::FurutaParameters::point(truth);
+  const auto parameter = static_cast<std::size_t>(state.range(0));
+  const double bench_width[] = {0.02, 0.02, 0.02, 0.02, 0.02, 0.1, 0.5};
+  const double relative = bench_width[parameter] * std::pow(10.0, -state.range(1));
+  Interval* fields[] = {&p.mu1, &p.mu2, &p.mu3, &p.mu4, &p.mug, &p.fv1, &p.fv2};
+  *fields[parameter] = *fields[parameter] * (Interval(1.0) + Interval(-relative, relative));
+  const Box state_box = initial_state(s);
+  const Box x0 = v::FurutaDynamics::initial_box(state_box, p);
+  const v::FurutaDynamics system(Interval(s.tau_nm));
+  v::IntegrationResult r;
+  for (auto _ : state) {
+    r = v::integrate(system, x0, furuta_options());
+    benchmark::DoNotOptimize(r);
+  }
+  const double reached = r.ok() ? r.tube.t_end() : r.t_failed;
+  state.counters["relative"] = relative;
+  state.counters["t_reached"] = reached;
+  state.counters["steps"] = static_cast<double>(r.steps);
+  state.counters["wall_s"] = r.seconds;
+  // q2's width against the sampled spread at half the time reached: the tube is tight until the
+  // error part takes over.
+  const std::vector<double> half{0.5 * reached};
+  const double spread = sampled_q2_spread(s, state_box, &p, 1000, half)[0];
+  state.counters["ratio_half"] =
+      r.tube.enclosure_at(half[0])[v::FurutaDynamics::q2].width() / spread;
+}
+BENCHMARK(BM_FurutaOneIntervalParameter)
+    ->ArgsProduct({{0, 1, 2, 3, 4, 5, 6}, {0, 1, 2, 3}})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
 }  // namespace
