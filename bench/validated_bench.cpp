@@ -124,6 +124,25 @@ std::vector<double> sampled_q2_spread(const Scenario& s, const Box& x0,
   return spread;
 }
 
+// q2's width in `set` (a Tube or a SplitResult) at each of `times`, and its ratio to the spread
+// of sampled solutions with the parameters `p` drawn in their intervals.
+struct Q2Width {
+  double width;
+  double ratio;
+};
+template <class Set>
+std::vector<Q2Width> q2_against_spread(const Set& set, const Scenario& s, const Box& state_box,
+                                       const v::FurutaParameters& p,
+                                       const std::vector<double>& times) {
+  const std::vector<double> spread = sampled_q2_spread(s, state_box, &p, 1000, times);
+  std::vector<Q2Width> out;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const double width = set.enclosure_at(times[k])[v::FurutaDynamics::q2].width();
+    out.push_back({width, width / spread[k]});
+  }
+  return out;
+}
+
 void report(benchmark::State& state, const v::SplitResult& r, std::size_t q2_component,
             const std::vector<double>& spread) {
   state.counters["ok"] = r.ok() ? 1 : 0;
@@ -205,13 +224,12 @@ void BM_FurutaIntervalParameters(benchmark::State& state) {
   // A run that ends early still says how tight it was: q2's width against the spread at half and
   // at nine tenths of the time it reached.
   if (r.t_reached < 4.0 && r.t_reached > 0.0) {
-    const std::vector<double> times{0.5 * r.t_reached, 0.9 * r.t_reached};
-    const std::vector<double> spread = sampled_q2_spread(s, state_box, &p, 1000, times);
+    const std::vector<Q2Width> late =
+        q2_against_spread(r, s, state_box, p, {0.5 * r.t_reached, 0.9 * r.t_reached});
     const char* names[] = {"half", "late"};
-    for (std::size_t k = 0; k < times.size(); ++k) {
-      const double width = r.enclosure_at(times[k])[v::FurutaDynamics::q2].width();
-      state.counters[std::string("q2_w_") + names[k]] = width;
-      state.counters[std::string("ratio_") + names[k]] = width / spread[k];
+    for (std::size_t k = 0; k < late.size(); ++k) {
+      state.counters[std::string("q2_w_") + names[k]] = late[k].width;
+      state.counters[std::string("ratio_") + names[k]] = late[k].ratio;
     }
   }
 }
@@ -242,17 +260,15 @@ void BM_FurutaOneIntervalParameter(benchmark::State& state) {
     r = v::integrate(system, x0, furuta_options());
     benchmark::DoNotOptimize(r);
   }
-  const double reached = r.ok() ? r.tube.t_end() : r.t_failed;
+  const double reached = r.tube.t_end();  // t_failed when the run ended early
   state.counters["relative"] = relative;
   state.counters["t_reached"] = reached;
   state.counters["steps"] = static_cast<double>(r.steps);
   state.counters["wall_s"] = r.seconds;
   // q2's width against the sampled spread at half the time reached: the tube is tight until the
   // error part takes over.
-  const std::vector<double> half{0.5 * reached};
-  const double spread = sampled_q2_spread(s, state_box, &p, 1000, half)[0];
   state.counters["ratio_half"] =
-      r.tube.enclosure_at(half[0])[v::FurutaDynamics::q2].width() / spread;
+      q2_against_spread(r.tube, s, state_box, p, {0.5 * reached})[0].ratio;
 }
 BENCHMARK(BM_FurutaOneIntervalParameter)
     ->ArgsProduct({{0, 1, 2, 3, 4, 5, 6}, {0, 1, 2, 3}})
