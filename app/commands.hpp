@@ -15,6 +15,9 @@ namespace furuta::app {
 
 struct DevicesOptions {
   bool simulated = false;  // list the simulated rig's boards instead of the USB bus
+  // With `simulated`: the configuration whose [simulation] builds the rig (its boards' serials and
+  // firmware versions). Empty: the built-in defaults.
+  std::string config_path;
 };
 // Lists connected Phidget boards; says clearly when there are none or access is denied.
 // Returns 0 when at least one board was listed, 1 when none, 2 when USB could not be read.

@@ -1,11 +1,14 @@
 // `furuta devices`: what is plugged in, and, when nothing usable is, what to do about it.
 
+#include <exception>
+#include <memory>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
 #include "devices_report.hpp"
+#include "furuta/config/rig_config.hpp"
 #include "furuta/firmware_bridge/clock.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_backends.hpp"
@@ -26,22 +29,50 @@ std::string backend_for(const bridge::DeviceInfo& device) {
   return device.vendor_class_interface ? "libusb (vendor-class interface)" : "hidapi (HID)";
 }
 
+// The firmware as the vendor library reports it, and a word when the codecs do not know it: the
+// daemon refuses such a board unless the configuration allows it.
+std::string firmware_text(const bridge::DeviceInfo& device) {
+  std::string text = std::to_string(device.firmware_version);
+  const bool known = bridge::firmware_known(device.product_id, device.vendor_class_interface,
+                                            device.firmware_version);
+  const auto range = bridge::known_firmware(device.product_id, device.vendor_class_interface);
+  if (!known && range) {
+    text += " (untested: furuta knows " + std::to_string(range->first) + "-" +
+            std::to_string(range->last) + " for this board)";
+  }
+  return text;
+}
+
 void print_device(std::ostream& out, const bridge::DeviceInfo& device, const std::string& backend) {
   out << "  " << device.product_name << "  serial " << (device.serial.empty() ? "?" : device.serial)
-      << "  firmware " << device.firmware_version << "  " << device.path << "  backend " << backend
+      << "  firmware " << firmware_text(device) << "  " << device.path << "  backend " << backend
       << "\n";
 }
 
-int list_simulated(std::ostream& out) {
+// The simulated rig is listed as the USB scan lists hardware: from its boards' descriptors, so the
+// firmware is read from bcdDevice as the vendor reads it.
+int list_simulated(const DevicesOptions& options, std::ostream& out, std::ostream& err) {
+  bridge::SimulatedRigConfig rig_config;
+  if (!options.config_path.empty()) {
+    try {
+      rig_config = config::load_rig_config(options.config_path).simulation;
+    } catch (const std::exception& e) {
+      err << e.what() << "\n";
+      return kUsbUnreadable;
+    }
+  }
   bridge::VirtualClock clock;
-  const bridge::SimulatedRig rig(bridge::SimulatedRigConfig{}, clock);
-  const std::vector<bridge::DeviceInfo> devices = rig.devices();
-  if (devices.empty()) {
+  bridge::SimulatedRig rig(rig_config, clock);
+  const std::unique_ptr<bridge::UsbBus> bus = rig.make_usb_bus();
+  const bridge::DiscoveryResult found = bridge::discover_phidgets(*bus);
+  if (found.devices.empty()) {
     out << "the simulated rig has no boards connected\n";
     return kNoneListed;
   }
   out << "simulated Phidget boards:\n";
-  for (const bridge::DeviceInfo& device : devices) print_device(out, device, "simulated");
+  for (const bridge::DeviceInfo& device : found.devices) {
+    print_device(out, device, "simulated " + backend_for(device));
+  }
   return kListed;
 }
 
@@ -82,7 +113,7 @@ int report_discovery(const bridge::DiscoveryResult& found, std::ostream& out, st
 }
 
 int run_devices_command(const DevicesOptions& options, std::ostream& out, std::ostream& err) {
-  if (options.simulated) return list_simulated(out);
+  if (options.simulated) return list_simulated(options, out, err);
   return report_discovery(bridge::discover_phidgets(), out, err);
 }
 

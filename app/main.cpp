@@ -14,7 +14,10 @@ int main(int argc, char** argv) {
   furuta::app::DevicesOptions devices;
   CLI::App* devices_cmd = app.add_subcommand("devices", "List connected Phidget boards");
   devices_cmd->add_flag("--simulated", devices.simulated,
-                        "List the simulated rig's boards instead");
+                        "List the simulated rig's boards instead, through its USB descriptors");
+  devices_cmd->add_option("--config", devices.config_path,
+                          "With --simulated: the rig configuration whose [simulation] builds the "
+                          "boards (serials, firmware)");
 
   // A running daemon, over LCM.
   furuta::app::RemoteOptions remote;

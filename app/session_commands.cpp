@@ -163,6 +163,7 @@ int run_session_command(const RunOptions& options, std::ostream& out, std::ostre
   if (options.simulated) connect.backend = daemon::BackendChoice::simulated;
   connect.virtual_time = options.virtual_time;
   daemon::RigConnection rig_io = daemon::connect_rig(rig, connect);
+  for (const std::string& warning : rig_io.warnings) err << "furuta run: " << warning << "\n";
   settings.recorder.motor_device = bridge::format_trace_device_line(rig_io.motor->device_info());
   settings.recorder.encoder_device =
       bridge::format_trace_device_line(rig_io.encoder->device_info());

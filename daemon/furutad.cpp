@@ -93,6 +93,7 @@ int main(int argc, char** argv) {
       settings.loop.rest_check_s = 0.0;
     }
     daemon::RigConnection rig_io = daemon::connect_rig(rig, connect);
+    for (const std::string& warning : rig_io.warnings) std::cerr << "furutad: " << warning << "\n";
     settings.recorder.motor_device = bridge::format_trace_device_line(rig_io.motor->device_info());
     settings.recorder.encoder_device =
         bridge::format_trace_device_line(rig_io.encoder->device_info());

@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
   bridge::EncoderReport1047 enc;
   enc.channels[0] = {5, 0, 96000, 0x0123, 0x03};
   enc.channels[1] = {-3, -0x7FFF, 0xFFFFFF, 0xFFFF, 0x06};
-  enc.channels[2] = {0x8000, 12, 48000, 0, 0x02};
+  enc.channels[2] = {-0x8000, 12, 48000, 0, 0x02};
   std::vector<std::uint8_t> enc_bytes(40);
   bridge::encode_input_1047(enc, enc_bytes);
   write(root / "fuzz_codec_1047" / "input_report_40", enc_bytes);

@@ -261,6 +261,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     BoardSelection b;
     const std::string serial = s.text("serial", "");
     if (!serial.empty()) b.serial = serial;
+    b.allow_untested_firmware = s.boolean("allow_untested_firmware", false);
     return b;
   };
   {
@@ -313,6 +314,11 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   s.usb_latency_jitter_ns = sim.integer(
       "usb_latency_jitter_ns", 0, [](std::int64_t v) { return v >= 0; }, ">= 0");
   s.supply_voltage_v = sim.number("supply_voltage_v", s.supply_voltage_v, positive, "> 0");
+  const auto firmware = [](std::int64_t v) { return v >= 100 && v <= 999; };
+  s.firmware_1065 =
+      static_cast<int>(sim.integer("firmware_1065", s.firmware_1065, firmware, "in [100, 999]"));
+  s.firmware_1047 =
+      static_cast<int>(sim.integer("firmware_1047", s.firmware_1047, firmware, "in [100, 999]"));
   s.parameters = read_parameters(sim.child("parameters"), bridge::ModelParameters::paper_run1());
   {
     Section x0 = sim.child("initial_state");
@@ -465,7 +471,11 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
     ec.multisine_f_max_hz = e.number("multisine_f_max_hz", ec.multisine_f_max_hz, positive, "> 0");
     ec.board_acceleration_pct_per_s = e.number(
         "board_acceleration_pct_per_s", ec.board_acceleration_pct_per_s,
-        [](double v) { return v >= 6250.0 / 255 && v <= 6250.0; }, "in [24.5, 6250]");
+        [](double v) {
+          return v >= bridge::k1065MinAccelerationPctPerS &&
+                 v <= bridge::k1065FullScaleAccelerationPctPerS;
+        },
+        "in [24.51, 6250] (the vendor library's range for the 1065)");
     e.reject_unknown_keys();
   }
 

@@ -1,6 +1,9 @@
 #include "furuta/daemon/rig_connection.hpp"
 
+#include <optional>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "furuta/firmware_bridge/replay_transport.hpp"
 #include "furuta/firmware_bridge/usb_backends.hpp"
@@ -28,6 +31,34 @@ void open_or_throw(bridge::Transport& transport, std::uint16_t product,
     message += "; `furuta devices` lists what is connected";
   }
   throw std::runtime_error(message);
+}
+
+// A board whose firmware the codecs do not know is refused, or opened with a warning when the
+// configuration allows it: its reports might be laid out otherwise and decode as wrong angles.
+void check_firmware(const bridge::DeviceInfo& info, const config::BoardSelection& selection,
+                    const char* what, const char* section, std::vector<std::string>& warnings) {
+  if (bridge::firmware_known(info.product_id, info.vendor_class_interface, info.firmware_version)) {
+    return;
+  }
+  const std::optional<bridge::FirmwareRange> known =
+      bridge::known_firmware(info.product_id, info.vendor_class_interface);
+  std::string message = std::string("the ") + what + " (" + info.product_name + ", serial " +
+                        (info.serial.empty() ? std::string("?") : info.serial) + ", " +
+                        (info.vendor_class_interface ? "vendor-class" : "HID") +
+                        " interface) has firmware " + std::to_string(info.firmware_version) +
+                        ", which furuta's codecs do not know (" +
+                        (known ? "they know " + std::to_string(known->first) + "-" +
+                                     std::to_string(known->last) + " for this board and interface"
+                               : std::string("none for this board and interface")) +
+                        ")";
+  if (!selection.allow_untested_firmware) {
+    throw std::runtime_error(message + ": its reports may be laid out otherwise. Set " + section +
+                             " allow_untested_firmware = true to try it anyway, and check it "
+                             "as docs/hardware-checklist.md says");
+  }
+  warnings.push_back(message +
+                     "; opened anyway (allow_untested_firmware): check its decoded "
+                     "angles and duty against docs/hardware-checklist.md");
 }
 
 }  // namespace
@@ -76,6 +107,13 @@ RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions&
                 "motor board");
   open_or_throw(*c.encoder, bridge::kProductEncoder1047, config.encoder_board.serial,
                 "encoder board");
+  // A replay plays what was recorded from boards that were accepted then.
+  if (options.backend != BackendChoice::replay) {
+    check_firmware(c.motor->device_info(), config.motor_board, "motor board", "[boards.motor]",
+                   c.warnings);
+    check_firmware(c.encoder->device_info(), config.encoder_board, "encoder board",
+                   "[boards.encoder]", c.warnings);
+  }
   if (threaded) {
     c.motor_link = std::make_unique<ThreadedBoardLink>(*c.motor);
     c.encoder_link = std::make_unique<ThreadedBoardLink>(*c.encoder);

@@ -8,7 +8,8 @@ namespace furuta::bridge {
 
 namespace {
 
-// Per-channel byte offsets within the channel's 10 bytes (protocol notes, "1047 input report").
+// Per-channel byte offsets within the channel's 10 bytes (docs/phidget-protocol.md, "1047 input
+// report").
 constexpr std::size_t kChPosition = 0;
 constexpr std::size_t kChIndex = 2;
 constexpr std::size_t kChPacketTime = 4;
@@ -27,8 +28,9 @@ bool delta_fits(std::int32_t delta) {
   return delta >= k1047MinDelta && delta <= k1047MaxDelta;
 }
 
+// The difference wraps to int16 (C++20 defines the narrowing as modulo 2^16): 0xFFFF -> -32768.
 std::int32_t decode_delta(std::uint16_t raw) {
-  return static_cast<std::int32_t>(raw) - k1047DeltaOffset;
+  return static_cast<std::int16_t>(static_cast<std::uint16_t>(raw - k1047DeltaOffset));
 }
 
 std::uint16_t encode_delta(std::int32_t delta) {

@@ -12,7 +12,7 @@ namespace {
 
 constexpr double kRawFullScale = 255.0;
 
-// Input report byte offsets (protocol notes, "1065 input report").
+// Input report byte offsets (docs/phidget-protocol.md, "1065 input report").
 constexpr std::size_t kInDigital = 0;
 constexpr std::size_t kInFlags = 1;
 constexpr std::size_t kInCurrent = 2;
@@ -67,14 +67,16 @@ CodecStatus to_output_1065(const MotorCommand1065& command, MotorOutput1065& out
   const double brake = command.braking_fraction;
   // Written as "inside the range" so NaN, which fails every comparison, is rejected too.
   const bool duty_ok = duty >= -1.0 && duty <= 1.0;
-  const bool accel_ok = accel >= 0.0 && accel <= k1065FullScaleAccelerationPctPerS;
+  const bool accel_ok =
+      accel >= k1065MinAccelerationPctPerS && accel <= k1065FullScaleAccelerationPctPerS;
   const bool brake_ok = brake >= 0.0 && brake <= 1.0;
   if (!duty_ok || !accel_ok || !brake_ok) return CodecStatus::out_of_range;
 
   MotorOutput1065 o;
   o.flags = 0;
-  // A zero duty carries no direction; -0.0 must not set the bit differently from +0.0 either.
-  if (duty > 0.0) o.flags |= k1065OutDirectionPositive;
+  // The vendor's packet sets the bit for `speed >= 0`, so zero goes out as "positive"; -0.0
+  // compares equal to 0 and gets the same bit, so the two zeros are one report on the wire.
+  if (duty >= 0.0) o.flags |= k1065OutDirectionPositive;
   if (command.back_emf_sensing) o.flags |= k1065OutBackEmfSensing;
   if (command.ratiometric) o.flags |= k1065OutRatiometric;
   // round(|duty %| * 255 / 100) == round(|duty| * 255); one multiplication keeps exact halves

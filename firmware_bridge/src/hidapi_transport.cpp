@@ -211,7 +211,7 @@ TransportStatus HidapiTransport::open(const DeviceMatch& match) {
   info_.vendor_id = chosen->vendor_id;
   info_.product_id = chosen->product_id;
   info_.serial = wide_to_utf8(chosen->serial_number);
-  info_.firmware_version = firmware_version_from_bcd(chosen->release_number);
+  info_.firmware_version = firmware_version_hid(chosen->release_number);
   info_.product_name = std::string(phidget_product_name(chosen->product_id));
   info_.path = chosen->path;
   info_.input_report_bytes = lengths.input_bytes;

@@ -9,7 +9,6 @@
 #include <climits>
 #include <cstdint>
 #include <memory>
-#include <optional>
 #include <string>
 
 namespace furuta::bridge::usb_detail {
@@ -91,16 +90,6 @@ inline std::string read_serial(libusb_device_handle* handle, std::uint8_t serial
                                                         static_cast<int>(text.size()));
   if (length <= 0) return {};
   return std::string(reinterpret_cast<const char*>(text.data()), static_cast<std::size_t>(length));
-}
-
-// Interface 0's class, from configuration index 0 (no open needed); nullopt when unreadable.
-// The boards have a single configuration.
-inline std::optional<std::uint8_t> interface0_class(libusb_device* device) {
-  libusb_config_descriptor* raw = nullptr;
-  if (libusb_get_config_descriptor(device, 0, &raw) != LIBUSB_SUCCESS) return std::nullopt;
-  const ConfigPtr config(raw);
-  if (config->bNumInterfaces == 0 || config->interface[0].num_altsetting == 0) return std::nullopt;
-  return config->interface[0].altsetting[0].bInterfaceClass;
 }
 
 // Milliseconds for libusb, rounded up so a sub-millisecond wait still waits. libusb reads 0 as

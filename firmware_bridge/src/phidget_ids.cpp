@@ -1,5 +1,7 @@
 #include "furuta/firmware_bridge/phidget_ids.hpp"
 
+#include "furuta/firmware_bridge/codec_1047.hpp"
+#include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/transport.hpp"
 
 namespace furuta::bridge {
@@ -18,6 +20,34 @@ std::string_view phidget_product_name(std::uint16_t product_id) {
       return "1060 MotorControl LV";
     default:
       return "unknown Phidget";
+  }
+}
+
+std::optional<FirmwareRange> known_firmware(std::uint16_t product_id, bool vendor_class_interface) {
+  switch (product_id) {
+    case kProductMotorControl1065:
+      if (vendor_class_interface) return std::nullopt;
+      return FirmwareRange{100, 199};
+    case kProductEncoder1047:
+      return vendor_class_interface ? FirmwareRange{200, 299} : FirmwareRange{100, 199};
+    default:
+      return std::nullopt;
+  }
+}
+
+bool firmware_known(std::uint16_t product_id, bool vendor_class_interface, int version) {
+  const std::optional<FirmwareRange> range = known_firmware(product_id, vendor_class_interface);
+  return range && version >= range->first && version <= range->last;
+}
+
+std::size_t minimum_input_report_bytes(std::uint16_t product_id) {
+  switch (product_id) {
+    case kProductMotorControl1065:
+      return k1065InputReportMinBytes;
+    case kProductEncoder1047:
+      return k1047InputReportMinBytes;
+    default:
+      return 0;
   }
 }
 

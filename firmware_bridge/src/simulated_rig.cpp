@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "furuta/firmware_bridge/phidget_ids.hpp"
+#include "simulated_usb.hpp"
 
 namespace furuta::bridge {
 
@@ -171,6 +172,7 @@ class SimulatedRig::Impl {
   void clamp_arm(bool clamped);
 
   const SimulatedRigConfig& config() const { return config_; }
+  std::int64_t now_ns() const { return clock_.now_ns(); }
   PendulumState true_state() const {
     std::lock_guard lock(mutex_);
     return state_;
@@ -258,6 +260,17 @@ SimulatedRig::Impl::Impl(SimulatedRigConfig config, Clock& clock)
       config_.output_report_bytes_1065 < k1065OutputReportMinBytes ||
       config_.output_report_bytes_1065 > kMaxReportBytes) {
     throw std::invalid_argument("SimulatedRigConfig: report lengths outside the boards' layouts");
+  }
+  // A firmware version is three digits (bcdDevice carries it, docs/phidget-protocol.md); any of
+  // them may be presented, so that a test can show one the codecs do not know.
+  if (config_.firmware_1065 < 100 || config_.firmware_1065 > 999 || config_.firmware_1047 < 100 ||
+      config_.firmware_1047 > 999) {
+    throw std::invalid_argument("SimulatedRigConfig: firmware versions must be in [100, 999]");
+  }
+  if (config_.usb_packet_bytes_1047 < config_.input_report_bytes_1047 ||
+      config_.usb_packet_bytes_1047 > kMaxReportBytes) {
+    throw std::invalid_argument(
+        "SimulatedRigConfig: usb_packet_bytes_1047 must hold a report and be at most 64");
   }
   if (config_.pendulum_channel < 0 ||
       config_.pendulum_channel >= static_cast<int>(k1047ChannelCount)) {
@@ -833,6 +846,12 @@ const std::vector<MotorCommandRecord>& SimulatedRig::motor_commands() const {
 }
 void SimulatedRig::advance_to_now() {
   impl_->advance_to_now();
+}
+std::int64_t SimulatedRig::now_ns() const {
+  return impl_->now_ns();
+}
+std::unique_ptr<UsbBus> SimulatedRig::make_usb_bus() {
+  return make_simulated_usb_bus(*this);
 }
 
 }  // namespace furuta::bridge

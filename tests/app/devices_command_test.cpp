@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -10,6 +11,7 @@
 #include "commands.hpp"
 #include "devices_report.hpp"
 #include "furuta/firmware_bridge/usb_backends.hpp"
+#include "temp_dir.hpp"
 
 namespace furuta::app {
 namespace {
@@ -54,6 +56,36 @@ TEST(DevicesCommand, SimulatedListsBothBoardsWithSerials) {
   EXPECT_TRUE(contains(text, "serial 300002")) << text;
   EXPECT_TRUE(contains(text, "firmware 105")) << text;
   EXPECT_EQ(err.str(), "");
+}
+
+// `furuta devices --simulated` lists the rig from its USB descriptors, as the vendor reads them:
+// a vendor-class 1047 with bcdDevice 0x0210 is firmware 210, and one the codecs do not know says
+// so.
+TEST(DevicesCommand, SimulatedBoardsShowTheirFirmwareAsTheVendorReportsIt) {
+  const std::string shipped = FURUTA_SOURCE_DIR "/config/rig.toml";
+  std::ifstream in(shipped);
+  std::stringstream text;
+  text << in.rdbuf();
+  for (const auto& [version, expected] :
+       {std::pair{"210", "firmware 210  simulated bus 1 port 2  backend simulated libusb"},
+        std::pair{"310", "firmware 310 (untested: furuta knows 200-299 for this board)"},
+        std::pair{"101", "firmware 101  simulated bus 1 port 2  backend simulated hidapi"}}) {
+    furuta::testing::TempDir dir;
+    std::string toml = text.str();
+    const auto at = toml.find("firmware_1047 = 101");
+    ASSERT_NE(at, std::string::npos);
+    toml.replace(at, 19, std::string("firmware_1047 = ") + version);
+    const auto path = dir.path() / "rig.toml";
+    std::ofstream(path) << toml;
+    DevicesOptions options;
+    options.simulated = true;
+    options.config_path = path.string();
+    std::ostringstream out;
+    std::ostringstream err;
+    EXPECT_EQ(run_devices_command(options, out, err), 0) << err.str();
+    EXPECT_TRUE(contains(out.str(), expected)) << out.str();
+    EXPECT_TRUE(contains(out.str(), "firmware 105  simulated bus 1 port 1")) << out.str();
+  }
 }
 
 bridge::DeviceInfo board(std::uint16_t product, std::string serial, int firmware, std::string path,

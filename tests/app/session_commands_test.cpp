@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.hpp"
@@ -135,6 +137,90 @@ TEST(RunCommand, ABadConfigurationNamesFileLineAndField) {
               std::string::npos)
         << e.what();
   }
+}
+
+// The shipped rig.toml with `from` replaced by `to` (each must occur), written into `dir`.
+fs::path edited_config(const fs::path& dir,
+                       const std::vector<std::pair<std::string, std::string>>& edits) {
+  std::ifstream in(FURUTA_SOURCE_DIR "/config/rig.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string toml = text.str();
+  for (const auto& [from, to] : edits) {
+    const auto at = toml.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) toml.replace(at, from.size(), to);
+  }
+  const fs::path path = dir / "rig.toml";
+  std::ofstream(path) << toml;
+  return path;
+}
+
+RunOptions simulated_run(const fs::path& config, const fs::path& logs, double duration_s) {
+  RunOptions options;
+  options.config_path = config;
+  options.simulated = true;
+  options.virtual_time = true;
+  options.logs_dir = logs;
+  options.lcm_url = "memq://";
+  options.session.duration_s = duration_s;
+  options.session.label = "cli";
+  return options;
+}
+
+// A 1047_2 (vendor class, firmware 2xx, 6 MHz ticks) runs a whole session like the HID board: its
+// report timing is read with its own tick, so no report counts as lost, and the log replays.
+TEST(RunCommand, ASessionOnAVendorClass1047WithFirmware210) {
+  TempDir dir;
+  const fs::path config =
+      edited_config(dir.path(), {{"firmware_1047 = 101", "firmware_1047 = 210"}});
+  std::ostringstream out, err;
+  ASSERT_EQ(run_session_command(simulated_run(config, dir.path() / "logs", 2.0), out, err), 0)
+      << out.str() << err.str();
+  EXPECT_NE(out.str().find("session ended: duration_reached"), std::string::npos) << out.str();
+  const fs::path log = only_log_in(dir.path() / "logs");
+  const session_log::SessionLog loaded = session_log::load_session_log(log);
+  ASSERT_TRUE(loaded.start.has_value());
+  ASSERT_EQ(loaded.samples.size(), 125u);  // 2 s / 16 ms
+  EXPECT_EQ(loaded.samples.back().encoder_lost_reports, 0);
+  EXPECT_EQ(loaded.samples.back().motor_lost_reports, 0);
+  EXPECT_NE(loaded.start->encoder_device.find("firmware=210"), std::string::npos)
+      << loaded.start->encoder_device;
+  std::ostringstream replay_out;
+  EXPECT_EQ(run_replay_command(log, {}, replay_out, err), 0) << replay_out.str() << err.str();
+  EXPECT_NE(replay_out.str().find("identical"), std::string::npos) << replay_out.str();
+}
+
+// A 1047 with firmware 3xx (the 1047_2's later firmware adds a field whose layout is not known) is
+// refused before the motor moves, naming the board, its serial, its firmware and the way out.
+TEST(RunCommand, AnUntestedFirmwareIsRefusedUnlessTheConfigurationAllowsIt) {
+  TempDir dir;
+  const fs::path refused =
+      edited_config(dir.path(), {{"firmware_1047 = 101", "firmware_1047 = 310"}});
+  std::ostringstream out, err;
+  try {
+    run_session_command(simulated_run(refused, dir.path() / "logs", 1.0), out, err);
+    FAIL() << "a board with firmware 310 was opened: " << out.str();
+  } catch (const std::exception& e) {
+    const std::string message = e.what();
+    for (const char* part : {"encoder board", "1047", "serial 300002", "firmware 310", "200-299",
+                             "[boards.encoder] allow_untested_firmware = true"}) {
+      EXPECT_NE(message.find(part), std::string::npos) << part << " in: " << message;
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "logs") && !fs::is_empty(dir.path() / "logs"));
+
+  TempDir allowed_dir;
+  const fs::path allowed = edited_config(
+      allowed_dir.path(),
+      {{"firmware_1047 = 101", "firmware_1047 = 310"},
+       {"allow_untested_firmware = false  # known", "allow_untested_firmware = true  # known"}});
+  std::ostringstream out2, err2;
+  EXPECT_EQ(
+      run_session_command(simulated_run(allowed, allowed_dir.path() / "logs", 1.0), out2, err2), 0)
+      << out2.str() << err2.str();
+  EXPECT_NE(err2.str().find("firmware 310"), std::string::npos) << err2.str();
+  EXPECT_NE(err2.str().find("opened anyway"), std::string::npos) << err2.str();
 }
 
 }  // namespace

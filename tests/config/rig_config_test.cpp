@@ -208,7 +208,7 @@ TEST(RigConfig, EverySafetyLimitRefusesBadValuesWithFileLineAndField) {
       {"limits", "max_commands_per_s", {"0", "-5", "1001", "5.5"}},
       {"excitation", "amplitude_duty", {"0", "0.6", "1e308"}},
       {"excitation", "arm_switch_deg", {"-1", "136"}},
-      {"excitation", "board_acceleration_pct_per_s", {"0", "6251", "-6250"}},
+      {"excitation", "board_acceleration_pct_per_s", {"0", "24.5", "6251", "-6250"}},
       {"daemon", "period_ms", {"0", "0.05", "1001"}},
   };
   const std::vector<const char*> always_bad = {"nan",  "-nan",  "inf",       "-inf",      "\"0.5\"",

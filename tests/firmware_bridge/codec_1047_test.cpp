@@ -11,7 +11,9 @@ namespace {
 
 using Bytes = std::vector<std::uint8_t>;
 
-// Four channels at offsets 0, 10, 20, 30; deltas travel as u16 = delta + 0x7fff.
+// Four channels at offsets 0, 10, 20, 30; deltas travel as u16 = delta + 0x7fff, read back as the
+// vendor does: libphidget21 2.1.8 cphidgetencoder.c, the 1047 branch of the input parser, computes
+// (u16 - 0x7fff) into `short positionChange[]` / `indexChange[]`, so the difference wraps to int16.
 const Bytes kReport = {
     // channel 0
     0x80, 0x04,        // position +5: 5 + 0x7fff = 0x8004
@@ -21,12 +23,12 @@ const Bytes kReport = {
     0x03,              // index seen, enabled; 0x04 clear: digital input true
     // channel 1
     0x7F, 0xFC,        // position -3: 0x7ffc
-    0x00, 0x00,        // index -0x7fff (the smallest): 0x0000
+    0x00, 0x00,        // index -0x7fff: 0x0000
     0xFF, 0xFF, 0xFF,  // packetTime 0xffffff = 16777215 (largest u24)
     0xFF, 0xFF,        // curTime 65535
     0x06,              // enabled, digital input false
     // channel 2
-    0xFF, 0xFF,        // position +0x8000 (the largest): 0xffff
+    0xFF, 0xFF,        // position -0x8000: 0xffff - 0x7fff = 0x8000 as int16 (not +32768)
     0x80, 0x00,        // index +1: 0x8000
     0x00, 0xBB, 0x80,  // packetTime 48000 = 0x00bb80 (8 ms at 6 MHz)
     0x00, 0x00,        // curTime 0
@@ -43,7 +45,7 @@ EncoderReport1047 report_struct() {
   EncoderReport1047 r;
   r.channels[0] = {5, 0, 96000, 291, 0x03};
   r.channels[1] = {-3, -0x7FFF, 0xFFFFFF, 65535, 0x06};
-  r.channels[2] = {0x8000, 1, 48000, 0, 0x00};
+  r.channels[2] = {-0x8000, 1, 48000, 0, 0x00};
   r.channels[3] = {-0x7FFF, 100, 1, 32768, 0x02};
   return r;
 }
@@ -112,16 +114,16 @@ TEST(Codec1047Input, RejectsDeltasAndTimesBeyondTheWireAndWritesNothing) {
     return status == CodecStatus::out_of_range && untouched;
   };
   EncoderReport1047 r = report_struct();
-  r.channels[3].position_delta = 0x8001;  // one above the largest, u16 would wrap
+  r.channels[3].position_delta = 0x8000;  // one above the largest: it would read back as -32768
   EXPECT_TRUE(rejected(r));
   r = report_struct();
-  r.channels[3].position_delta = -0x8000;  // one below the smallest
+  r.channels[3].position_delta = -0x8001;  // one below the smallest
   EXPECT_TRUE(rejected(r));
   r = report_struct();
-  r.channels[1].index_delta = 0x8001;
+  r.channels[1].index_delta = 0x8000;
   EXPECT_TRUE(rejected(r));
   r = report_struct();
-  r.channels[2].index_delta = -0x8000;
+  r.channels[2].index_delta = -0x8001;
   EXPECT_TRUE(rejected(r));
   r = report_struct();
   r.channels[0].packet_time_ticks = 0x1000000;  // 25 bits
@@ -140,6 +142,35 @@ TEST(Codec1047Input, RoundTrips) {
     EncoderReport1047 back;
     ASSERT_EQ(decode_input_1047(report, back), CodecStatus::ok);
     expect_same(back, original);
+  }
+}
+
+// The vendor's reading of the two extremes (cphidgetencoder.c, 1047 branch: `short` deltas):
+// 0xffff - 0x7fff = 0x8000 stored in a short is -32768, 0x0000 - 0x7fff is -32767. A delta of
+// +32768 cannot be carried at all, so the two codecs agree on every one of the 65536 raw values.
+TEST(Codec1047Input, RawFFFFIsMinus32768AsTheVendorReadsIt) {
+  Bytes report(40, 0x00);
+  for (std::size_t i = 0; i < k1047ChannelCount; ++i) {
+    report[10 * i + 0] = 0xFF;  // position raw 0xffff
+    report[10 * i + 1] = 0xFF;
+    report[10 * i + 2] = 0x00;  // index raw 0x0000
+    report[10 * i + 3] = 0x00;
+  }
+  EncoderReport1047 r;
+  ASSERT_EQ(decode_input_1047(report, r), CodecStatus::ok);
+  for (const EncoderChannel1047& ch : r.channels) {
+    EXPECT_EQ(ch.position_delta, -32768);
+    EXPECT_EQ(ch.index_delta, -32767);
+  }
+  for (std::uint32_t raw = 0; raw <= 0xFFFF; ++raw) {
+    report[0] = static_cast<std::uint8_t>(raw >> 8);
+    report[1] = static_cast<std::uint8_t>(raw);
+    ASSERT_EQ(decode_input_1047(report, r), CodecStatus::ok);
+    const auto vendor = static_cast<std::int16_t>(static_cast<std::uint16_t>(raw - 0x7FFF));
+    ASSERT_EQ(r.channels[0].position_delta, vendor) << "raw " << raw;
+    std::array<std::uint8_t, 40> again{};
+    ASSERT_EQ(encode_input_1047(r, again), CodecStatus::ok);
+    ASSERT_EQ(again[0] << 8 | again[1], static_cast<int>(raw)) << "raw " << raw;
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -67,14 +68,14 @@ TEST(Codec1065Output, PositiveDutyRoundsHalvesUpAndSetsDirection) {
 
 TEST(Codec1065Output, RangeEndsAndTinyDuties) {
   MotorCommand1065 command;
-  command.duty_cycle = 1.0;              // 255 = 0xff, positive
-  command.acceleration_pct_per_s = 0.0;  // 0
-  command.braking_fraction = 1.0;        // 255
+  command.duty_cycle = 1.0;                // 255 = 0xff, positive
+  command.acceleration_pct_per_s = 24.51;  // the vendor's smallest: round(24.51 / 6250 * 255) = 1
+  command.braking_fraction = 1.0;          // 255
   MotorOutput1065 output;
   ASSERT_EQ(to_output_1065(command, output), CodecStatus::ok);
   std::array<std::uint8_t, 4> report{};
   ASSERT_EQ(encode_output_1065(output, report), CodecStatus::ok);
-  EXPECT_EQ(report, (std::array<std::uint8_t, 4>{0x01, 0xFF, 0x00, 0xFF}));
+  EXPECT_EQ(report, (std::array<std::uint8_t, 4>{0x01, 0xFF, 0x01, 0xFF}));
 
   command = {};
   command.duty_cycle = -1.0;  // 255, negative: flags 0x00
@@ -90,12 +91,55 @@ TEST(Codec1065Output, RangeEndsAndTinyDuties) {
   ASSERT_EQ(to_output_1065(command, output), CodecStatus::ok);
   EXPECT_EQ(output.duty_raw, 1);
   EXPECT_EQ(output.flags & k1065OutDirectionPositive, 0);
+}
 
-  // Zero, of either sign, carries no direction.
-  command.duty_cycle = -0.0;
-  ASSERT_EQ(to_output_1065(command, output), CodecStatus::ok);
-  EXPECT_EQ(output.flags, 0);
+// libphidget21 2.1.8 cphidgetmotorcontrol.c:634-651 (makePacket, 1065 branch): `if (motorSpeed >=
+// 0) { velocity = round(speed * 255 / 100); dir = 1; }`, and buffer[0] = dir | 0x04 (ratiometric)
+// | 0x02 (back-EMF). So a stop at full acceleration, ratiometric off, is 01 00 ff 00; -0.0 compares
+// equal to 0 in C and goes out the same.
+TEST(Codec1065Output, ZeroDutySetsTheDirectionBitAsTheVendorDoes) {
+  for (const double zero : {0.0, -0.0}) {
+    MotorCommand1065 command;
+    command.duty_cycle = zero;
+    MotorOutput1065 output;
+    ASSERT_EQ(to_output_1065(command, output), CodecStatus::ok);
+    std::array<std::uint8_t, 4> report{};
+    ASSERT_EQ(encode_output_1065(output, report), CodecStatus::ok);
+    EXPECT_EQ(report, (std::array<std::uint8_t, 4>{0x01, 0x00, 0xFF, 0x00})) << zero;
+    EXPECT_EQ(output.duty_cycle(), 0.0);
+    EXPECT_FALSE(std::signbit(output.duty_cycle()));
+
+    command.ratiometric = true;
+    command.back_emf_sensing = true;
+    ASSERT_EQ(to_output_1065(command, output), CodecStatus::ok);
+    ASSERT_EQ(encode_output_1065(output, report), CodecStatus::ok);
+    EXPECT_EQ(report, (std::array<std::uint8_t, 4>{0x07, 0x00, 0xFF, 0x00})) << zero;
+  }
+  // A duty that rounds to raw 0 keeps its sign's bit, as the vendor's `speed >= 0` test does.
+  MotorCommand1065 tiny;
+  tiny.duty_cycle = -0.0019;
+  MotorOutput1065 output;
+  ASSERT_EQ(to_output_1065(tiny, output), CodecStatus::ok);
+  EXPECT_EQ(output.flags, 0x00);
   EXPECT_EQ(output.duty_raw, 0);
+}
+
+// libphidget21 2.1.8 cphidgetmotorcontrol.c:84 sets the 1065's accelerationMin to
+// round_double(100 / 4.08, 2) = 24.51 %/s, and the setter (:727, TESTRANGE(accelerationMin,
+// accelerationMax)) refuses anything below it: raw 0 ("never ramp") is never sent.
+TEST(Codec1065Output, AccelerationBelowTheVendorsMinimumIsRefused) {
+  MotorCommand1065 command;
+  MotorOutput1065 output;
+  for (const double refused : {0.0, 1.0, 12.0, 24.5, 24.509, 6250.0 / 255.0}) {
+    command.acceleration_pct_per_s = refused;
+    EXPECT_EQ(to_output_1065(command, output), CodecStatus::out_of_range) << refused;
+  }
+  command.acceleration_pct_per_s = k1065MinAccelerationPctPerS;
+  ASSERT_EQ(to_output_1065(command, output), CodecStatus::ok);
+  EXPECT_EQ(output.acceleration_raw, 1);  // round(24.51 * 255 / 6250) = round(1.00001) = 1
+  command.acceleration_pct_per_s = 6250.0;
+  ASSERT_EQ(to_output_1065(command, output), CodecStatus::ok);
+  EXPECT_EQ(output.acceleration_raw, 255);
 }
 
 TEST(Codec1065Output, RejectsWhatTheWireCannotCarryAndLeavesTheOutputAlone) {
@@ -164,8 +208,10 @@ TEST(Codec1065Output, DecodesBytesAndConvertsUnits) {
 TEST(Codec1065Output, RoundTrips) {
   for (int duty = 0; duty <= 255; ++duty) {
     for (std::uint8_t flags : {0x00, 0x01, 0x02, 0x07}) {
+      // Acceleration raw 0 and 1 read back below the vendor's 24.51 %/s minimum (1 is
+      // 24.5098 %/s), which the command refuses; every raw value from 2 up round-trips.
       const MotorOutput1065 original{flags, static_cast<std::uint8_t>(duty),
-                                     static_cast<std::uint8_t>(255 - duty), 0x5A};
+                                     static_cast<std::uint8_t>(std::max(2, 255 - duty)), 0x5A};
       std::array<std::uint8_t, 6> report{};
       ASSERT_EQ(encode_output_1065(original, report), CodecStatus::ok);
       MotorOutput1065 back;
@@ -175,7 +221,7 @@ TEST(Codec1065Output, RoundTrips) {
       EXPECT_EQ(back.acceleration_raw, original.acceleration_raw);
       EXPECT_EQ(back.braking_raw, original.braking_raw);
       // And the units convert back to the same raw values (the direction included, except that a
-      // zero duty carries none).
+      // zero duty goes out as positive, as the vendor sends it).
       MotorCommand1065 command;
       command.duty_cycle = back.duty_cycle();
       command.acceleration_pct_per_s = back.acceleration_pct_per_s();
@@ -187,8 +233,8 @@ TEST(Codec1065Output, RoundTrips) {
       EXPECT_EQ(again.duty_raw, original.duty_raw);
       EXPECT_EQ(again.acceleration_raw, original.acceleration_raw);
       EXPECT_EQ(again.braking_raw, original.braking_raw);
-      const std::uint8_t direction_free = static_cast<std::uint8_t>(~k1065OutDirectionPositive);
-      EXPECT_EQ(again.flags, duty == 0 ? (original.flags & direction_free) : original.flags);
+      EXPECT_EQ(again.flags,
+                duty == 0 ? (original.flags | k1065OutDirectionPositive) : original.flags);
     }
   }
 }

@@ -34,6 +34,9 @@ enum class UsbBackend : std::uint8_t { simulated, hidapi, libusb };
 
 struct BoardSelection {
   std::optional<std::string> serial;  // none: the first board of that product
+  // Open a board whose firmware version is outside what the codecs know (bridge::known_firmware),
+  // with a warning, instead of refusing it.
+  bool allow_untested_firmware = false;
 };
 
 // The daemon's own settings ([daemon], [daemon.realtime]).

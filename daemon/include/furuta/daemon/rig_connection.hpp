@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/board_link.hpp"
@@ -36,10 +37,13 @@ struct RigConnection {
   std::unique_ptr<BoardLink> motor_link;
   std::unique_ptr<BoardLink> encoder_link;
   std::string description;  // "simulated rig", "hidapi: 1065 serial ...", for messages
+  // What the caller must show the user: a board opened although its firmware is untested.
+  std::vector<std::string> warnings;
 };
 
 // Opens both boards. Throws std::runtime_error with a message naming the board and the status (and,
-// for access_denied, the udev rule to install).
+// for access_denied, the udev rule to install), or naming the board, its serial and firmware when
+// the codecs do not know that firmware and the configuration does not allow it.
 RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions& options);
 
 ExcitationSpec excitation_from_config(const config::ExcitationConfig& config);

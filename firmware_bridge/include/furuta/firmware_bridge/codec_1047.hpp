@@ -14,10 +14,11 @@ inline constexpr std::size_t k1047ChannelCount = 4;
 inline constexpr std::size_t k1047ChannelBytes = 10;
 inline constexpr std::size_t k1047InputReportMinBytes = k1047ChannelCount * k1047ChannelBytes;
 inline constexpr std::size_t k1047OutputReportBytes = 1;
-// Delta counts travel as u16 - 0x7FFF.
+// Delta counts travel as u16 - 0x7FFF, taken as a 16-bit signed integer as the vendor library
+// stores it: raw 0xFFFF is -32768, not +32768 (docs/phidget-protocol.md), so deltas span int16.
 inline constexpr std::int32_t k1047DeltaOffset = 0x7FFF;
-inline constexpr std::int32_t k1047MinDelta = -0x7FFF;
-inline constexpr std::int32_t k1047MaxDelta = 0x8000;
+inline constexpr std::int32_t k1047MinDelta = -0x8000;
+inline constexpr std::int32_t k1047MaxDelta = 0x7FFF;
 
 inline constexpr std::uint8_t k1047FlagIndexSeen = 0x01;
 inline constexpr std::uint8_t k1047FlagEnabledEcho = 0x02;

@@ -34,11 +34,15 @@ inline constexpr std::uint8_t k1065FlagCommandedDirection = 0x40;  // set = posi
 
 // Full-scale acceleration: raw 255 = 6250 %/s (0 to 100 % in 16 ms).
 inline constexpr double k1065FullScaleAccelerationPctPerS = 6250.0;
+// The smallest acceleration the vendor library accepts: 100 % in 4.08 s, rounded to two decimals
+// (one raw step, 6250 / 255 = 24.5098..., would round to raw 1). Below it the vendor's setter
+// refuses; raw 0 is never sent (docs/phidget-protocol.md).
+inline constexpr double k1065MinAccelerationPctPerS = 24.51;
 
 // What the host asks of the motor.
 struct MotorCommand1065 {
   double duty_cycle = 0.0;  // [-1, 1]; sign is the direction
-  double acceleration_pct_per_s = k1065FullScaleAccelerationPctPerS;  // [0, 6250]
+  double acceleration_pct_per_s = k1065FullScaleAccelerationPctPerS;  // [24.51, 6250]
   double braking_fraction = 0.0;                                      // [0, 1]
   bool back_emf_sensing = false;
   bool ratiometric = false;
@@ -56,7 +60,8 @@ struct MotorOutput1065 {
   double braking_fraction() const;
 };
 
-// Rounds a command to the wire; out_of_range for NaN or values outside the ranges above.
+// Rounds a command to the wire; out_of_range for NaN or values outside the ranges above. As the
+// vendor library does, a zero duty goes out with the direction bit set (its `speed >= 0`).
 CodecStatus to_output_1065(const MotorCommand1065& command, MotorOutput1065& out);
 // Writes bytes 0..3 and zero-pads the rest of `report` (the device's output report length).
 CodecStatus encode_output_1065(const MotorOutput1065& output, std::span<std::uint8_t> report);

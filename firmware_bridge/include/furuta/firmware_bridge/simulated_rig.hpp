@@ -19,6 +19,7 @@
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/firmware_bridge/transport.hpp"
+#include "furuta/firmware_bridge/usb_device.hpp"
 
 namespace furuta::bridge {
 
@@ -50,8 +51,12 @@ struct SimulatedRigConfig {
   std::size_t input_report_bytes_1065 = 25;
   std::size_t output_report_bytes_1065 = 4;
   std::string serial_1047 = "300002";
+  // 1xx: a HID board; 2xx and later: a vendor-class interface (as the 1047_2), ticking at 6 MHz.
   int firmware_1047 = 101;
   std::size_t input_report_bytes_1047 = 40;
+  // wMaxPacketSize of the vendor-class 1047's IN endpoint: its 40-byte reports come in a 64-byte
+  // endpoint. (A HID board's endpoint is as long as its report.)
+  std::uint16_t usb_packet_bytes_1047 = 64;
 
   bool record_truth =
       true;  // keep a TruthRecord per generated report (allocates; off for RT tests)
@@ -91,6 +96,11 @@ class SimulatedRig {
   std::unique_ptr<Transport> make_transport();
   // What discovery would list: the boards currently connected.
   std::vector<DeviceInfo> devices() const;
+  // The rig as a USB bus: the boards with their descriptors (bcdDevice, interface class, endpoints,
+  // HID report descriptor) and their control and interrupt endpoints, for the USB transport and
+  // discovery (make_usb_transport, discover_phidgets). A vendor-class 1047 answers only the
+  // vendor's interface-recipient write request. The rig must outlive the bus.
+  std::unique_ptr<UsbBus> make_usb_bus();
 
   // --- faults (each applies to reports generated from now on) ---
   void drop_reports(RigBoard board, int count);
@@ -120,6 +130,7 @@ class SimulatedRig {
   const std::vector<MotorCommandRecord>& motor_commands() const;
   // Brings physics up to the clock's time (reads and writes do this themselves).
   void advance_to_now();
+  std::int64_t now_ns() const;  // the rig's clock
 
   class Impl;
 

@@ -8,15 +8,14 @@
 #include <vector>
 
 #include "furuta/firmware_bridge/transport.hpp"
+#include "furuta/firmware_bridge/usb_device.hpp"
 
 namespace furuta::bridge {
 
 // HID boards through hidraw (hidapi). Report lengths come from the HID report descriptor.
 std::unique_ptr<Transport> make_hidapi_transport();
 
-// Any board through libusb: detaches the kernel driver, claims interface 0, reads interrupt IN
-// 0x81, writes interrupt OUT 0x01 when the interface has it, else HID SET_REPORT (or, for the
-// vendor-class 1047 firmware 2xx, the vendor "device write" control transfer).
+// Any board through libusb: make_usb_transport(make_libusb_bus()).
 std::unique_ptr<Transport> make_libusb_transport();
 
 // Lengths in bytes of the first input and first output report: Report Count * Report Size summed
@@ -37,6 +36,9 @@ struct DiscoveryResult {
   std::vector<std::string> access_denied;
   std::string error;  // libusb could not even start (no USB in this machine/container)
 };
-DiscoveryResult discover_phidgets();
+// Lists the bus without claiming anything (a board another process uses is listed too); report
+// lengths stay 0. The firmware version is read as the vendor reads it for the interface's class.
+DiscoveryResult discover_phidgets(UsbBus& bus);
+DiscoveryResult discover_phidgets();  // on make_libusb_bus()
 
 }  // namespace furuta::bridge
