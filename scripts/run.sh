@@ -10,7 +10,7 @@ bash scripts/setup.sh
 cmake --preset release
 cmake --build --preset release --parallel "$(nproc)"
 
-furuta=./build/release/app/furuta
+furuta=${FURUTA_BIN:-./build/release/app/furuta}
 # A directory of its own per run: the trigger takes the oldest pending logs first, and the report
 # must come from the sessions just run, not from a batch left over by an earlier run.
 run="${FURUTA_OUT:-out}/$(date -u +%Y-%m-%dT%H-%M-%SZ)"
