@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/model/model.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::app {
@@ -132,7 +132,7 @@ struct SimulationReport {
 // figures written to figures_dir. Shared by `furuta simulate` and `furuta identify --simulate`.
 SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>& scenarios,
                                           const std::vector<validated::ParameterSet>& sets,
-                                          const bridge::ModelParameters& truth,
+                                          const model::Parameters<double>& truth,
                                           const std::filesystem::path& figures_dir,
                                           const std::string& truth_source, std::size_t pieces = 1);
 

@@ -43,7 +43,7 @@ struct FitInputs {
   std::vector<identification::RawExperiment> experiments;
   std::optional<identification::RawExperiment> validation;
   config::RigConfig settings;  // [identification] and the motor for eq. 4
-  std::optional<bridge::ModelParameters> nominal, truth;
+  std::optional<model::Parameters<double>> nominal, truth;
   identification::VoltageMotor voltage_motor;
   double angle_resolution_rad = 0;               // the signals figures' quantisation band
   std::vector<report::SessionSummary> sessions;  // session logs only, for the report
@@ -85,7 +85,7 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
                              const identification::Identification& id,
                              const identification::IdentifyOptions& identify_options,
                              const IdentifyCommandOptions& options,
-                             const std::optional<bridge::ModelParameters>& truth) {
+                             const std::optional<model::Parameters<double>>& truth) {
   using namespace identification;
   GuaranteedOptions g;
   g.prior = paper_prior(id.combined.estimate, cfg.mu_uncertainty_pct, 1.0);
@@ -93,8 +93,8 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
   g.prior[6] = interval::Interval(cfg.fv2_prior[0], cfg.fv2_prior[1]);
   g.unknown.fill(false);
   for (const std::string& name : cfg.unknowns) {
-    for (int k = 0; k < kParameterCount; ++k) {
-      if (name == kParameterNames[k]) g.unknown[k] = true;
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      if (name == model::kParameterNames[k]) g.unknown[k] = true;
     }
   }
   g.epsilon = cfg.epsilon;
@@ -128,7 +128,7 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
   run.json = guaranteed_json(r, constraints);
   std::vector<double> reference;
   if (truth) {
-    const ParameterVector t = to_vector(*truth);
+    const auto t = truth->to_array();
     reference.assign(t.begin(), t.end());
   }
   run.svg = svg_paving(r, 5, 6, truth ? &reference : nullptr);
@@ -142,12 +142,12 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
     s << r.finding << "\n";
   } else {
     const interval::Box hull = r.paving.outer_hull();
-    for (int k = 0; k < kParameterCount; ++k) {
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
       if (!g.unknown[k]) continue;
-      s << "  " << kParameterNames[k] << " in " << hull[static_cast<std::size_t>(k)] << " "
-        << kParameterUnits[k];
+      s << "  " << model::kParameterNames[k] << " in " << hull[static_cast<std::size_t>(k)] << " "
+        << model::kParameterUnits[k];
       if (truth) {
-        const ParameterVector t = to_vector(*truth);
+        const model::Parameters<double> t = *truth;
         s << (hull[static_cast<std::size_t>(k)].contains(t[k]) ? "  (contains the truth)"
                                                                : "  (misses the truth)");
       }
@@ -178,16 +178,15 @@ SimulationRun run_simulation(const identification::Identification& id,
   std::vector<validated::ParameterSet> sets;
   if (sivia_hull) {
     const interval::Box& h = *sivia_hull;
-    sets.push_back(
-        {"SIVIA", validated::FurutaParameters{h[0], h[1], h[2], h[3], h[4], h[5], h[6]}});
+    sets.push_back({"SIVIA", model::Parameters<furuta::interval::Interval>{h[0], h[1], h[2], h[3],
+                                                                           h[4], h[5], h[6]}});
   }
-  sets.push_back(
-      validated::point_parameters("LSMI", identification::to_parameters(id.combined.estimate)));
+  sets.push_back(validated::point_parameters("LSMI", id.combined.estimate));
   std::vector<validated::Scenario> scenarios = validated::paper_scenarios();
   if (options.simulate_seconds) {
     for (validated::Scenario& s : scenarios) s.duration_s = *options.simulate_seconds;
   }
-  const bridge::ModelParameters truth = fit.truth.value_or(fit.settings.simulation.parameters);
+  const model::Parameters<double> truth = fit.truth.value_or(fit.settings.simulation.parameters);
   const std::string source = fit.truth ? "the simulated sessions' truth"
                                        : "the configuration's simulated rig (the sessions carry "
                                          "no truth)";
@@ -391,8 +390,8 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
       identify_options_for(fit->settings, options);
   identification::Identification id = identification::identify(
       fit->experiments, fit->validation, identify_options, fit->settings.motor, fit->voltage_motor);
-  if (fit->nominal) id.nominal = identification::to_vector(*fit->nominal);
-  if (fit->truth) id.truth = identification::to_vector(*fit->truth);
+  if (fit->nominal) id.nominal = *fit->nominal;
+  if (fit->truth) id.truth = *fit->truth;
 
   std::filesystem::create_directories(options.output_dir);
   std::vector<identification::InputFile> inputs;

@@ -51,7 +51,7 @@ std::string slug(const std::string& name) {
   return out.empty() ? "parameters" : out;
 }
 
-std::string parameters_json(const bridge::ModelParameters& p) {
+std::string parameters_json(const model::Parameters<double>& p) {
   return "{\"mu1\": " + json_number(p.mu1) + ", \"mu2\": " + json_number(p.mu2) +
          ", \"mu3\": " + json_number(p.mu3) + ", \"mu4\": " + json_number(p.mu4) +
          ", \"mug\": " + json_number(p.mug) + ", \"fv1\": " + json_number(p.fv1) +
@@ -81,9 +81,9 @@ double finite_number(const nlohmann::json& object, const std::string& key,
   return it->get<double>();
 }
 
-bridge::ModelParameters parameters_from(const nlohmann::json& object, const std::string& where) {
+model::Parameters<double> parameters_from(const nlohmann::json& object, const std::string& where) {
   if (!object.is_object()) throw ResultsFileError(where + ": not an object");
-  bridge::ModelParameters p;
+  model::Parameters<double> p;
   p.mu1 = finite_number(object, "mu1", where);
   p.mu2 = finite_number(object, "mu2", where);
   p.mu3 = finite_number(object, "mu3", where);
@@ -95,15 +95,15 @@ bridge::ModelParameters parameters_from(const nlohmann::json& object, const std:
 }
 
 struct ResultsParameters {
-  bridge::ModelParameters lsmi;
-  std::optional<bridge::ModelParameters> truth;
-  std::optional<validated::FurutaParameters> sivia;
+  model::Parameters<double> lsmi;
+  std::optional<model::Parameters<double>> truth;
+  std::optional<model::Parameters<furuta::interval::Interval>> sivia;
   std::string note;  // why there is no SIVIA set, when there is none
 };
 
 // The SIVIA outer hull by parameter name: the carried mu's come out as their prior (the LSMI
 // estimate +- Table II %), the frictions as the paving's hull.
-validated::FurutaParameters sivia_hull(const nlohmann::json& sivia) {
+model::Parameters<furuta::interval::Interval> sivia_hull(const nlohmann::json& sivia) {
   const auto names = sivia.find("parameters");
   const auto hull = sivia.find("outer_hull");
   if (names == sivia.end() || !names->is_array()) {
@@ -112,7 +112,7 @@ validated::FurutaParameters sivia_hull(const nlohmann::json& sivia) {
   if (hull == sivia.end() || !hull->is_array() || hull->size() != names->size()) {
     throw ResultsFileError("sivia.outer_hull: missing or not one interval per parameter");
   }
-  validated::FurutaParameters p;
+  model::Parameters<furuta::interval::Interval> p;
   const std::array<std::pair<const char*, interval::Interval*>, 7> slots = {{{"mu1", &p.mu1},
                                                                              {"mu2", &p.mu2},
                                                                              {"mu3", &p.mu3},
@@ -176,7 +176,7 @@ ResultsParameters read_results(const std::filesystem::path& path) {
 
 SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>& scenarios,
                                           const std::vector<validated::ParameterSet>& sets,
-                                          const bridge::ModelParameters& truth,
+                                          const model::Parameters<double>& truth,
                                           const std::filesystem::path& figures_dir,
                                           const std::string& truth_source, std::size_t pieces) {
   const validated::MeasurementOptions measurement_options;
@@ -268,7 +268,7 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
   }
 
   std::vector<validated::ParameterSet> sets;
-  bridge::ModelParameters truth = bridge::ModelParameters::paper_run1();
+  model::Parameters<double> truth = model::paper_run1();
   std::string truth_source = "the simulated rig's default (the paper's run 1)";
   std::string note;
   if (!options.results.empty()) {
@@ -292,7 +292,7 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
   } else {
     if (options.relative_pct) {
       sets.push_back({"truth+-" + percent_text(*options.relative_pct) + "%",
-                      validated::FurutaParameters::around(truth, *options.relative_pct / 100)});
+                      validated::parameters_around(truth, *options.relative_pct / 100)});
     }
     sets.push_back(validated::point_parameters("truth", truth));
   }

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/model/model.hpp"
 
 namespace {
 
@@ -20,8 +20,8 @@ using namespace furuta;
 // A session generated from the model (the paper's parameters, eq. 4 motor) without the daemon:
 // a smooth six-sine duty of amplitude 0.3, RK4 at 1 ms, sampled every 16 ms for 10 s.
 identification::RawExperiment session(double phase, const std::string& name) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
-  const bridge::MotorData motor;
+  const furuta::model::Parameters<double> p = furuta::model::paper_run1();
+  const furuta::model::MotorData motor;
   constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
   const auto duty = [&](double t) {
     double sum = 0;
@@ -34,7 +34,7 @@ identification::RawExperiment session(double phase, const std::string& name) {
   e.name = name;
   e.sample_period_s = 0.016;
   e.input_kind = identification::InputKind::duty;
-  bridge::PendulumState x;
+  furuta::model::PendulumState x;
   constexpr int kStepsPerSample = 16;
   constexpr double h = 1e-3;
   for (int k = 0; k < 625; ++k) {
@@ -45,7 +45,7 @@ identification::RawExperiment session(double phase, const std::string& name) {
     e.input.push_back(duty(t));
     for (int s = 0; s < kStepsPerSample; ++s) {
       const double d = duty(t + (s + 0.5) * h);
-      x = bridge::rk4_step(p, x, h, [&](const bridge::PendulumState& state) {
+      x = furuta::model::rk4_step(p, x, h, [&](const furuta::model::PendulumState& state) {
         return motor.arm_torque_nm(d, state.dq1);
       });
     }
@@ -79,7 +79,7 @@ identification::IdentifyOptions options(bool estimate_lag) {
 void BM_IdentifyTwoSessionsPlusHeldOut(benchmark::State& state) {
   const Sessions& s = sessions();
   const identification::IdentifyOptions o = options(state.range(0) != 0);
-  const bridge::MotorData motor;
+  const furuta::model::MotorData motor;
   for (auto _ : state) {
     identification::Identification id = identification::identify(s.fit, s.held_out, o, motor);
     benchmark::DoNotOptimize(id.combined.estimate);
@@ -96,7 +96,7 @@ BENCHMARK(BM_IdentifyTwoSessionsPlusHeldOut)
 void BM_PreprocessOneSession(benchmark::State& state) {
   const identification::RawExperiment& e = sessions().fit.front();
   const identification::PreprocessOptions o = options(false).preprocess;
-  const bridge::MotorData motor;
+  const furuta::model::MotorData motor;
   for (auto _ : state) {
     benchmark::DoNotOptimize(identification::preprocess(e, o, motor).tau.data());
   }
@@ -105,7 +105,7 @@ BENCHMARK(BM_PreprocessOneSession)->Unit(benchmark::kMillisecond);
 
 void BM_LsmiTwoSessions(benchmark::State& state) {
   const identification::PreprocessOptions o = options(false).preprocess;
-  const bridge::MotorData motor;
+  const furuta::model::MotorData motor;
   const identification::JointSeries a = identification::preprocess(sessions().fit[0], o, motor);
   const identification::JointSeries b = identification::preprocess(sessions().fit[1], o, motor);
   identification::LsmiOptions lsmi;

@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/preprocessing.hpp"
+#include "furuta/model/model.hpp"
 #include "simulated_sessions.hpp"
 
 namespace {
@@ -37,7 +37,7 @@ using furuta::testing::trim;
 struct Data {
   std::vector<SimulatedSession> sessions;
   std::vector<IntervalSample> samples;
-  ParameterVector truth{};
+  furuta::model::Parameters<double> truth{};
 };
 const Data& data() {
   static const Data d = [] {
@@ -45,7 +45,7 @@ const Data& data() {
     out.sessions = {simulate(1), simulate(2)};
     out.samples = interval_samples({&out.sessions[0].processed, &out.sessions[1].processed},
                                    bounds_covering(out.sessions), trim());
-    out.truth = to_vector(bridge::ModelParameters::paper_run1());
+    out.truth = furuta::model::paper_run1();
     return out;
   }();
   return d;
@@ -98,8 +98,9 @@ void run(benchmark::State& state, GuaranteedOptions o) {
   state.counters["probed_inner"] = static_cast<double>(p.probed_inner);
   state.counters["truncated"] = p.truncated ? 1 : 0;
   const Box hull = p.outer_hull();
-  for (int k = 0; k < kParameterCount; ++k) {
-    if (o.unknown[k]) state.counters[std::string("w_") + kParameterNames[k]] = hull[k].width();
+  for (std::size_t k = 0; k < furuta::model::kParameterCount; ++k) {
+    if (o.unknown[k])
+      state.counters[std::string("w_") + furuta::model::kParameterNames[k]] = hull[k].width();
   }
   state.counters["inner_measure"] = unknowns_volume(p.inner, o.unknown);
   state.counters["boundary_measure"] = unknowns_volume(p.boundary, o.unknown);

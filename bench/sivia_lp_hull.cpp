@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/guaranteed.hpp"
+#include "furuta/model/model.hpp"
 #include "simulated_sessions.hpp"
 
 namespace {
@@ -36,7 +36,7 @@ struct ProblemDeleter {
 using LinearProgram = std::unique_ptr<glp_prob, ProblemDeleter>;
 
 struct Row {
-  std::array<Interval, kParameterCount> a;
+  std::array<Interval, furuta::model::kParameterCount> a;
   Interval y;
 };
 
@@ -44,16 +44,16 @@ struct Row {
 // and magnitudes, so rounds repeat until it stops shrinking).
 bool lp_hull(const std::vector<Row>& rows, Box& box) {
   LinearProgram lp(glp_create_prob());
-  glp_add_cols(lp.get(), kParameterCount);
-  for (int k = 0; k < kParameterCount; ++k) {
+  glp_add_cols(lp.get(), furuta::model::kParameterCount);
+  for (std::size_t k = 0; k < furuta::model::kParameterCount; ++k) {
     glp_set_col_bnds(lp.get(), k + 1, GLP_DB, box[k].lo(), box[k].hi());
   }
   glp_add_rows(lp.get(), static_cast<int>(2 * rows.size()));
-  std::array<int, kParameterCount + 1> index{};
-  std::array<double, kParameterCount + 1> upper{}, lower{};
+  std::array<int, furuta::model::kParameterCount + 1> index{};
+  std::array<double, furuta::model::kParameterCount + 1> upper{}, lower{};
   for (std::size_t j = 0; j < rows.size(); ++j) {
     double unsigned_slack = 0;
-    for (int k = 0; k < kParameterCount; ++k) {
+    for (std::size_t k = 0; k < furuta::model::kParameterCount; ++k) {
       const double mid = rows[j].a[k].mid(), rad = rows[j].a[k].rad();
       index[k + 1] = k + 1;
       if (box[k].lo() >= 0) {
@@ -68,22 +68,23 @@ bool lp_hull(const std::vector<Row>& rows, Box& box) {
       }
     }
     const int r = static_cast<int>(2 * j) + 1;
-    glp_set_mat_row(lp.get(), r, kParameterCount, index.data(), upper.data());
+    glp_set_mat_row(lp.get(), r, furuta::model::kParameterCount, index.data(), upper.data());
     glp_set_row_bnds(lp.get(), r, GLP_UP, 0, rows[j].y.hi() + unsigned_slack);
-    glp_set_mat_row(lp.get(), r + 1, kParameterCount, index.data(), lower.data());
+    glp_set_mat_row(lp.get(), r + 1, furuta::model::kParameterCount, index.data(), lower.data());
     glp_set_row_bnds(lp.get(), r + 1, GLP_LO, rows[j].y.lo() - unsigned_slack, 0);
   }
   glp_smcp parameters;
   glp_init_smcp(&parameters);
   parameters.msg_lev = GLP_MSG_OFF;
   Box hull = box;
-  for (int k = 0; k < kParameterCount; ++k) {
+  for (std::size_t k = 0; k < furuta::model::kParameterCount; ++k) {
     for (const int direction : {GLP_MIN, GLP_MAX}) {
-      for (int i = 0; i < kParameterCount; ++i) glp_set_obj_coef(lp.get(), i + 1, i == k ? 1 : 0);
+      for (std::size_t i = 0; i < furuta::model::kParameterCount; ++i)
+        glp_set_obj_coef(lp.get(), i + 1, i == k ? 1 : 0);
       glp_set_obj_dir(lp.get(), direction);
       if (glp_simplex(lp.get(), &parameters) != 0 || glp_get_status(lp.get()) != GLP_OPT) {
-        std::fprintf(stderr, "LP for %s not solved (status %d)\n", kParameterNames[k],
-                     glp_get_status(lp.get()));
+        std::fprintf(stderr, "LP for %s not solved (status %d)\n",
+                     furuta::model::kParameterNames[k], glp_get_status(lp.get()));
         return false;
       }
       const double v = glp_get_obj_val(lp.get());
@@ -105,13 +106,13 @@ int main(int argc, char** argv) {
   const std::vector<IntervalSample> samples =
       interval_samples({&sessions[0].processed, &sessions[1].processed},
                        testing::bounds_covering(sessions), testing::trim());
-  const ParameterVector truth = to_vector(bridge::ModelParameters::paper_run1());
+  const furuta::model::Parameters<double> truth = furuta::model::paper_run1();
   const double p = prior_percent;
   Box box = paper_prior(truth, {p, p, p, p, p}, 1.5);
   if (argc > 3) {
     const int k = std::atoi(argv[2]);
     const double pin = std::atof(argv[3]) / 100.0;
-    if (k < 0 || k >= kParameterCount) {
+    if (k < 0 || k >= static_cast<int>(furuta::model::kParameterCount)) {
       std::fprintf(stderr, "PIN_PARAMETER must be 0..6, got %d\n", k);
       return 2;
     }
@@ -128,9 +129,9 @@ int main(int argc, char** argv) {
     const Box before = box;
     if (!lp_hull(rows, box)) return 1;
     std::printf("round %d:", round);
-    for (int k = 0; k < kParameterCount; ++k) {
-      std::printf(" %s [%.4g, %.4g] (%.1f %% of truth)", kParameterNames[k], box[k].lo(),
-                  box[k].hi(), 100 * box[k].width() / std::abs(truth[k]));
+    for (std::size_t k = 0; k < furuta::model::kParameterCount; ++k) {
+      std::printf(" %s [%.4g, %.4g] (%.1f %% of truth)", furuta::model::kParameterNames[k],
+                  box[k].lo(), box[k].hi(), 100 * box[k].width() / std::abs(truth[k]));
     }
     std::printf("\n");
     if (box == before) break;

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/model/model.hpp"
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/split.hpp"
 #include "reference.hpp"
@@ -91,10 +91,11 @@ Box initial_state(const Scenario& s) {
 // The spread of q2 at `times` (increasing, from 0) over `count` sampled initial states (corners
 // included) and, when `params` is not null, parameters drawn in their intervals (one draw per 50
 // points).
-std::vector<double> sampled_q2_spread(const Scenario& s, const Box& x0,
-                                      const v::FurutaParameters* params, std::size_t count,
-                                      const std::vector<double>& times = {1.0, 2.0, 3.0, 4.0}) {
-  const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
+std::vector<double> sampled_q2_spread(
+    const Scenario& s, const Box& x0,
+    const furuta::model::Parameters<furuta::interval::Interval>* params, std::size_t count,
+    const std::vector<double>& times = {1.0, 2.0, 3.0, 4.0}) {
+  const furuta::model::Parameters<double> truth = furuta::model::paper_run1();
   std::mt19937_64 rng(2024);
   const std::vector<ref::Point<4>> points = ref::sample_box<4>(x0, count, rng);
   const std::size_t m = times.size();
@@ -102,12 +103,12 @@ std::vector<double> sampled_q2_spread(const Scenario& s, const Box& x0,
   std::vector<long double> hi(m, -1e9L);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   auto draw = [&](const Interval& x) { return x.lo() + u(rng) * (x.hi() - x.lo()); };
-  v::FurutaParameters p = v::FurutaParameters::point(truth);
+  furuta::model::Parameters<furuta::interval::Interval> p = v::interval_parameters(truth);
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (params != nullptr && i % 50 == 0) {
-      p = v::FurutaParameters{draw(params->mu1), draw(params->mu2), draw(params->mu3),
-                              draw(params->mu4), draw(params->mug), draw(params->fv1),
-                              draw(params->fv2)};
+      p = furuta::model::Parameters<furuta::interval::Interval>{
+          draw(params->mu1), draw(params->mu2), draw(params->mu3), draw(params->mu4),
+          draw(params->mug), draw(params->fv1), draw(params->fv2)};
     }
     const v::FurutaStateDynamics system(p, Interval(s.tau_nm));
     ref::Point<4> x = points[i];
@@ -131,9 +132,10 @@ struct Q2Width {
   double ratio;
 };
 template <class Set>
-std::vector<Q2Width> q2_against_spread(const Set& set, const Scenario& s, const Box& state_box,
-                                       const v::FurutaParameters& p,
-                                       const std::vector<double>& times) {
+std::vector<Q2Width> q2_against_spread(
+    const Set& set, const Scenario& s, const Box& state_box,
+    const furuta::model::Parameters<furuta::interval::Interval>& p,
+    const std::vector<double>& times) {
   const std::vector<double> spread = sampled_q2_spread(s, state_box, &p, 1000, times);
   std::vector<Q2Width> out;
   for (std::size_t k = 0; k < times.size(); ++k) {
@@ -183,9 +185,8 @@ v::SplitOptions split_options(int planned_depth = 0) {
 void BM_FurutaPointParameters(benchmark::State& state) {
   const Scenario& s = kScenarios[state.range(0)];
   const Box x0 = initial_state(s);
-  const v::FurutaStateDynamics system(
-      v::FurutaParameters::point(furuta::bridge::ModelParameters::paper_run1()),
-      Interval(s.tau_nm));
+  const v::FurutaStateDynamics system(v::interval_parameters(furuta::model::paper_run1()),
+                                      Interval(s.tau_nm));
   v::SplitResult r;
   for (auto _ : state) {
     r = v::integrate_split(system, x0, furuta_options(),
@@ -205,8 +206,9 @@ BENCHMARK(BM_FurutaPointParameters)
 // second argument: the planned split's depth, as in (2).
 void BM_FurutaIntervalParameters(benchmark::State& state) {
   const Scenario& s = kScenarios[state.range(0)];
-  const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
-  v::FurutaParameters p = v::FurutaParameters::around(truth, env_or("FURUTA_MU_REL", 0.02));
+  const furuta::model::Parameters<double> truth = furuta::model::paper_run1();
+  furuta::model::Parameters<furuta::interval::Interval> p =
+      v::parameters_around(truth, env_or("FURUTA_MU_REL", 0.02));
   const double fv1 = env_or("FURUTA_FV1_REL", 0.1);
   const double fv2 = env_or("FURUTA_FV2_REL", 0.5);
   p.fv1 = Interval(truth.fv1) * (Interval(1.0) + Interval(-fv1, fv1));
@@ -245,8 +247,8 @@ BENCHMARK(BM_FurutaIntervalParameters)
 // (0..6 = mu1, mu2, mu3, mu4, mug, fv1, fv2), second: decades (0..3).
 void BM_FurutaOneIntervalParameter(benchmark::State& state) {
   const Scenario& s = kScenarios[1];
-  const furuta::bridge::ModelParameters truth = furuta::bridge::ModelParameters::paper_run1();
-  v::FurutaParameters p = v::FurutaParameters::point(truth);
+  const furuta::model::Parameters<double> truth = furuta::model::paper_run1();
+  furuta::model::Parameters<furuta::interval::Interval> p = v::interval_parameters(truth);
   const auto parameter = static_cast<std::size_t>(state.range(0));
   const double bench_width[] = {0.02, 0.02, 0.02, 0.02, 0.02, 0.1, 0.5};
   const double relative = bench_width[parameter] * std::pow(10.0, -state.range(1));

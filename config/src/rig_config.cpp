@@ -219,8 +219,8 @@ bridge::EncoderGeometry read_encoder(Section s, double default_cpr) {
   return g;
 }
 
-bridge::ModelParameters read_parameters(Section s, const bridge::ModelParameters& d) {
-  bridge::ModelParameters p;
+model::Parameters<double> read_parameters(Section s, const model::Parameters<double>& d) {
+  model::Parameters<double> p;
   p.mu1 = s.number("mu1", d.mu1, positive, "> 0");
   p.mu2 = s.number("mu2", d.mu2);
   p.mu3 = s.number("mu3", d.mu3);
@@ -277,7 +277,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   boards.reject_unknown_keys();
 
   Section motor = top.child("motor");
-  const bridge::MotorData dm;
+  const model::MotorData dm;
   c.motor.rotor_inertia_kg_m2 =
       motor.number("rotor_inertia_kg_m2", dm.rotor_inertia_kg_m2, non_negative, ">= 0");
   c.motor.no_load_speed_rpm =
@@ -319,7 +319,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
       static_cast<int>(sim.integer("firmware_1065", s.firmware_1065, firmware, "in [100, 999]"));
   s.firmware_1047 =
       static_cast<int>(sim.integer("firmware_1047", s.firmware_1047, firmware, "in [100, 999]"));
-  s.parameters = read_parameters(sim.child("parameters"), bridge::ModelParameters::paper_run1());
+  s.parameters = read_parameters(sim.child("parameters"), model::paper_run1());
   {
     Section x0 = sim.child("initial_state");
     s.initial_state.q1 = x0.number("q1_deg", 0.0) * kDegToRad;
@@ -562,7 +562,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   }
 
   Section nominal = top.child("nominal");
-  if (nominal.present()) c.nominal = read_parameters(nominal, bridge::ModelParameters{});
+  if (nominal.present()) c.nominal = read_parameters(nominal, model::Parameters<double>{});
 
   top.reject_unknown_keys();
   return c;

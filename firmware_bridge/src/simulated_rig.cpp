@@ -173,7 +173,7 @@ class SimulatedRig::Impl {
 
   const SimulatedRigConfig& config() const { return config_; }
   std::int64_t now_ns() const { return clock_.now_ns(); }
-  PendulumState true_state() const {
+  model::PendulumState true_state() const {
     std::lock_guard lock(mutex_);
     return state_;
   }
@@ -217,7 +217,7 @@ class SimulatedRig::Impl {
   std::int64_t t0_ns_ = 0;
   std::int64_t step_ns_ = 0;
   std::int64_t physics_ns_ = 0;
-  PendulumState state_{};
+  model::PendulumState state_{};
   bool arm_clamped_ = false;
 
   // 1065 motor drive.
@@ -384,9 +384,10 @@ void SimulatedRig::Impl::integrate_to(std::int64_t t_ns) {
     // The ramp is linear within the step, so its mean is the duty the step sees on average.
     const double step_duty = 0.5 * (duty_start + applied_duty_);
 
-    state_ = rk4_step(
+    state_ = model::rk4_step(
         config_.parameters, state_, h,
-        [&](const PendulumState& s) { return drive_torque(step_duty, s.dq1); }, arm_clamped_);
+        [&](const model::PendulumState& s) { return drive_torque(step_duty, s.dq1); },
+        arm_clamped_);
     physics_ns_ = end_ns;
     arm.track_edges(state_.q1, physics_ns_);
     pendulum.track_edges(state_.q2, physics_ns_);
@@ -829,10 +830,10 @@ void SimulatedRig::clamp_arm(bool clamped) {
 const SimulatedRigConfig& SimulatedRig::config() const {
   return impl_->config();
 }
-const ModelParameters& SimulatedRig::true_parameters() const {
+const model::Parameters<double>& SimulatedRig::true_parameters() const {
   return impl_->config().parameters;
 }
-PendulumState SimulatedRig::true_state() const {
+model::PendulumState SimulatedRig::true_state() const {
   return impl_->true_state();
 }
 std::int64_t SimulatedRig::physics_time_ns() const {

@@ -33,10 +33,10 @@ Interval evaluate(const LinearRow& row, const Box& p) {
 // the box is emptied.
 bool contract_linear(const LinearRow& row, const Interval& y, Box& p) {
   const int n = row.terms;
-  std::array<Interval, kParameterCount> term;
+  std::array<Interval, model::kParameterCount> term;
   for (int j = 0; j < n; ++j) term[j] = row.coefficient[j] * p[row.index[j]];
   // prefix[j] = constant + term[0..j-1]; suffix[j] = term[j..n-1].
-  std::array<Interval, kParameterCount + 1> prefix, suffix;
+  std::array<Interval, model::kParameterCount + 1> prefix, suffix;
   prefix[0] = row.constant;
   for (int j = 0; j < n; ++j) prefix[j + 1] = prefix[j] + term[j];
   suffix[n] = Interval(0.0);
@@ -84,7 +84,7 @@ RowEstimate estimate(const LinearRow& row, const Box& p) {
 bool contraction_is_idle(const LinearRow& row, const Interval& y, const Box& p) {
   const int n = row.terms;
   // Per term: the products a_lo x_lo, a_hi x_lo (the bound x_lo) and a_lo x_hi, a_hi x_hi.
-  std::array<double, kParameterCount> lo_min, lo_max, hi_min, hi_max, tl, th;
+  std::array<double, model::kParameterCount> lo_min, lo_max, hi_min, hi_max, tl, th;
   double lo = row.constant.lo(), hi = row.constant.hi();
   for (int j = 0; j < n; ++j) {
     const Interval& a = row.coefficient[j];
@@ -116,10 +116,10 @@ bool contraction_is_idle(const LinearRow& row, const Interval& y, const Box& p) 
 
 // A row's coefficients split into the unknowns' terms and a constant from the carried components
 // (each carried p_k given as an interval: its prior, or its midpoint).
-LinearRow reduce(const std::array<Interval, kParameterCount>& a, const Box& carried,
-                 const std::array<bool, kParameterCount>& unknown) {
+LinearRow reduce(const std::array<Interval, model::kParameterCount>& a, const Box& carried,
+                 const std::array<bool, model::kParameterCount>& unknown) {
   LinearRow row;
-  for (int k = 0; k < kParameterCount; ++k) {
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (is_zero(a[k])) continue;
     if (unknown[k]) {
       row.coefficient[row.terms] = a[k];
@@ -187,13 +187,13 @@ RegressorEnclosure regressor_enclosure(const Interval& q2, const Interval& dq1, 
 }
 
 SampleConstraints::SampleConstraints(std::vector<IntervalSample> samples, const Box& prior,
-                                     const std::array<bool, kParameterCount>& unknown)
+                                     const std::array<bool, model::kParameterCount>& unknown)
     : samples_(std::move(samples)) {
-  if (prior.size() != static_cast<std::size_t>(kParameterCount)) {
+  if (prior.size() != static_cast<std::size_t>(model::kParameterCount)) {
     throw std::invalid_argument("guaranteed identification: the prior box needs 7 components");
   }
   Box midpoints = prior;
-  for (int k = 0; k < kParameterCount; ++k) midpoints[k] = Interval(prior[k].mid());
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) midpoints[k] = Interval(prior[k].mid());
   pre_.reserve(samples_.size());
   for (const IntervalSample& d : samples_) {
     Precomputed p;
@@ -210,7 +210,7 @@ SampleConstraints::SampleConstraints(std::vector<IntervalSample> samples, const 
     p.row2_ddq2_lo = reduce(face(d.ddq1, Interval(d.ddq2.lo())).row2, midpoints, unknown);
     p.row2_ddq2_hi = reduce(face(d.ddq1, Interval(d.ddq2.hi())).row2, midpoints, unknown);
     const Interval sn = interval::sin(q2), cs = interval::cos(q2), zero(0.0), one(1.0);
-    using Row = std::array<Interval, kParameterCount>;
+    using Row = std::array<Interval, model::kParameterCount>;
     p.a11 = reduce(Row{one, interval::sqr(sn), zero, zero, zero, zero, zero}, midpoints, unknown);
     p.a12 = reduce(Row{zero, zero, cs, zero, zero, zero, zero}, midpoints, unknown);
     p.a22 = reduce(Row{zero, zero, zero, one, zero, zero, zero}, midpoints, unknown);
@@ -225,15 +225,15 @@ SampleConstraints::SampleConstraints(std::vector<IntervalSample> samples, const 
 }
 
 void SampleConstraints::build_preconditioned_system(
-    const std::array<bool, kParameterCount>& unknown) {
-  for (int k = 0; k < kParameterCount; ++k) {
+    const std::array<bool, model::kParameterCount>& unknown) {
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (unknown[k]) unknown_index_.push_back(k);
   }
   const auto n = static_cast<Eigen::Index>(unknown_index_.size());
   const auto rows = static_cast<Eigen::Index>(2 * pre_.size());
   if (n == 0 || rows < n) return;
   // Row r of A over the unknowns, and its right-hand side y - constant.
-  std::vector<std::array<Interval, kParameterCount>> a(static_cast<std::size_t>(rows));
+  std::vector<std::array<Interval, model::kParameterCount>> a(static_cast<std::size_t>(rows));
   std::vector<Interval> y(static_cast<std::size_t>(rows));
   Eigen::MatrixXd mid(rows, n);
   for (std::size_t i = 0; i < pre_.size(); ++i) {
@@ -393,9 +393,9 @@ bool SampleConstraints::contract(std::size_t i, Box& p) const {
   return contraction_is_idle(pre.row2, zero, p) || contract_linear(pre.row2, zero, p);
 }
 
-Box paper_prior(const ParameterVector& mu_centre, const std::array<double, 5>& mu_percent,
+Box paper_prior(const model::Parameters<double>& mu_centre, const std::array<double, 5>& mu_percent,
                 double friction_limit) {
-  Box prior(kParameterCount);
+  Box prior(model::kParameterCount);
   for (int k = 0; k < 5; ++k) {
     const double half = std::abs(mu_centre[k]) * mu_percent[k] / 100.0;
     prior[k] = Interval(mu_centre[k]) + Interval(-half, half);
@@ -407,7 +407,7 @@ Box paper_prior(const ParameterVector& mu_centre, const std::array<double, 5>& m
 
 GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
                                            const GuaranteedOptions& options) {
-  if (options.prior.size() != static_cast<std::size_t>(kParameterCount)) {
+  if (options.prior.size() != static_cast<std::size_t>(model::kParameterCount)) {
     throw std::invalid_argument("guaranteed identification: the prior box needs 7 components");
   }
   if (options.q < 0) throw std::invalid_argument("guaranteed identification: q must be >= 0");
@@ -452,7 +452,7 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
           }
         }
         bool shrank = false;
-        for (int k = 0; k < kParameterCount; ++k) {
+        for (std::size_t k = 0; k < model::kParameterCount; ++k) {
           if (options.unknown[k] && box[k].width() < 0.9 * before[k].width()) shrank = true;
         }
         if (!shrank) break;
@@ -483,10 +483,10 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
     sivia.inner_probe = [&, unknowns](const Box& box) -> std::optional<Box> {
       const auto sub_box = [&](double fraction, int shifted, double shift) {
         Box sub = box;
-        for (int k = 0; k < kParameterCount; ++k) {
+        for (std::size_t k = 0; k < model::kParameterCount; ++k) {
           if (!options.unknown[k]) continue;
           const double w = box[k].width();
-          const double c = box[k].mid() + (k == shifted ? shift * w : 0.0);
+          const double c = box[k].mid() + (static_cast<int>(k) == shifted ? shift * w : 0.0);
           sub[k] = intersect(Interval(c - 0.5 * fraction * w, c + 0.5 * fraction * w), box[k]);
         }
         return sub;
@@ -503,7 +503,7 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
       };
       if (auto found = grown_from(-1, 0)) return found;
       if (unknowns > 3) return std::nullopt;
-      for (int k = 0; k < kParameterCount; ++k) {
+      for (std::size_t k = 0; k < model::kParameterCount; ++k) {
         if (!options.unknown[k]) continue;
         for (const double shift : {-0.25, 0.25}) {
           if (auto found = grown_from(k, shift)) return found;
@@ -517,8 +517,8 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
   sivia.progress = options.progress;
   sivia.max_boxes = options.max_boxes;
   sivia.cancel = options.cancel;
-  sivia.scale.assign(kParameterCount, 0.0);
-  for (int k = 0; k < kParameterCount; ++k) {
+  sivia.scale.assign(model::kParameterCount, 0.0);
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (options.unknown[k]) {
       sivia.scale[k] = options.epsilon_relative ? options.prior[k].width() : 1.0;
     }

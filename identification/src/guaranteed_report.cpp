@@ -25,11 +25,11 @@ std::string box_json(const Box& b) {
 }  // namespace
 
 double unknowns_volume(const std::vector<Box>& boxes,
-                       const std::array<bool, kParameterCount>& unknown) {
+                       const std::array<bool, model::kParameterCount>& unknown) {
   double total = 0;
   for (const Box& b : boxes) {
     double v = 1;
-    for (int k = 0; k < kParameterCount; ++k) {
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
       if (unknown[k]) v *= b[k].width();
     }
     total += v;
@@ -42,14 +42,14 @@ std::string guaranteed_json(const GuaranteedResult& r, const SampleConstraints& 
   const auto& p = r.paving;
   out << "{\"unknowns\": [";
   bool first = true;
-  for (int k = 0; k < kParameterCount; ++k) {
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (!r.unknown[k]) continue;
-    out << (first ? "" : ", ") << "\"" << kParameterNames[k] << "\"";
+    out << (first ? "" : ", ") << "\"" << model::kParameterNames[k] << "\"";
     first = false;
   }
   out << "], \"parameters\": [";
-  for (int k = 0; k < kParameterCount; ++k)
-    out << (k ? ", " : "") << "\"" << kParameterNames[k] << "\"";
+  for (std::size_t k = 0; k < model::kParameterCount; ++k)
+    out << (k ? ", " : "") << "\"" << model::kParameterNames[k] << "\"";
   out << "], \"samples\": " << r.samples << ", \"q\": " << r.q
       << ", \"prior\": " << box_json(p.prior) << ", \"boxes_tested\": " << p.boxes_tested
       << ", \"bisections\": " << p.bisections << ", \"inner_count\": " << p.inner.size()
@@ -137,7 +137,7 @@ std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
   draw(p.outer, "#6fa8dc", "outer");
   draw(p.boundary, "#ffd966", "boundary");
   draw(p.inner, "#e06666", "inner");
-  if (reference && reference->size() == static_cast<std::size_t>(kParameterCount)) {
+  if (reference && reference->size() == static_cast<std::size_t>(model::kParameterCount)) {
     s << "<circle cx=\"" << X((*reference)[static_cast<std::size_t>(xp)]) << "\" cy=\""
       << Y((*reference)[static_cast<std::size_t>(yp)])
       << "\" r=\"4\" fill=\"none\" stroke=\"black\" stroke-width=\"1.5\"/>\n";
@@ -155,12 +155,12 @@ std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
   }
   s << "<text x=\"" << left + pw / 2 << "\" y=\"" << top + ph + 36
     << "\" font-size=\"12\" text-anchor=\"middle\">"
-    << kParameterNames[static_cast<std::size_t>(xp)] << " ["
-    << kParameterUnits[static_cast<std::size_t>(xp)] << "]</text>\n";
+    << model::kParameterNames[static_cast<std::size_t>(xp)] << " ["
+    << model::kParameterUnits[static_cast<std::size_t>(xp)] << "]</text>\n";
   s << "<text x=\"16\" y=\"" << top + ph / 2 << "\" font-size=\"12\" transform=\"rotate(-90 16 "
     << top + ph / 2 << ")\" text-anchor=\"middle\">"
-    << kParameterNames[static_cast<std::size_t>(yp)] << " ["
-    << kParameterUnits[static_cast<std::size_t>(yp)] << "]</text>\n";
+    << model::kParameterNames[static_cast<std::size_t>(yp)] << " ["
+    << model::kParameterUnits[static_cast<std::size_t>(yp)] << "]</text>\n";
   s << "<text x=\"" << left << "\" y=\"" << H - 10
     << "\" font-size=\"11\"><tspan fill=\"#e06666\">inner</tspan>  <tspan "
        "fill=\"#b8860b\">boundary</tspan>  <tspan fill=\"#6fa8dc\">outer</tspan>"

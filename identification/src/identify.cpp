@@ -20,7 +20,7 @@ using text::json_string;
 
 Identification identify(const std::vector<RawExperiment>& experiments,
                         const std::optional<RawExperiment>& validation,
-                        const IdentifyOptions& options, const bridge::MotorData& motor,
+                        const IdentifyOptions& options, const model::MotorData& motor,
                         const VoltageMotor& voltage_motor) {
   if (experiments.empty()) throw std::invalid_argument("identify: no experiment given");
   Identification id;
@@ -99,10 +99,10 @@ std::string sci(double v, int precision = 5) {
   return s.str();
 }
 
-std::string json_vector(const ParameterVector& v) {
+std::string json_vector(const model::Parameters<double>& v) {
   std::string out = "{";
   for (std::size_t k = 0; k < v.size(); ++k) {
-    out += (k ? ", " : "") + json_string(kParameterNames[k]) + ": " + json_number(v[k]);
+    out += (k ? ", " : "") + json_string(model::kParameterNames[k]) + ": " + json_number(v[k]);
   }
   return out + "}";
 }
@@ -135,8 +135,9 @@ std::string format_table_one(const Identification& id) {
   if (id.nominal) out << std::setw(13) << "CAD";
   if (id.truth) out << std::setw(13) << "truth";
   out << "\n";
-  for (std::size_t k = 0; k < kParameterCount; ++k) {
-    out << std::left << std::setw(6) << kParameterNames[k] << std::setw(13) << kParameterUnits[k];
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    out << std::left << std::setw(6) << model::kParameterNames[k] << std::setw(13)
+        << model::kParameterUnits[k];
     auto cell = [&](const LsmiResult& r) {
       return sci(r.estimate[k], 4) + " +-" + sci(r.std_dev[k], 1);
     };

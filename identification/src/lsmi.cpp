@@ -7,31 +7,6 @@
 
 namespace furuta::identification {
 
-ParameterVector to_vector(const bridge::ModelParameters& p) {
-  return {p.mu1, p.mu2, p.mu3, p.mu4, p.mug, p.fv1, p.fv2};
-}
-
-bridge::ModelParameters to_parameters(const ParameterVector& v) {
-  bridge::ModelParameters p;
-  p.mu1 = v[0];
-  p.mu2 = v[1];
-  p.mu3 = v[2];
-  p.mu4 = v[3];
-  p.mug = v[4];
-  p.fv1 = v[5];
-  p.fv2 = v[6];
-  return p;
-}
-
-RegressorRows regressor(double q2, double dq1, double dq2, double ddq1, double ddq2) {
-  const double s = std::sin(q2);
-  const double c = std::cos(q2);
-  RegressorRows r;
-  r.row1 = {ddq1, s * s * ddq1 + 2 * s * c * dq1 * dq2, c * ddq2 - s * dq2 * dq2, 0, 0, dq1, 0};
-  r.row2 = {0, -s * c * dq1 * dq1, c * ddq1, ddq2, s, 0, dq2};
-  return r;
-}
-
 LsmiResult solve_lsmi(const std::vector<const JointSeries*>& experiments,
                       const LsmiOptions& options) {
   std::size_t samples = 0;
@@ -39,17 +14,18 @@ LsmiResult solve_lsmi(const std::vector<const JointSeries*>& experiments,
     if (e->size() > 2 * options.trim_samples) samples += e->size() - 2 * options.trim_samples;
   }
   const auto rows = static_cast<Eigen::Index>(2 * samples);
-  if (rows < kParameterCount) {
+  if (rows < static_cast<Eigen::Index>(model::kParameterCount)) {
     throw std::invalid_argument("LSMI: " + std::to_string(rows) + " equations for " +
-                                std::to_string(kParameterCount) + " parameters");
+                                std::to_string(model::kParameterCount) + " parameters");
   }
-  Eigen::MatrixXd W(rows, kParameterCount);
+  Eigen::MatrixXd W(rows, model::kParameterCount);
   Eigen::VectorXd Y(rows);
   Eigen::Index r = 0;
   for (const JointSeries* e : experiments) {
     for (std::size_t i = options.trim_samples; i + options.trim_samples < e->size(); ++i) {
-      const RegressorRows d = regressor(e->q2[i], e->dq1[i], e->dq2[i], e->ddq1[i], e->ddq2[i]);
-      for (int j = 0; j < kParameterCount; ++j) {
+      const model::RegressorRows d =
+          model::regressor(e->q2[i], e->dq1[i], e->dq2[i], e->ddq1[i], e->ddq2[i]);
+      for (std::size_t j = 0; j < model::kParameterCount; ++j) {
         W(r, j) = d.row1[static_cast<std::size_t>(j)];
         W(r + 1, j) = d.row2[static_cast<std::size_t>(j)];
       }
@@ -78,27 +54,27 @@ LsmiResult solve_lsmi(const std::vector<const JointSeries*>& experiments,
   result.condition_number =
       sv(sv.size() - 1) > 0 ? sv(0) / sv(sv.size() - 1) : std::numeric_limits<double>::infinity();
   const Eigen::VectorXd residual = Y - W * p;
-  const double dof = static_cast<double>(rows - kParameterCount);
+  const double dof = static_cast<double>(rows - static_cast<Eigen::Index>(model::kParameterCount));
   result.sigma = std::sqrt(residual.squaredNorm() / dof);
   // Cov(p) = sigma^2 (W^T W)^-1 = S^-1 sigma^2 (Ws^T Ws)^-1 S^-1.
   const Eigen::MatrixXd cov_scaled =
       result.sigma * result.sigma *
       (Ws.transpose() * Ws)
           .ldlt()
-          .solve(Eigen::MatrixXd::Identity(kParameterCount, kParameterCount));
-  for (int j = 0; j < kParameterCount; ++j) {
+          .solve(Eigen::MatrixXd::Identity(model::kParameterCount, model::kParameterCount));
+  for (std::size_t j = 0; j < model::kParameterCount; ++j) {
     const auto k = static_cast<std::size_t>(j);
     result.estimate[k] = p(j);
     result.std_dev[k] = std::sqrt(std::max(0.0, cov_scaled(j, j))) / scale(j);
     result.relative_sd[k] =
         p(j) != 0.0 ? result.std_dev[k] / std::abs(p(j)) : std::numeric_limits<double>::infinity();
     if (result.relative_sd[k] > options.poorly_excited_relative_sd) {
-      result.poorly_excited.push_back(kParameterNames[k]);
+      result.poorly_excited.emplace_back(model::kParameterNames[k]);
     }
   }
-  if (result.rank < kParameterCount) {
+  if (result.rank < static_cast<int>(model::kParameterCount)) {
     result.warnings.push_back("W has rank " + std::to_string(result.rank) + " of " +
-                              std::to_string(kParameterCount) +
+                              std::to_string(model::kParameterCount) +
                               ": some parameters are not identifiable from these experiments");
   }
   if (result.condition_number > options.condition_warning) {
@@ -116,10 +92,11 @@ LsmiResult solve_lsmi(const std::vector<const JointSeries*>& experiments,
   return result;
 }
 
-std::vector<double> predicted_torque(const JointSeries& s, const ParameterVector& p) {
+std::vector<double> predicted_torque(const JointSeries& s, const model::Parameters<double>& p) {
   std::vector<double> tau(s.size());
   for (std::size_t i = 0; i < s.size(); ++i) {
-    const RegressorRows d = regressor(s.q2[i], s.dq1[i], s.dq2[i], s.ddq1[i], s.ddq2[i]);
+    const model::RegressorRows d =
+        model::regressor(s.q2[i], s.dq1[i], s.dq2[i], s.ddq1[i], s.ddq2[i]);
     double y = 0;
     for (std::size_t j = 0; j < p.size(); ++j) y += d.row1[j] * p[j];
     tau[i] = y;
@@ -127,7 +104,7 @@ std::vector<double> predicted_torque(const JointSeries& s, const ParameterVector
   return tau;
 }
 
-TorqueFit torque_fit(const JointSeries& s, const ParameterVector& p, std::size_t trim) {
+TorqueFit torque_fit(const JointSeries& s, const model::Parameters<double>& p, std::size_t trim) {
   TorqueFit fit;
   fit.predicted = predicted_torque(s, p);
   double sum = 0, lo = 0, hi = 0;

@@ -136,7 +136,7 @@ std::size_t edge_samples(const PreprocessOptions& options) {
 }
 
 JointSeries preprocess(const RawExperiment& e, const PreprocessOptions& options,
-                       const bridge::MotorData& motor, const VoltageMotor& voltage_motor) {
+                       const model::MotorData& motor, const VoltageMotor& voltage_motor) {
   if (e.sample_period_s <= 0) throw std::invalid_argument(e.name + ": no sample period");
   const double fs = 1.0 / e.sample_period_s;
   const IirFilter lowpass =
@@ -168,7 +168,7 @@ JointSeries preprocess(const RawExperiment& e, const PreprocessOptions& options,
 }
 
 void torque_with_input_lag(JointSeries& s, double lag_s, InputKind kind,
-                           const bridge::MotorData& motor, const VoltageMotor& voltage_motor) {
+                           const model::MotorData& motor, const VoltageMotor& voltage_motor) {
   if (s.input.size() != s.size() || s.dq1.size() != s.size()) {
     throw std::invalid_argument(s.name +
                                 ": torque needs the filtered input and dq1 at every sample");

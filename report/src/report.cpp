@@ -12,9 +12,9 @@ namespace furuta::report {
 
 namespace {
 
-using identification::kParameterCount;
-using identification::kParameterNames;
-using identification::kParameterUnits;
+using model::kParameterCount;
+using model::kParameterNames;
+using model::kParameterUnits;
 
 std::string sci(double v, int digits) {
   if (!std::isfinite(v)) return "-";
@@ -214,7 +214,7 @@ ReportInput report_input(const identification::Identification& id) {
   return r;
 }
 
-std::vector<IntervalRow> table_two(const identification::ParameterVector& lsmi,
+std::vector<IntervalRow> table_two(const model::Parameters<double>& lsmi,
                                    const config::SiviaConfig& sivia,
                                    const identification::GuaranteedResult* result) {
   interval::Box prior;
@@ -228,11 +228,11 @@ std::vector<IntervalRow> table_two(const identification::ParameterVector& lsmi,
   std::optional<interval::Box> hull;
   if (result && !result->empty) hull = result->paving.outer_hull();
   std::vector<IntervalRow> rows;
-  for (int k = 0; k < kParameterCount; ++k) {
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     const auto i = static_cast<std::size_t>(k);
     IntervalRow row;
-    row.parameter = kParameterNames[i];
-    row.unit = kParameterUnits[i];
+    row.parameter = model::kParameterNames[i];
+    row.unit = model::kParameterUnits[i];
     const bool unknown = std::find(sivia.unknowns.begin(), sivia.unknowns.end(), row.parameter) !=
                          sivia.unknowns.end();
     row.lo = prior[i].lo();
@@ -413,9 +413,10 @@ std::string render_html(const ReportInput& in) {
     if (in.nominal) header.push_back("CAD");
     if (in.truth) header.push_back("truth");
     std::vector<std::vector<std::string>> rows;
-    for (int k = 0; k < kParameterCount; ++k) {
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
       const auto i = static_cast<std::size_t>(k);
-      std::vector<std::string> row = {kParameterNames[i], pretty_unit(kParameterUnits[i])};
+      std::vector<std::string> row = {std::string(model::kParameterNames[i]),
+                                      pretty_unit(std::string(model::kParameterUnits[i]))};
       const auto cell = [i](const identification::LsmiResult& r) {
         return plus_minus(sci(r.estimate[i], 4), sci(r.std_dev[i], 1));
       };

@@ -28,7 +28,7 @@ fs::path simulated_session(const fs::path& logs, std::int64_t seed) {
 
 struct Fit {
   identification::Identification id;
-  identification::ParameterVector truth{};
+  model::Parameters<double> truth{};
 };
 
 Fit identify_sessions(const std::vector<fs::path>& fit, const fs::path& held_out,
@@ -44,7 +44,7 @@ Fit identify_sessions(const std::vector<fs::path>& fit, const fs::path& held_out
       identification::experiment_from_log(session_log::load_session_log(held_out));
   Fit f{identification::identify(experiments, validation, identify_options_for(rig, command),
                                  rig.motor),
-        identification::to_vector(rig.simulation.parameters)};
+        rig.simulation.parameters};
   return f;
 }
 
@@ -70,21 +70,20 @@ std::vector<fs::path> SimulatedTruth::sessions_;
 // shows"): the arm's 4.4 ms time constant and the bang-bang's harmonics above the Nyquist
 // frequency bias the pendulum's parameters by about 5 % whatever the filter. These bounds are the
 // measured errors with a margin, not the issue's 2 % / 5 %.
-constexpr std::array<double, identification::kParameterCount> kAchievableRelativeError = {
+constexpr std::array<double, model::kParameterCount> kAchievableRelativeError = {
     0.08, 0.09, 0.08, 0.08, 0.08, 0.03, 0.16};
 
 TEST_F(SimulatedTruth, TwoSeedPairsComeCloseToTheTruthAndTheHeldOutTorqueFits) {
   for (const auto& [a, b, c] : {std::tuple{0, 1, 2}, std::tuple{3, 4, 5}}) {
     ASSERT_FALSE(sessions_[c].empty());
     const Fit f = identify_sessions({sessions_[a], sessions_[b]}, sessions_[c]);
-    for (int k = 0; k < identification::kParameterCount; ++k) {
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
       const double estimate = f.id.combined.estimate[k];
       const double relative = (estimate - f.truth[k]) / f.truth[k];
       std::printf("[ measured ] seeds %d,%d: %s %.4e (truth %.4e, %+.1f %%, %.1f sd)\n", a + 1,
-                  b + 1, identification::kParameterNames[k], estimate, f.truth[k], 100 * relative,
-                  std::abs(estimate - f.truth[k]) / f.id.combined.std_dev[k]);
-      EXPECT_LT(std::abs(relative), kAchievableRelativeError[k])
-          << identification::kParameterNames[k];
+                  b + 1, std::string(model::kParameterNames[k]).c_str(), estimate, f.truth[k],
+                  100 * relative, std::abs(estimate - f.truth[k]) / f.id.combined.std_dev[k]);
+      EXPECT_LT(std::abs(relative), kAchievableRelativeError[k]) << model::kParameterNames[k];
     }
     ASSERT_TRUE(f.id.validation.has_value());
     std::printf("[ measured ] held-out seed %d: torque RMSE %.3e N m = %.2f %% (paper 6.4 %%)\n",

@@ -13,8 +13,8 @@
 #include <string>
 
 #include "commands.hpp"
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/model/model.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::app {
@@ -25,8 +25,8 @@ using furuta::testing::TempDir;
 constexpr double kPi = std::numbers::pi;
 
 // The rig of tests/identification/voltage_rig_test.cpp (arm time constant about 150 ms).
-bridge::ModelParameters truth() {
-  bridge::ModelParameters p;
+model::Parameters<double> truth() {
+  model::Parameters<double> p;
   p.mu1 = 3.0e-3;
   p.mu2 = 2.56e-3;
   p.mu3 = 1.2e-3;
@@ -62,8 +62,8 @@ fs::path record(const fs::path& dir, const std::string& name, double phase) {
     }
     return 3.5 * sum / std::sqrt(6.0);
   };
-  const bridge::ModelParameters p = truth();
-  bridge::PendulumState x;
+  const model::Parameters<double> p = truth();
+  model::PendulumState x;
   const double h = 5e-4;
   for (int step = -4000; step < 20000; ++step) {  // 2 s of settling first
     const double t = step * h;
@@ -71,7 +71,7 @@ fs::path record(const fs::path& dir, const std::string& name, double phase) {
       out << t << "," << x.q1 << "," << x.q2 << "," << volts(t) << "\n";
     }
     const double v = volts(t + h / 2);
-    x = bridge::rk4_step(p, x, h, [&](const bridge::PendulumState& s) {
+    x = model::rk4_step(p, x, h, [&](const model::PendulumState& s) {
       return kTorquePerVolt * v - kBackEmfDamping * s.dq1;
     });
   }
@@ -133,12 +133,12 @@ TEST_F(IdentifyCsv, VoltageRigWithoutAConfigurationWritesTableResultsAndFigures)
   }
   // The configuration's input lag is the daemon's; a CSV's defaults to none.
   EXPECT_NE(json.find("\"input_lag_s\": 0,"), std::string::npos);
-  const identification::ParameterVector expected = identification::to_vector(truth());
-  for (int k = 0; k < identification::kParameterCount; ++k) {
-    const double estimate = combined_estimate(json, identification::kParameterNames[k]);
+  const model::Parameters<double> expected = truth();
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const double estimate = combined_estimate(json, model::kParameterNames[k]);
     std::printf("[ measured ] command, 15 Hz default cut-off: %s %+.2f %%\n",
-                identification::kParameterNames[k], 100 * (estimate / expected[k] - 1));
-    EXPECT_NEAR(estimate / expected[k], 1.0, 0.05) << identification::kParameterNames[k];
+                model::kParameterNames[k], 100 * (estimate / expected[k] - 1));
+    EXPECT_NEAR(estimate / expected[k], 1.0, 0.05) << model::kParameterNames[k];
   }
 }
 

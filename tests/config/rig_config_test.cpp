@@ -35,7 +35,7 @@ TEST(RigConfig, AnEmptyFileGivesTheDefaults) {
   const RigConfig c = parse_rig_config("", "empty.toml");
   EXPECT_DOUBLE_EQ(c.pendulum_encoder.counts_per_rev, 4096.0);
   EXPECT_DOUBLE_EQ(c.motor.no_load_speed_rpm, 11700.0);
-  EXPECT_DOUBLE_EQ(c.simulation.parameters.mug, bridge::ModelParameters::paper_run1().mug);
+  EXPECT_DOUBLE_EQ(c.simulation.parameters.mug, model::paper_run1().mug);
   EXPECT_FALSE(c.nominal.has_value());
 }
 

@@ -374,7 +374,7 @@ TEST(SimulatedRig, ASagingSupplySlowsTheMotorInProportion) {
     Bench b(config);
     EXPECT_EQ(b.command(0.2), TransportStatus::ok);
     b.run_until(3 * kS);
-    const PendulumState x = b.rig.true_state();
+    const model::PendulumState x = b.rig.true_state();
     return x.dq1;
   };
   EXPECT_NEAR(steady_speed(6.0) / steady_speed(12.0), 0.5, 0.01);
@@ -452,7 +452,7 @@ TEST(SimulatedRig, SteadyArmSpeedFromEncoderCountsMatchesEquation4) {
       (decode_1065(end).encoder_position - decode_1065(*start).encoder_position) /
       arm_counts_per_rad(config) / seconds;
 
-  const MotorData& m = config.motor;
+  const model::MotorData& m = config.motor;
   const double k =
       m.total_ratio() * m.motor_efficiency * m.gear_efficiency / m.speed_torque_gradient_rpm_per_nm;
   const double expected = k * duty * m.no_load_speed_rpm /
@@ -488,11 +488,11 @@ TEST(SimulatedRig, ClampedArmPendulumPeriodMatchesTheory) {
   SimulatedRig rig(config, clock);
   rig.clamp_arm(true);
   std::vector<double> crossings;
-  PendulumState previous = rig.true_state();
+  model::PendulumState previous = rig.true_state();
   for (std::int64_t t = kMs; t <= 20 * kS; t += kMs) {
     clock.sleep_until_ns(t);
     rig.advance_to_now();
-    const PendulumState x = rig.true_state();
+    const model::PendulumState x = rig.true_state();
     EXPECT_EQ(x.q1, 0.0);
     if (previous.q2 < 0.0 && x.q2 >= 0.0) {
       crossings.push_back((t - kMs) * 1e-9 + 1e-3 * (-previous.q2) / (x.q2 - previous.q2));

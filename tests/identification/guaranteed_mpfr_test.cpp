@@ -439,8 +439,8 @@ TEST(GuaranteedMpfr, RegressorEnclosureContainsEveryRowEntry) {
 
 // A parameter point: mu's of either sign (mostly positive) from 1e-4 to 1e-2, |mu4| >= 1e-4, mug
 // from 1e-3 to 1, frictions in [-1.5, 1.5] (sometimes 0).
-ParameterVector draw_parameters(Draw& d) {
-  ParameterVector p{};
+model::Parameters<double> draw_parameters(Draw& d) {
+  model::Parameters<double> p{};
   for (int k = 0; k < 4; ++k) p[k] = (d.coin(0.9) ? 1.0 : -1.0) * d.magnitude(-4, -2);
   p[4] = (d.coin(0.9) ? 1.0 : -1.0) * d.magnitude(-3, 0);
   p[5] = d.coin(0.1) ? 0.0 : d.uniform(-1.5, 1.5);
@@ -454,7 +454,7 @@ ParameterVector draw_parameters(Draw& d) {
 // widened at random.
 class SampleMaker {
  public:
-  IntervalSample make(Draw& d, const ParameterVector& p) {
+  IntervalSample make(Draw& d, const model::Parameters<double>& p) {
     const double q2 = d.angle(), dq1 = d.value(50), dq2 = d.value(50), ddq1 = d.value(2000);
     sin_cos(s_, c_, q2);
     mul(sc_, s_, c_);
@@ -520,25 +520,25 @@ class SampleMaker {
 
 // A box containing p over the components marked unknown (p a point of it: sometimes the point
 // itself, sometimes at a bound); the carried components copied from the prior.
-Box box_around(Draw& d, const ParameterVector& p, const Box& prior,
-               const std::array<bool, kParameterCount>& unknown) {
+Box box_around(Draw& d, const model::Parameters<double>& p, const Box& prior,
+               const std::array<bool, model::kParameterCount>& unknown) {
   Box b = prior;
-  for (int k = 0; k < kParameterCount; ++k) {
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (unknown[k]) b[k] = d.around(p[k], std::max(std::fabs(p[k]), 1e-3));
   }
   return b;
 }
 
-bool unknowns_contain(const Box& b, const ParameterVector& p,
-                      const std::array<bool, kParameterCount>& unknown) {
-  for (int k = 0; k < kParameterCount; ++k) {
+bool unknowns_contain(const Box& b, const model::Parameters<double>& p,
+                      const std::array<bool, model::kParameterCount>& unknown) {
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (unknown[k] && !b[k].contains(p[k])) return false;
   }
   return true;
 }
 
-std::array<bool, kParameterCount> draw_unknowns(Draw& d) {
-  std::array<bool, kParameterCount> u{};
+std::array<bool, model::kParameterCount> draw_unknowns(Draw& d) {
+  std::array<bool, model::kParameterCount> u{};
   switch (d.pick(3)) {
     case 0:  // the paper's problem
       u = {false, false, false, false, false, true, true};
@@ -548,17 +548,17 @@ std::array<bool, kParameterCount> draw_unknowns(Draw& d) {
       break;
     default:
       for (bool& x : u) x = d.coin(0.5);
-      u[static_cast<std::size_t>(d.pick(kParameterCount))] = true;
+      u[static_cast<std::size_t>(d.pick(model::kParameterCount))] = true;
   }
   return u;
 }
 
-std::string describe(const ParameterVector& p, const Box& b, const IntervalSample& s,
+std::string describe(const model::Parameters<double>& p, const Box& b, const IntervalSample& s,
                      const std::array<double, 6>& point) {
   std::ostringstream o;
   o.precision(17);
   o << "p = (";
-  for (int k = 0; k < kParameterCount; ++k) o << (k ? ", " : "") << p[k];
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) o << (k ? ", " : "") << p[k];
   o << "), box " << b << ", data q2 " << i_str(s.q2) << " dq1 " << i_str(s.dq1) << " dq2 "
     << i_str(s.dq2) << " ddq1 " << i_str(s.ddq1) << " ddq2 " << i_str(s.ddq2) << " tau "
     << i_str(s.tau) << ", point (q2, dq1, dq2, ddq1, ddq2, tau) = (";
@@ -574,11 +574,11 @@ TEST(GuaranteedMpfr, NoBoxContainingAConsistentPointIsCalledInconsistent) {
   const int groups = 2'500 * scale();
   std::uint64_t inconsistent_checks = 0, contract_checks = 0, contract_all_checks = 0;
   for (int g = 0; g < groups; ++g) {
-    const ParameterVector p = draw_parameters(draw);
-    const std::array<bool, kParameterCount> unknown = draw_unknowns(draw);
+    const model::Parameters<double> p = draw_parameters(draw);
+    const std::array<bool, model::kParameterCount> unknown = draw_unknowns(draw);
     // The prior contains p (the carried components are folded in as their prior intervals).
-    Box prior(kParameterCount);
-    for (int k = 0; k < kParameterCount; ++k) {
+    Box prior(model::kParameterCount);
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
       prior[k] = draw.around(p[k], std::max(std::fabs(p[k]), 1e-3));
     }
     const int count = 1 + draw.pick(8);
@@ -627,9 +627,9 @@ TEST(GuaranteedMpfr, NoBoxContainingAConsistentPointIsCalledInconsistent) {
 // entries, whose empty point intervals emptied the box: contract_all called it outer although p
 // meets the sample exactly.
 TEST(GuaranteedMpfr, ContractAllKeepsThePointWhenACoefficientIsSubnormal) {
-  const ParameterVector p = {0x1.f5994f39fa594p-13, 0x1.a95476e955298p-8,  0x1.802e40a50aed1p-12,
-                             0x1.259951ade21cep-11, 0x1.450a877650688p-10, 0x1.884dd690323d8p-1,
-                             -0x1.fa64264da1454p-2};
+  const model::Parameters<double> p = {
+      0x1.f5994f39fa594p-13, 0x1.a95476e955298p-8, 0x1.802e40a50aed1p-12, 0x1.259951ade21cep-11,
+      0x1.450a877650688p-10, 0x1.884dd690323d8p-1, -0x1.fa64264da1454p-2};
   const Box prior{Interval(-0x1.19b3e8d658ff2p-6, 0x1.f5994f39fa594p-13),
                   Interval(0x1.a95476e9536b2p-8, 0x1.a95476ea1b272p-8),
                   Interval(0x1.7f65c2f3c7419p-12, 0x1.802e41d3c0da1p-12),
@@ -644,7 +644,8 @@ TEST(GuaranteedMpfr, ContractAllKeepsThePointWhenACoefficientIsSubnormal) {
   s.ddq1 = Interval(-0x1.d2be28e75bdaep+10, -0x1.d2be28e75bdabp+10);
   s.ddq2 = Interval(0x1.315f250b253fdp+10, 0x1.9a4994a97833bp+14);
   s.tau = Interval(0x1.fb8fa575ee3c4p-11, 0x1.030eb33a4688fp-10);
-  const std::array<bool, kParameterCount> unknown = {false, false, false, false, false, true, true};
+  const std::array<bool, model::kParameterCount> unknown = {false, false, false, false,
+                                                            false, true,  true};
   const SampleConstraints constraints({s}, prior, unknown);
   Box box = prior;
   EXPECT_FALSE(constraints.proves_inconsistent(0, box));
@@ -660,11 +661,11 @@ TEST(GuaranteedMpfr, ThePavingKeepsAConsistentPoint) {
   SampleMaker maker;
   const int runs = 150 * scale();
   for (int run = 0; run < runs; ++run) {
-    const ParameterVector p = draw_parameters(draw);
+    const model::Parameters<double> p = draw_parameters(draw);
     GuaranteedOptions o;
     o.unknown = draw_unknowns(draw);
-    o.prior = Box(kParameterCount);
-    for (int k = 0; k < kParameterCount; ++k) {
+    o.prior = Box(model::kParameterCount);
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
       const double w = std::max(std::fabs(p[k]), 1e-3);
       o.prior[k] = Interval(p[k] - draw.uniform(0, 1) * w, p[k] + draw.uniform(0, 1) * w);
     }
@@ -685,7 +686,7 @@ TEST(GuaranteedMpfr, ThePavingKeepsAConsistentPoint) {
       std::ostringstream s;
       s.precision(17);
       s << "run " << run << ": p = (";
-      for (int k = 0; k < kParameterCount; ++k) s << (k ? ", " : "") << p[k];
+      for (std::size_t k = 0; k < model::kParameterCount; ++k) s << (k ? ", " : "") << p[k];
       s << ") not in the outer approximation (" << r.paving.inner.size() << " inner, "
         << r.paving.boundary.size() << " boundary; contract " << o.contract << ", q " << o.q << ")"
         << (r.empty ? ": " + r.finding : "");

@@ -13,8 +13,8 @@
 #include <iostream>
 #include <random>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/preprocessing.hpp"
+#include "furuta/model/model.hpp"
 #include "simulated_sessions.hpp"
 
 namespace furuta::identification {
@@ -31,7 +31,7 @@ DataErrorBounds bounds_covering(const SimulatedSession& s, double margin = 1.5) 
 }
 
 std::vector<double> truth_vector() {
-  const ParameterVector t = to_vector(bridge::ModelParameters::paper_run1());
+  const model::Parameters<double> t = model::paper_run1();
   return {t.begin(), t.end()};
 }
 
@@ -48,7 +48,7 @@ bool in_outer_approximation(const GuaranteedResult& r, const std::vector<double>
 // The paper's problem: fv1, fv2 in [-1.5, 1.5], the mu's carried as Table II intervals. Epsilon is
 // relative to the prior's 3 N m s width: the paper's 0.01 is 0.03 N m s, coarser than fv2 itself
 // (6.4e-4), so the tests that look at the set's shape use finer ones.
-GuaranteedOptions two_unknowns(const ParameterVector& centre, double epsilon = 1e-4) {
+GuaranteedOptions two_unknowns(const model::Parameters<double>& centre, double epsilon = 1e-4) {
   GuaranteedOptions o;
   o.prior = paper_prior(centre);
   o.epsilon = epsilon;
@@ -67,8 +67,8 @@ TEST(Guaranteed, RegressorEnclosureContainsThePointRegressor) {
         regressor_enclosure(box(q2), box(dq1), box(dq2), box(ddq1), box(ddq2));
     // A point of each interval, not only the centre.
     const double a = u(rng) * w;
-    const RegressorRows r = regressor(q2 + a, dq1 - a, dq2 + a, ddq1 - a, ddq2 + a);
-    for (int k = 0; k < kParameterCount; ++k) {
+    const model::RegressorRows r = model::regressor(q2 + a, dq1 - a, dq2 + a, ddq1 - a, ddq2 + a);
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
       ASSERT_TRUE(e.row1[k].contains(r.row1[k])) << trial << " row1 " << k;
       ASSERT_TRUE(e.row2[k].contains(r.row2[k])) << trial << " row2 " << k;
     }
@@ -80,7 +80,7 @@ TEST(Guaranteed, TheTruthIsInsideOnTwentySeedsWithTwoUnknowns) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const SimulatedSession s = simulate(seed);
     const std::vector<double> truth = truth_vector();
-    ParameterVector centre;
+    model::Parameters<double> centre;
     std::copy(truth.begin(), truth.end(), centre.begin());
     GuaranteedOptions o = two_unknowns(centre, 1e-3);
     ASSERT_TRUE(o.prior.contains(truth));
@@ -169,8 +169,8 @@ class GuaranteedOnOneSession : public ::testing::Test {
     std::uniform_real_distribution<double> u(0, 1);
     for (int trial = 0; trial < trials; ++trial) {
       const Box& b = boxes[rng() % boxes.size()];
-      std::vector<double> p(kParameterCount);
-      for (int k = 0; k < kParameterCount; ++k) {
+      std::vector<double> p(model::kParameterCount);
+      for (std::size_t k = 0; k < model::kParameterCount; ++k) {
         p[k] = o.unknown[k] ? b[k].lo() + u(rng) * (b[k].hi() - b[k].lo()) : o.prior[k].mid();
       }
       for (std::size_t i = 0; i < constraints_->size(); i += stride) {
@@ -181,11 +181,11 @@ class GuaranteedOnOneSession : public ::testing::Test {
   }
   static std::unique_ptr<SimulatedSession> session_;
   static std::unique_ptr<SampleConstraints> constraints_;
-  static ParameterVector centre_;
+  static model::Parameters<double> centre_;
 };
 std::unique_ptr<SimulatedSession> GuaranteedOnOneSession::session_;
 std::unique_ptr<SampleConstraints> GuaranteedOnOneSession::constraints_;
-ParameterVector GuaranteedOnOneSession::centre_;
+model::Parameters<double> GuaranteedOnOneSession::centre_;
 
 TEST_F(GuaranteedOnOneSession, InnerBoxPointsHaveDataAndTheForAllTestProvesNothing) {
   GuaranteedOptions o = two_unknowns(centre_);
@@ -336,7 +336,7 @@ TEST(Guaranteed, TheTruthIsInsideWithSevenUnknowns) {
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     const SimulatedSession s = simulate(seed);
     const std::vector<double> truth = truth_vector();
-    ParameterVector centre;
+    model::Parameters<double> centre;
     std::copy(truth.begin(), truth.end(), centre.begin());
     GuaranteedOptions o;
     o.prior = paper_prior(centre, {12, 12, 10, 12, 15}, 0.2);

@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/identification/preprocessing.hpp"
+#include "furuta/model/model.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::identification {
@@ -31,8 +31,8 @@ constexpr double kRadToDeg = 180.0 / kPi;
 
 // Not the paper's rig: a heavier arm and less arm friction, so that with this motor the arm's time
 // constant is about 150 ms (mu1 over fv1 plus the back-EMF damping), which 10 ms samples resolve.
-bridge::ModelParameters truth() {
-  bridge::ModelParameters p;
+model::Parameters<double> truth() {
+  model::Parameters<double> p;
   p.mu1 = 3.0e-3;
   p.mu2 = 2.56e-3;
   p.mu3 = 1.2e-3;
@@ -85,21 +85,21 @@ struct Recording {
 // kStart + k kPeriod + jitter (up to +-0.3 ms: irregular enough for the importer to resample).
 Recording record(const fs::path& dir, const std::string& name, const Multisine& u,
                  double duration_s) {
-  const bridge::ModelParameters p = truth();
+  const model::Parameters<double> p = truth();
   const VoltageMotor m = motor();
   Recording r;
   r.csv = dir / name;
   std::ofstream out(r.csv);
   out << "\"time_s\",\"theta_deg\",\"note\",\"alpha_deg\",\"u_V\"\n" << std::fixed;
-  bridge::PendulumState x;
+  model::PendulumState x;
   double t = kStart - 2.0;
   const auto advance_to = [&](double until) {
     const int steps = static_cast<int>(std::ceil((until - t) / 5e-4 - 1e-9));
     const double h = (until - t) / steps;
     for (int i = 0; i < steps; ++i) {
       const double volts = u(t + h / 2);
-      x = bridge::rk4_step(
-          p, x, h, [&](const bridge::PendulumState& s) { return arm_torque(m, volts, s.dq1); });
+      x = model::rk4_step(
+          p, x, h, [&](const model::PendulumState& s) { return arm_torque(m, volts, s.dq1); });
       t += h;
     }
     t = until;
@@ -187,23 +187,23 @@ TEST(VoltageRig, CsvFromAnotherLoggerRecoversTheParameters) {
       experiment_from_csv(import_csv(held_out.csv, spec), held_out.csv.filename().string());
 
   const Identification id = identify(experiments, validation, options_for_10ms(),
-                                     bridge::MotorData{}, *spec.voltage_motor);
-  const ParameterVector expected = to_vector(truth());
+                                     model::MotorData{}, *spec.voltage_motor);
+  const model::Parameters<double> expected = truth();
   // mu1, mu3, mu4, mug within 2 %; mu2, fv1, fv2 within 5 %.
-  constexpr ParameterVector kBound = {0.02, 0.05, 0.02, 0.02, 0.02, 0.05, 0.05};
-  for (int k = 0; k < kParameterCount; ++k) {
+  constexpr model::Parameters<double> kBound = {0.02, 0.05, 0.02, 0.02, 0.02, 0.05, 0.05};
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     const double estimate = id.combined.estimate[k];
     const double relative = (estimate - expected[k]) / expected[k];
-    std::printf("[ measured ] %s %.5e (truth %.5e, %+.2f %%, %.1f sd)\n", kParameterNames[k],
+    std::printf("[ measured ] %s %.5e (truth %.5e, %+.2f %%, %.1f sd)\n", model::kParameterNames[k],
                 estimate, expected[k], 100 * relative,
                 std::abs(estimate - expected[k]) / id.combined.std_dev[k]);
-    EXPECT_LT(std::abs(relative), kBound[k]) << kParameterNames[k];
+    EXPECT_LT(std::abs(relative), kBound[k]) << model::kParameterNames[k];
   }
   ASSERT_TRUE(id.validation.has_value());
   std::printf("[ measured ] held-out c.csv: torque RMSE %.3e N m = %.2f %% of the range\n",
               id.validation->fit.rmse_nm, id.validation->fit.rmse_percent_of_range);
   EXPECT_LT(id.validation->fit.rmse_percent_of_range, 2.0);
-  EXPECT_EQ(id.combined.rank, kParameterCount);
+  EXPECT_EQ(id.combined.rank, model::kParameterCount);
 }
 
 TEST(VoltageRig, WithoutTheMotorTheVoltageCannotBecomeATorque) {
@@ -211,7 +211,7 @@ TEST(VoltageRig, WithoutTheMotorTheVoltageCannotBecomeATorque) {
   const Recording r = record(dir.path(), "a.csv", Multisine{{0, 1, 2, 3, 4, 5}, 3.0}, 2.0);
   const CsvImportSpec spec = load_csv_import_spec(write_spec(dir.path()));
   const RawExperiment e = experiment_from_csv(import_csv(r.csv, spec), "a.csv");
-  EXPECT_THROW(preprocess(e, options_for_10ms().preprocess, bridge::MotorData{}, VoltageMotor{}),
+  EXPECT_THROW(preprocess(e, options_for_10ms().preprocess, model::MotorData{}, VoltageMotor{}),
                std::invalid_argument);
 }
 

@@ -196,7 +196,7 @@ TEST(ReportWarnings, LsmiWarningsAreExcitationTheDatasAreSession) {
 }
 
 TEST(ReportTableTwo, WithoutSiviaTheIntervalsItWouldStartFrom) {
-  const identification::ParameterVector lsmi = {1e-3, 2e-3, 8e-4, 1.2e-3, 7e-2, 8e-2, 6e-4};
+  const model::Parameters<double> lsmi = {1e-3, 2e-3, 8e-4, 1.2e-3, 7e-2, 8e-2, 6e-4};
   config::SiviaConfig cfg;
   cfg.fv1_prior = {-1.5, 1.5};
   cfg.fv2_prior = {-0.5, 0.5};

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/preprocessing.hpp"
+#include "furuta/model/model.hpp"
 
 namespace furuta::testing {
 
@@ -41,8 +41,8 @@ inline PreprocessOptions preprocess_options() {
 }
 
 inline SimulatedSession simulate(std::uint64_t seed, double seconds = 10.0) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
-  const bridge::MotorData motor;
+  const model::Parameters<double> p = model::paper_run1();
+  const model::MotorData motor;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> phase(0, 2 * std::numbers::pi);
   const std::array<double, 5> freq_hz = {0.3, 0.7, 1.1, 1.7, 2.3};
@@ -63,13 +63,13 @@ inline SimulatedSession simulate(std::uint64_t seed, double seconds = 10.0) {
   SimulatedSession out;
   out.truth.name = raw.name;
   out.truth.sample_period_s = period;
-  bridge::PendulumState x{0, 0, 0.05, 0};
+  model::PendulumState x{0, 0, 0.05, 0};
   double t = 0;
   const int steps_per_sample = static_cast<int>(std::lround(period / dt));
   for (int k = 0; t < seconds; ++k) {
     const double d = duty(t);
     const double tau = motor.arm_torque_nm(d, x.dq1);
-    const bridge::JointAccelerations a = bridge::forward_dynamics(p, x, tau);
+    const model::JointAccelerations<double> a = model::forward_dynamics(p, x, tau);
     raw.t_s.push_back(t);
     raw.q1.push_back(std::round(x.q1 / arm_resolution) * arm_resolution);
     raw.q2.push_back(std::round(x.q2 / pendulum_resolution) * pendulum_resolution);
@@ -83,7 +83,7 @@ inline SimulatedSession simulate(std::uint64_t seed, double seconds = 10.0) {
     out.truth.tau.push_back(tau);
     for (int s = 0; s < steps_per_sample; ++s) {
       const double ts = t + s * dt;
-      x = bridge::rk4_step(p, x, dt, [&](const bridge::PendulumState& st) {
+      x = model::rk4_step(p, x, dt, [&](const model::PendulumState& st) {
         return motor.arm_torque_nm(duty(ts), st.dq1);
       });
     }

@@ -13,7 +13,7 @@
 #include <span>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/model/model.hpp"
 #include "reference.hpp"
 
 namespace furuta::validated {
@@ -181,14 +181,14 @@ TEST(Integrator, ReferenceSimulationIsAccurate) {
 }
 
 TEST(Integrator, FurutaFieldMatchesThePointModel) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   const FurutaDynamics furuta(Interval(0.07));
-  const bridge::PendulumState s{0.3, -1.2, 2.1, 4.5};
+  const model::PendulumState s{0.3, -1.2, 2.1, 4.5};
   const std::vector<double> x{s.q1,  s.dq1, s.q2,  s.dq2, p.mu1, p.mu2,
                               p.mu3, p.mu4, p.mug, p.fv1, p.fv2};
   std::vector<double> dx(11);
   furuta(0, std::span<const double>(x), std::span<double>(dx));
-  const bridge::JointAccelerations a = bridge::forward_dynamics(p, s, 0.07);
+  const model::JointAccelerations<double> a = model::forward_dynamics(p, s, 0.07);
   EXPECT_DOUBLE_EQ(dx[0], s.dq1);
   EXPECT_NEAR(dx[1], a.ddq1, 1e-12 * std::abs(a.ddq1));
   EXPECT_DOUBLE_EQ(dx[2], s.dq2);
@@ -197,7 +197,7 @@ TEST(Integrator, FurutaFieldMatchesThePointModel) {
   // The interval field encloses the point one.
   const Box box = FurutaDynamics::initial_box(
       Box{Interval(s.q1), Interval(s.dq1), Interval(s.q2), Interval(s.dq2)},
-      FurutaParameters::point(p));
+      interval_parameters(p));
   const std::vector<Interval> xi(box.begin(), box.end());
   std::vector<Interval> dxi(11);
   furuta(0, std::span<const Interval>(xi), std::span<Interval>(dxi));
@@ -209,14 +209,14 @@ TEST(Integrator, FurutaFieldMatchesThePointModel) {
 // state), a piecewise constant torque with an interval piece. (Wider boxes or longer horizons: see
 // validated/README.md, "Limits".)
 TEST(Integrator, FurutaSoundnessWithIntervalParametersAndTorquePieces) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   const std::vector<InputPiece> pieces{InputPiece{0.0, Interval(0.0)},
                                        InputPiece{0.25, Interval(0.05)},
                                        InputPiece{0.45, Interval(-0.0301, -0.03)}};
   const FurutaDynamics furuta(pieces);
   const Box state{Interval(-5e-4, 5e-4), Interval(-5e-4, 5e-4), Interval(-1.5705, -1.5695),
                   Interval(-5e-4, 5e-4)};
-  const Box x0 = FurutaDynamics::initial_box(state, FurutaParameters::around(p, 1e-4));
+  const Box x0 = FurutaDynamics::initial_box(state, parameters_around(p, 1e-4));
   IntegratorOptions options;
   options.t_end = 0.6;
   const IntegrationResult r = integrate(furuta, x0, options);
@@ -259,8 +259,8 @@ TEST(Integrator, FurutaSoundnessWithIntervalParametersAndTorquePieces) {
 // with point parameters (0.8 s) and interval ones (+-0.01 %, 0.25 s; each batch of points drawn
 // with its own point parameters inside the intervals).
 TEST(Integrator, FurutaStateDynamicsSoundness) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
-  const FurutaStateDynamics point(FurutaParameters::point(p), Interval(0.17));
+  const model::Parameters<double> p = model::paper_run1();
+  const FurutaStateDynamics point(interval_parameters(p), Interval(0.17));
   const FurutaDynamics full(Interval(0.17));
   const std::vector<double> x{0.3, -1.2, 2.1, 4.5, p.mu1, p.mu2, p.mu3, p.mu4, p.mug, p.fv1, p.fv2};
   std::vector<double> dx11(11);
@@ -279,7 +279,7 @@ TEST(Integrator, FurutaStateDynamicsSoundness) {
   // With interval parameters as constants the parameters' effect is wrapped at every step: the
   // tube ends (step_not_validated) at 0.28 s already for +-0.01 %, hence the shorter horizon.
   for (const double relative : {0.0, 1e-4}) {
-    const FurutaParameters params = FurutaParameters::around(p, relative);
+    const model::Parameters<Interval> params = parameters_around(p, relative);
     const FurutaStateDynamics system(params, Interval(0.17));
     options.t_end = relative == 0.0 ? 0.8 : 0.25;
     const IntegrationResult r = integrate(system, state, options);
@@ -288,7 +288,7 @@ TEST(Integrator, FurutaStateDynamicsSoundness) {
     testing::SoundnessCount total;
     std::uniform_real_distribution<double> u(-relative, relative);
     for (std::size_t i = 0; i < points.size(); i += 100) {
-      bridge::ModelParameters drawn = p;
+      model::Parameters<double> drawn = p;
       for (double* v :
            {&drawn.mu1, &drawn.mu2, &drawn.mu3, &drawn.mu4, &drawn.mug, &drawn.fv1, &drawn.fv2}) {
         *v *= 1.0 + u(rng);
@@ -300,7 +300,7 @@ TEST(Integrator, FurutaStateDynamicsSoundness) {
       // 150 /s transient under the torque) reached 1e-11 in q1 at a corner of the box, where the
       // tube's q1 bound (a translation, carried exactly) is within that of the true extreme.
       const testing::SoundnessCount c = testing::check_tube(
-          FurutaStateDynamics(FurutaParameters::point(drawn), Interval(0.17)), r.tube, batch, 32);
+          FurutaStateDynamics(interval_parameters(drawn), Interval(0.17)), r.tube, batch, 32);
       total.points += c.points;
       total.checks += c.checks;
       total.violations += c.violations;
@@ -319,8 +319,8 @@ TEST(Integrator, FurutaStateDynamicsSoundness) {
 // fast swing of the paper's scenario (a): box +-1e-3 (q2 +-1.6e-3) around [0, 0, -100 deg, 0],
 // u = 0, point parameters, 2.5 s (the doubleton alone ended at 1.22 s).
 TEST(Integrator, FurutaQuadraticModelSoundness) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
-  const FurutaStateDynamics system(FurutaParameters::point(p), Interval(0.0));
+  const model::Parameters<double> p = model::paper_run1();
+  const FurutaStateDynamics system(interval_parameters(p), Interval(0.0));
   const double q2 = -100.0 * 3.14159265358979323846 / 180.0;
   const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
                   Interval(-1e-3, 1e-3)};
@@ -348,7 +348,7 @@ TEST(Integrator, FurutaQuadraticModelSoundness) {
 // tube passes a width of 1): every sampled point carries its own parameters (a quarter of them
 // at vertices of the 11-dimensional box, 3/16 on a face).
 TEST(Integrator, FurutaIntervalParametersCarriedAsStateSoundness) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   struct Case {
     double relative;
     double q2_deg;
@@ -362,7 +362,7 @@ TEST(Integrator, FurutaIntervalParametersCarriedAsStateSoundness) {
     const double q2 = k.q2_deg * 3.14159265358979323846 / 180.0;
     const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3),
                     Interval(q2 - 1.6e-3, q2 + 1.6e-3), Interval(-1e-3, 1e-3)};
-    const Box x0 = FurutaDynamics::initial_box(state, FurutaParameters::around(p, k.relative));
+    const Box x0 = FurutaDynamics::initial_box(state, parameters_around(p, k.relative));
     const FurutaDynamics system(Interval(k.tau));
     IntegratorOptions options;
     options.t_end = k.t_end;
@@ -443,11 +443,11 @@ TEST(Integrator, SubBoxRestartIsSound) {
 // t_start and from the middle of a run, and stays sound: halves of a +-1 % parameter box (split
 // in mu4 and in fv1).
 TEST(Integrator, FurutaSubBoxRestartKeepsTheParametersExact) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   const double q2 = 50.0 * 3.14159265358979323846 / 180.0;
   const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
                   Interval(-1e-3, 1e-3)};
-  const Box x0 = FurutaDynamics::initial_box(state, FurutaParameters::around(p, 1e-2));
+  const Box x0 = FurutaDynamics::initial_box(state, parameters_around(p, 1e-2));
   const FurutaDynamics system(Interval(0.0));
   const std::vector<Tape> tapes = record_system(system);
   IntegratorOptions options;

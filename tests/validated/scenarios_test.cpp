@@ -41,8 +41,7 @@ TEST(Scenarios, ThePapersFour) {
 }
 
 TEST(ScenarioMeasurement, SampledAndQuantisedLikeTheRig) {
-  const ScenarioMeasurement m =
-      measure_scenario(paper_scenario(1), bridge::ModelParameters::paper_run1());
+  const ScenarioMeasurement m = measure_scenario(paper_scenario(1), model::paper_run1());
   ASSERT_EQ(m.t_s.size(), 251u);  // 0 to 4 s every 16 ms
   const double pendulum = 2 * kPi / 4096, arm = 2 * kPi / (512 * 26.0);
   EXPECT_DOUBLE_EQ(m.pendulum_resolution_rad, pendulum);
@@ -63,7 +62,7 @@ TEST(ScenarioMeasurement, SampledAndQuantisedLikeTheRig) {
 // its peaks shrink; the half-period lies between the small-swing value with the arm free and,
 // at this amplitude, the pendulum's with the arm clamped stretched by the large-swing factor.
 TEST(ScenarioMeasurement, FreeDecayFollowsThePhysics) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   for (const int n : {1, 2}) {
     const Scenario s = paper_scenario(n);
     const ScenarioMeasurement m = measure_scenario(s, p);
@@ -99,7 +98,7 @@ TEST(ScenarioMeasurement, FreeDecayFollowsThePhysics) {
 // A constant torque drives the arm to the speed where viscous friction balances it (the pendulum's
 // coupling averages out): q1 grows at about u / fv1.
 TEST(ScenarioMeasurement, ConstantTorqueDrivesTheArmAtItsTerminalSpeed) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   for (const int n : {3, 4}) {
     const Scenario s = paper_scenario(n);
     const ScenarioMeasurement m = measure_scenario(s, p);
@@ -110,7 +109,7 @@ TEST(ScenarioMeasurement, ConstantTorqueDrivesTheArmAtItsTerminalSpeed) {
 }
 
 TEST(ScenarioMeasurement, BadOptionsAreRefused) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   MeasurementOptions o;
   o.step_s = 0.003;  // 16 ms is not a whole number of 3 ms steps
   EXPECT_THROW(measure_scenario(paper_scenario(1), p, o), std::invalid_argument);
@@ -125,7 +124,7 @@ TEST(ScenarioMeasurement, BadOptionsAreRefused) {
 }
 
 TEST(ScenarioParameters, IntervalSetsWidenTheMusAndTakeTheFrictions) {
-  const bridge::ModelParameters p = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   const ParameterSet set = interval_parameters(
       "SIVIA", p, {12, 12, 10, 12, 15}, Interval(0.043012, 0.13002), Interval(0.000454, 0.001174));
   EXPECT_EQ(set.name, "SIVIA");
@@ -156,8 +155,8 @@ class ShortRun : public ::testing::Test {
     return s;
   }
   static const ScenarioTubes& tubes() {
-    static const ScenarioTubes t = run_scenario_tubes(
-        scenario(), FurutaParameters::point(bridge::ModelParameters::paper_run1()), {}, {});
+    static const ScenarioTubes t =
+        run_scenario_tubes(scenario(), interval_parameters(model::paper_run1()), {}, {});
     return t;
   }
 };
@@ -168,7 +167,7 @@ TEST_F(ShortRun, TubeHoldsTheTrueModelsSamples) {
   ASSERT_EQ(tubes().status, IntegrationResult::Status::ok) << tubes().reason;
   ASSERT_EQ(tubes().pieces.size(), 1u);
   EXPECT_DOUBLE_EQ(tubes().t_reached_s, 0.2);
-  const bridge::ModelParameters truth = bridge::ModelParameters::paper_run1();
+  const model::Parameters<double> truth = model::paper_run1();
   for (const double offset : {0.0, 1.5e-3, -1.5e-3}) {
     Scenario start = scenario();
     start.q2_initial_rad += offset;
@@ -195,15 +194,15 @@ TEST_F(ShortRun, TubeHoldsTheTrueModelsSamples) {
 TEST_F(ShortRun, TubeMissesAStartOutsideItsBox) {
   Scenario outside = scenario();
   outside.q2_initial_rad += 0.01;
-  const ScenarioMeasurement m = measure_scenario(outside, bridge::ModelParameters::paper_run1());
+  const ScenarioMeasurement m = measure_scenario(outside, model::paper_run1());
   const Coverage c = coverage(tubes().views(), FurutaDynamics::q2, m.t_s, m.q2_true_rad,
                               CoverageMode::interpolated);
   EXPECT_LT(c.covered, c.measurements / 2);
 }
 
 TEST_F(ShortRun, ResultTableJsonAndFigure) {
-  const ScenarioMeasurement m = measure_scenario(scenario(), bridge::ModelParameters::paper_run1());
-  const ParameterSet set = point_parameters("LSMI", bridge::ModelParameters::paper_run1());
+  const ScenarioMeasurement m = measure_scenario(scenario(), model::paper_run1());
+  const ParameterSet set = point_parameters("LSMI", model::paper_run1());
   const ScenarioResult r = evaluate_tubes(scenario(), set, {}, m, tubes());
   EXPECT_EQ(r.q2_step.measurements, m.t_s.size());
   EXPECT_EQ(r.q2_step.in_time, m.t_s.size());
@@ -257,9 +256,9 @@ TEST_F(ShortRun, ResultTableJsonAndFigure) {
 TEST_F(ShortRun, EarlyEndIsReported) {
   Scenario longer = scenario();
   longer.duration_s = 0.8;
-  const ScenarioMeasurement m = measure_scenario(longer, bridge::ModelParameters::paper_run1());
-  const ScenarioResult r = evaluate_tubes(
-      longer, point_parameters("LSMI", bridge::ModelParameters::paper_run1()), {}, m, tubes());
+  const ScenarioMeasurement m = measure_scenario(longer, model::paper_run1());
+  const ScenarioResult r =
+      evaluate_tubes(longer, point_parameters("LSMI", model::paper_run1()), {}, m, tubes());
   EXPECT_DOUBLE_EQ(r.t_reached_s, 0.2);
   EXPECT_EQ(r.q2_step.outside_time, m.t_s.size() - r.q2_step.in_time);
   EXPECT_GT(r.q2_step.outside_time, 20u);

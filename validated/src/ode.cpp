@@ -6,23 +6,14 @@
 
 namespace furuta::validated {
 
-FurutaParameters FurutaParameters::point(const bridge::ModelParameters& p) {
-  return around(p, 0.0);
+model::Parameters<Interval> interval_parameters(const model::Parameters<double>& p) {
+  return parameters_around(p, 0.0);
 }
 
-FurutaParameters FurutaParameters::around(const bridge::ModelParameters& p, double relative) {
-  if (!(relative >= 0.0)) throw std::invalid_argument("FurutaParameters::around: relative < 0");
+model::Parameters<Interval> parameters_around(const model::Parameters<double>& p, double relative) {
+  if (!(relative >= 0.0)) throw std::invalid_argument("parameters_around: relative < 0");
   const Interval factor = Interval(1.0) + Interval(-relative, relative);
-  auto widen = [&](double v) { return relative == 0.0 ? Interval(v) : Interval(v) * factor; };
-  FurutaParameters q;
-  q.mu1 = widen(p.mu1);
-  q.mu2 = widen(p.mu2);
-  q.mu3 = widen(p.mu3);
-  q.mu4 = widen(p.mu4);
-  q.mug = widen(p.mug);
-  q.fv1 = widen(p.fv1);
-  q.fv2 = widen(p.fv2);
-  return q;
+  return p.map([&](double v) { return relative == 0.0 ? Interval(v) : Interval(v) * factor; });
 }
 
 std::vector<InputPiece> checked_pieces(std::vector<InputPiece> pieces) {
@@ -50,10 +41,11 @@ FurutaDynamics::FurutaDynamics(const Interval& tau) : pieces_{InputPiece{0.0, ta
 FurutaDynamics::FurutaDynamics(std::vector<InputPiece> pieces)
     : pieces_(checked_pieces(std::move(pieces))) {}
 
-FurutaStateDynamics::FurutaStateDynamics(const FurutaParameters& p, const Interval& tau)
+FurutaStateDynamics::FurutaStateDynamics(const model::Parameters<Interval>& p, const Interval& tau)
     : FurutaStateDynamics(p, std::vector<InputPiece>{InputPiece{0.0, tau}}) {}
 
-FurutaStateDynamics::FurutaStateDynamics(const FurutaParameters& p, std::vector<InputPiece> pieces)
+FurutaStateDynamics::FurutaStateDynamics(const model::Parameters<Interval>& p,
+                                         std::vector<InputPiece> pieces)
     : p_(p), pieces_(checked_pieces(std::move(pieces))) {
   for (const Interval* v : {&p.mu1, &p.mu2, &p.mu3, &p.mu4, &p.mug, &p.fv1, &p.fv2}) {
     if (v->is_empty() || !v->is_bounded()) {
@@ -62,7 +54,7 @@ FurutaStateDynamics::FurutaStateDynamics(const FurutaParameters& p, std::vector<
   }
 }
 
-Box FurutaDynamics::initial_box(const Box& state, const FurutaParameters& p) {
+Box FurutaDynamics::initial_box(const Box& state, const model::Parameters<Interval>& p) {
   if (state.size() != 4) throw std::invalid_argument("FurutaDynamics::initial_box: state size 4");
   return Box{state[0], state[1], state[2], state[3], p.mu1, p.mu2,
              p.mu3,    p.mu4,    p.mug,    p.fv1,    p.fv2};

@@ -86,7 +86,8 @@ Scenario paper_scenario(int number) {
   return paper_scenarios()[static_cast<std::size_t>(number - 1)];
 }
 
-ScenarioMeasurement measure_scenario(const Scenario& scenario, const bridge::ModelParameters& truth,
+ScenarioMeasurement measure_scenario(const Scenario& scenario,
+                                     const model::Parameters<double>& truth,
                                      const MeasurementOptions& options) {
   if (!(options.step_s > 0.0) || !(options.sample_period_s > 0.0) || !(scenario.duration_s > 0.0) ||
       !std::isfinite(scenario.duration_s)) {
@@ -111,8 +112,8 @@ ScenarioMeasurement measure_scenario(const Scenario& scenario, const bridge::Mod
   const auto quantise = [](double x, double resolution) {
     return std::round(x / resolution) * resolution;
   };
-  bridge::PendulumState x{0.0, 0.0, scenario.q2_initial_rad, 0.0};
-  const auto torque = [&](const bridge::PendulumState&) { return scenario.torque_nm; };
+  model::PendulumState x{0.0, 0.0, scenario.q2_initial_rad, 0.0};
+  const auto torque = [&](const model::PendulumState&) { return scenario.torque_nm; };
   // Sample times as k T (not accumulated) so they land on the tube's step ends where they should.
   for (long k = 0;; ++k) {
     const double t = static_cast<double>(k) * options.sample_period_s;
@@ -123,7 +124,7 @@ ScenarioMeasurement measure_scenario(const Scenario& scenario, const bridge::Mod
     m.q1_true_rad.push_back(x.q1);
     m.q2_true_rad.push_back(x.q2);
     for (long s = 0; s < steps_per_sample; ++s)
-      x = bridge::rk4_step(truth, x, options.step_s, torque);
+      x = model::rk4_step(truth, x, options.step_s, torque);
   }
   return m;
 }
@@ -141,11 +142,11 @@ interval::Box initial_state_box(const Scenario& scenario, const StateUncertainty
                        around(scenario.q2_initial_rad, u.q2_rad), around(0.0, u.dq2_rad_s)};
 }
 
-ParameterSet point_parameters(std::string name, const bridge::ModelParameters& p) {
-  return ParameterSet{std::move(name), FurutaParameters::point(p)};
+ParameterSet point_parameters(std::string name, const model::Parameters<double>& p) {
+  return ParameterSet{std::move(name), interval_parameters(p)};
 }
 
-ParameterSet interval_parameters(std::string name, const bridge::ModelParameters& mu_centre,
+ParameterSet interval_parameters(std::string name, const model::Parameters<double>& mu_centre,
                                  const std::array<double, 5>& mu_percent,
                                  const interval::Interval& fv1, const interval::Interval& fv2) {
   for (const double pct : mu_percent) {
@@ -203,7 +204,7 @@ SplitOptions scenario_split_options(std::size_t pieces, double duration_s) {
 
 namespace {
 
-bool all_points(const FurutaParameters& p) {
+bool all_points(const model::Parameters<Interval>& p) {
   for (const Interval* x : {&p.mu1, &p.mu2, &p.mu3, &p.mu4, &p.mug, &p.fv1, &p.fv2}) {
     if (x->width() != 0.0) return false;
   }
@@ -212,7 +213,8 @@ bool all_points(const FurutaParameters& p) {
 
 }  // namespace
 
-ScenarioTubes run_scenario_tubes(const Scenario& scenario, const FurutaParameters& parameters,
+ScenarioTubes run_scenario_tubes(const Scenario& scenario,
+                                 const model::Parameters<Interval>& parameters,
                                  const StateUncertainty& uncertainty, IntegratorOptions options,
                                  const SplitOptions& split) {
   options.t_start = 0.0;
@@ -325,7 +327,7 @@ std::string scenarios_json(const std::vector<ScenarioResult>& results) {
   out << "[";
   for (std::size_t i = 0; i < results.size(); ++i) {
     const ScenarioResult& r = results[i];
-    const FurutaParameters& p = r.parameters.parameters;
+    const model::Parameters<Interval>& p = r.parameters.parameters;
     out << (i ? ",\n    " : "\n    ") << "{\"scenario\": " << r.scenario.number
         << ", \"label\": " << json_string(r.scenario.label())
         << ", \"description\": " << json_string(r.scenario.description())

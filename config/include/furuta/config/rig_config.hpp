@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "furuta/firmware_bridge/encoder_geometry.hpp"
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/model/model.hpp"
 
 namespace furuta::config {
 
@@ -155,9 +155,9 @@ struct RigConfig {
   int pendulum_channel = 0;
   bridge::EncoderGeometry arm_encoder;  // gear_ratio = motor.total_ratio()
   bridge::EncoderGeometry pendulum_encoder;
-  bridge::MotorData motor;
-  bridge::SimulatedRigConfig simulation;           // geometry and motor copied in from the above
-  std::optional<bridge::ModelParameters> nominal;  // CAD values, for comparison only
+  model::MotorData motor;
+  bridge::SimulatedRigConfig simulation;             // geometry and motor copied in from the above
+  std::optional<model::Parameters<double>> nominal;  // CAD values, for comparison only
   DaemonConfig daemon;
   SafetyConfig safety;
   CommandLimitsConfig limits;

@@ -17,18 +17,18 @@
 #include "furuta/firmware_bridge/clock.hpp"
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/firmware_bridge/transport.hpp"
 #include "furuta/firmware_bridge/usb_device.hpp"
+#include "furuta/model/model.hpp"
 
 namespace furuta::bridge {
 
 enum class RigBoard : std::uint8_t { motor_1065 = 0, encoder_1047 = 1 };
 
 struct SimulatedRigConfig {
-  ModelParameters parameters = ModelParameters::paper_run1();
-  MotorData motor{};
-  PendulumState initial_state{};
+  model::Parameters<double> parameters = model::paper_run1();
+  model::MotorData motor{};
+  model::PendulumState initial_state{};
 
   double integration_step_s = 1e-4;
   std::int64_t report_period_ns = 8'000'000;
@@ -70,7 +70,7 @@ struct TruthRecord {
   RigBoard board = RigBoard::motor_1065;
   std::int64_t generated_ns = 0;  // board time the report describes
   std::int64_t report_index = 0;  // per board, counting dropped reports too
-  PendulumState state{};
+  model::PendulumState state{};
   double applied_duty = 0.0;
   double arm_torque_nm = 0.0;
   bool delivered = true;  // false when a fault dropped it
@@ -122,8 +122,8 @@ class SimulatedRig {
 
   // --- truth ---
   const SimulatedRigConfig& config() const;
-  const ModelParameters& true_parameters() const;
-  PendulumState true_state() const;  // at the time physics has reached
+  const model::Parameters<double>& true_parameters() const;
+  model::PendulumState true_state() const;  // at the time physics has reached
   std::int64_t physics_time_ns() const;
   const std::vector<TruthRecord>& truth() const;
   // Empty unless config.record_motor_commands. Read while no transport is in use.

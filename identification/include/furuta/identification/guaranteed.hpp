@@ -50,7 +50,7 @@ std::vector<IntervalSample> interval_samples(const std::vector<const JointSeries
 // The regressor D of DESIGN.md over data intervals: every D(q2, dq1, dq2, ddq1, ddq2) for data in
 // the intervals lies in these enclosures.
 struct RegressorEnclosure {
-  std::array<Interval, kParameterCount> row1, row2;
+  std::array<Interval, model::kParameterCount> row1, row2;
 };
 RegressorEnclosure regressor_enclosure(const Interval& q2, const Interval& dq1, const Interval& dq2,
                                        const Interval& ddq1, const Interval& ddq2);
@@ -77,7 +77,7 @@ enum class SampleVerdict { consistent, inconsistent, unknown };
 class SampleConstraints {
  public:
   SampleConstraints(std::vector<IntervalSample> samples, const Box& prior,
-                    const std::array<bool, kParameterCount>& unknown);
+                    const std::array<bool, model::kParameterCount>& unknown);
   std::size_t size() const { return samples_.size(); }
   const IntervalSample& sample(std::size_t i) const { return samples_[i]; }
 
@@ -97,8 +97,8 @@ class SampleConstraints {
   // One row as constant + sum over the unknowns of coefficient * p[index].
   struct LinearRow {
     Interval constant{0.0};
-    std::array<Interval, kParameterCount> coefficient{};
-    std::array<int, kParameterCount> index{};
+    std::array<Interval, model::kParameterCount> coefficient{};
+    std::array<int, model::kParameterCount> index{};
     int terms = 0;
   };
 
@@ -110,7 +110,7 @@ class SampleConstraints {
     // The rows as M(p) ddq + r(p) at the witness point: M = [a11 a12; a12 a22].
     LinearRow a11, a12, a22, r1, r2;
   };
-  void build_preconditioned_system(const std::array<bool, kParameterCount>& unknown);
+  void build_preconditioned_system(const std::array<bool, model::kParameterCount>& unknown);
   bool faces_separate(const Precomputed& pre, const Interval& y1, const Box& p) const;
   bool solved_inside(std::size_t i, const Precomputed& pre, const Box& p) const;
   std::vector<IntervalSample> samples_;
@@ -124,8 +124,8 @@ class SampleConstraints {
 struct GuaranteedOptions {
   // Prior box over p = [mu1, mu2, mu3, mu4, mug, fv1, fv2]; components with `unknown` false are
   // carried as intervals (the paper's Table II mu's) and never bisected.
-  Box prior{Box(kParameterCount)};
-  std::array<bool, kParameterCount> unknown{false, false, false, false, false, true, true};
+  Box prior{Box(model::kParameterCount)};
+  std::array<bool, model::kParameterCount> unknown{false, false, false, false, false, true, true};
   // Boundary boxes stop at this width: relative to each unknown's prior width, or absolute.
   double epsilon = 0.01;
   bool epsilon_relative = true;
@@ -145,7 +145,7 @@ struct GuaranteedOptions {
 
 struct GuaranteedResult {
   interval::SubPaving paving;
-  std::array<bool, kParameterCount> unknown{};
+  std::array<bool, model::kParameterCount> unknown{};
   std::size_t samples = 0;
   int q = 0;
   // Samples inconsistent with every parameter of the outer approximation (with q > 0: the faulty
@@ -170,11 +170,11 @@ std::string svg_paving(const GuaranteedResult& result, int x_parameter = 5, int 
                        const std::vector<double>* reference = nullptr);
 // Area (or volume) of a list of boxes over the unknowns only.
 double unknowns_volume(const std::vector<Box>& boxes,
-                       const std::array<bool, kParameterCount>& unknown);
+                       const std::array<bool, model::kParameterCount>& unknown);
 
 // The prior of the paper's problem: mu's = centre +- percent (Table II: 12, 12, 10, 12, 15), fv1
 // and fv2 in [-1.5, 1.5].
-Box paper_prior(const ParameterVector& mu_centre,
+Box paper_prior(const model::Parameters<double>& mu_centre,
                 const std::array<double, 5>& mu_percent = {12, 12, 10, 12, 15},
                 double friction_limit = 1.5);
 

@@ -29,10 +29,11 @@ struct ValidationResult {
 struct Identification {
   std::vector<RawExperiment> raw;
   std::vector<JointSeries> processed;
-  std::vector<LsmiResult> per_experiment;  // Table I: one column each
-  LsmiResult combined;                     // and all together
-  std::optional<ParameterVector> nominal;  // CAD values, from the configuration
-  std::optional<ParameterVector> truth;    // simulated sessions: the simulated rig's parameters
+  std::vector<LsmiResult> per_experiment;            // Table I: one column each
+  LsmiResult combined;                               // and all together
+  std::optional<model::Parameters<double>> nominal;  // CAD values, from the configuration
+  std::optional<model::Parameters<double>>
+      truth;  // simulated sessions: the simulated rig's parameters
   std::optional<ValidationResult> validation;
   double input_lag_s = 0;  // as used (estimated or given)
   std::vector<std::string> warnings;
@@ -40,7 +41,7 @@ struct Identification {
 
 Identification identify(const std::vector<RawExperiment>& experiments,
                         const std::optional<RawExperiment>& validation,
-                        const IdentifyOptions& options, const bridge::MotorData& motor,
+                        const IdentifyOptions& options, const model::MotorData& motor,
                         const VoltageMotor& voltage_motor = {});
 
 // Table I as text: parameter, unit, one column per experiment, all, (CAD), (truth); with standard

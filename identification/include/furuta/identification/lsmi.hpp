@@ -2,24 +2,12 @@
 // Least-squares identification of the model's seven parameters (paper section III.B): the regressor
 // of DESIGN.md stacked over samples and experiments, solved by a rank-revealing factorisation.
 
-#include <array>
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/model/model.hpp"
 
 namespace furuta::identification {
-
-inline constexpr int kParameterCount = 7;
-// In the order of p = [mu1, mu2, mu3, mu4, mug, fv1, fv2].
-inline constexpr std::array<const char*, kParameterCount> kParameterNames = {
-    "mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"};
-inline constexpr std::array<const char*, kParameterCount> kParameterUnits = {
-    "kg m^2", "kg m^2", "kg m^2", "kg m^2", "kg m^2 s^-2", "N m s", "N m s"};
-
-using ParameterVector = std::array<double, kParameterCount>;
-ParameterVector to_vector(const bridge::ModelParameters& p);
-bridge::ModelParameters to_parameters(const ParameterVector& v);
 
 // Joint positions, velocities, accelerations and the arm torque at each sample of one experiment,
 // after preprocessing.
@@ -31,12 +19,6 @@ struct JointSeries {
   std::size_t size() const { return t_s.size(); }
 };
 
-// D(q, dq, ddq): y = [tau, 0] = D p.
-struct RegressorRows {
-  ParameterVector row1{}, row2{};
-};
-RegressorRows regressor(double q2, double dq1, double dq2, double ddq1, double ddq2);
-
 struct LsmiOptions {
   std::size_t trim_samples = 0;  // dropped at each end of every experiment (filter edge effects)
   // W is called ill-conditioned above this 2-norm condition number (of W with columns scaled to
@@ -47,11 +29,11 @@ struct LsmiOptions {
 };
 
 struct LsmiResult {
-  ParameterVector estimate{};
-  ParameterVector std_dev{};      // sqrt(diag(sigma^2 (W^T W)^-1))
-  ParameterVector relative_sd{};  // std_dev / |estimate|
-  double sigma = 0;               // residual standard deviation, N m
-  double condition_number = 0;    // of the column-scaled W
+  model::Parameters<double> estimate{};
+  model::Parameters<double> std_dev{};      // sqrt(diag(sigma^2 (W^T W)^-1))
+  model::Parameters<double> relative_sd{};  // std_dev / |estimate|
+  double sigma = 0;                         // residual standard deviation, N m
+  double condition_number = 0;              // of the column-scaled W
   int rank = 0;
   std::size_t rows = 0;  // 2 per sample used
   std::vector<std::string> warnings;
@@ -63,13 +45,14 @@ LsmiResult solve_lsmi(const std::vector<const JointSeries*>& experiments,
                       const LsmiOptions& options = {});
 
 // Predicted arm torque (row 1 of D p) at each sample.
-std::vector<double> predicted_torque(const JointSeries& series, const ParameterVector& p);
+std::vector<double> predicted_torque(const JointSeries& series, const model::Parameters<double>& p);
 
 struct TorqueFit {
   double rmse_nm = 0;                // eq. 12
   double rmse_percent_of_range = 0;  // RMSE / (max tau - min tau) * 100
   std::vector<double> predicted;
 };
-TorqueFit torque_fit(const JointSeries& series, const ParameterVector& p, std::size_t trim = 0);
+TorqueFit torque_fit(const JointSeries& series, const model::Parameters<double>& p,
+                     std::size_t trim = 0);
 
 }  // namespace furuta::identification

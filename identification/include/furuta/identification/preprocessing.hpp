@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/identification/lsmi.hpp"
+#include "furuta/model/model.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::identification {
@@ -44,7 +44,7 @@ struct PreprocessOptions {
 // Filters and differentiates; `motor` gives eq. 4 for duty input, `voltage_motor` the DC-motor
 // form.
 JointSeries preprocess(const RawExperiment& experiment, const PreprocessOptions& options,
-                       const bridge::MotorData& motor, const VoltageMotor& voltage_motor = {});
+                       const model::MotorData& motor, const VoltageMotor& voltage_motor = {});
 
 // Forms series.tau from series.input (the filtered input) delayed by lag_s, and series.dq1.
 // The arm's time constant (mu1 over the back-EMF and viscous damping, about 4.4 ms on the paper's
@@ -52,7 +52,7 @@ JointSeries preprocess(const RawExperiment& experiment, const PreprocessOptions&
 // terms and mu1 moves by (fv1 + back-EMF damping) / mu1 per second of misalignment between input
 // and angles (about 23 % per ms): an unmodelled lag of a millisecond is a large bias.
 void torque_with_input_lag(JointSeries& series, double lag_s, InputKind kind,
-                           const bridge::MotorData& motor, const VoltageMotor& voltage_motor);
+                           const model::MotorData& motor, const VoltageMotor& voltage_motor);
 
 // How many samples at each end the filters disturb (to trim before fitting).
 std::size_t edge_samples(const PreprocessOptions& options);

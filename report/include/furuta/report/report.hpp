@@ -99,7 +99,7 @@ struct ReportInput {
   std::vector<std::string> experiment_names;
   std::vector<identification::LsmiResult> per_experiment;
   identification::LsmiResult combined;
-  std::optional<identification::ParameterVector> nominal, truth;
+  std::optional<model::Parameters<double>> nominal, truth;
   double input_lag_s = 0;
 
   std::vector<std::string> signals_svg;  // Fig. 2/3, one per experiment (svg_signals)
@@ -123,7 +123,7 @@ ReportInput report_input(const identification::Identification& id);
 // Table II: the intervals of the SIVIA problem the configuration sets up around the LSMI estimate
 // (the mu's +- [sivia] mu_uncertainty_pct, the frictions' priors; unknowns as in [sivia]), and,
 // when SIVIA ran, its outer hull per parameter.
-std::vector<IntervalRow> table_two(const identification::ParameterVector& lsmi,
+std::vector<IntervalRow> table_two(const model::Parameters<double>& lsmi,
                                    const config::SiviaConfig& sivia,
                                    const identification::GuaranteedResult* result);
 SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::string svg);

@@ -22,9 +22,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/interval/box.hpp"
 #include "furuta/interval/interval.hpp"
+#include "furuta/model/model.hpp"
 #include "furuta/validated/taylor.hpp"
 
 namespace furuta::validated {
@@ -107,17 +107,10 @@ struct DampedOscillator {
   }
 };
 
-// The Furuta model's parameters as intervals (DESIGN.md).
-struct FurutaParameters {
-  Interval mu1 = 0.0, mu2 = 0.0, mu3 = 0.0, mu4 = 0.0;  // kg m^2
-  Interval mug = 0.0;                                   // kg m^2 s^-2
-  Interval fv1 = 0.0, fv2 = 0.0;                        // N m s
-
-  // The point parameters p.
-  static FurutaParameters point(const bridge::ModelParameters& p);
-  // p with each parameter widened by +-relative * |value| (an enclosure of it).
-  static FurutaParameters around(const bridge::ModelParameters& p, double relative);
-};
+// The model's parameters as intervals (docs/model.md): the point parameters p, and p with each
+// parameter widened by +-relative * |value| (an enclosure of it).
+model::Parameters<Interval> interval_parameters(const model::Parameters<double>& p);
+model::Parameters<Interval> parameters_around(const model::Parameters<double>& p, double relative);
 
 // A piece of piecewise constant arm torque: tau from t_start on (until the next piece).
 struct InputPiece {
@@ -125,36 +118,13 @@ struct InputPiece {
   Interval tau = 0.0;  // N m
 };
 
-// The Furuta model's accelerations ddq = M^-1 (Gamma - B - Q) (DESIGN.md) with the 2x2 inverse
-// written out, det M = (mu1 + mu2 s^2) mu4 - mu3^2 c^2 (s = sin q2, c = cos q2); shared by the
-// 11- and 4-dimensional systems below.
-template <class S>
-void furuta_accelerations(const S& q2, const S& dq1, const S& dq2, const S& m1, const S& m2,
-                          const S& m3, const S& m4, const S& mg, const S& f1, const S& f2,
-                          const S& tau, S& ddq1, S& ddq2) {
-  using std::cos;
-  using std::sin;
-  const S s = sin(q2);
-  const S c = cos(q2);
-  const S m11 = m1 + m2 * s * s;
-  const S m12 = m3 * c;
-  const S sc = s * c;
-  const S b1 = S(2.0) * m2 * sc * dq1 * dq2 - m3 * s * dq2 * dq2;
-  const S b2 = -(m2 * sc * dq1 * dq1);
-  const S rhs1 = tau - f1 * dq1 - b1;
-  const S rhs2 = -(f2 * dq2) - b2 - mg * s;
-  const S det = m11 * m4 - m12 * m12;
-  ddq1 = (m4 * rhs1 - m12 * rhs2) / det;
-  ddq2 = (m11 * rhs2 - m12 * rhs1) / det;
-}
-
 // The torque pieces' common checks and switch times (see the two Furuta systems).
 std::vector<InputPiece> checked_pieces(std::vector<InputPiece> pieces);
 std::vector<double> piece_switch_times(const std::vector<InputPiece>& pieces);
 
-// The Furuta pendulum, M(q) ddq + B(q, dq) + Q(q) = Gamma (DESIGN.md), with the parameters carried
-// as state of zero derivative, so that the integrator tracks their correlation with the motion:
-// x = [q1, dq1, q2, dq2, mu1, mu2, mu3, mu4, mug, fv1, fv2].
+// The Furuta pendulum, M(q) ddq + B(q, dq) + Q(q) = Gamma (docs/model.md), with the parameters
+// carried as state of zero derivative, so that the integrator tracks their correlation with the
+// motion: x = [q1, dq1, q2, dq2, mu1, mu2, mu3, mu4, mug, fv1, fv2].
 class FurutaDynamics {
  public:
   static constexpr std::size_t dimension = 11;
@@ -170,15 +140,17 @@ class FurutaDynamics {
   std::vector<double> switch_times() const { return piece_switch_times(pieces_); }
 
   // The 11-dimensional initial box from the state [q1, dq1, q2, dq2] and the parameters.
-  static Box initial_box(const Box& state, const FurutaParameters& p);
+  static Box initial_box(const Box& state, const model::Parameters<Interval>& p);
 
   template <class S>
   void operator()(std::size_t piece, std::span<const S> x, std::span<S> dx) const {
     const S tau = constant_as<S>(pieces_[std::min(piece, pieces_.size() - 1)].tau);
     dx[q1] = x[dq1];
     dx[q2] = x[dq2];
-    furuta_accelerations(x[q2], x[dq1], x[dq2], x[mu1], x[mu2], x[mu3], x[mu4], x[mug], x[fv1],
-                         x[fv2], tau, dx[dq1], dx[dq2]);
+    const model::Parameters<S> p{x[mu1], x[mu2], x[mu3], x[mu4], x[mug], x[fv1], x[fv2]};
+    const model::JointAccelerations<S> a = model::accelerations(p, x[q2], x[dq1], x[dq2], tau);
+    dx[dq1] = a.ddq1;
+    dx[dq2] = a.ddq2;
     for (std::size_t i = mu1; i <= fv2; ++i) dx[i] = S(0.0);
   }
 
@@ -196,10 +168,11 @@ class FurutaStateDynamics {
   static constexpr std::size_t dimension = 4;
   enum Component : std::size_t { q1, dq1, q2, dq2 };
 
-  explicit FurutaStateDynamics(const FurutaParameters& p, const Interval& tau = Interval(0.0));
-  FurutaStateDynamics(const FurutaParameters& p, std::vector<InputPiece> pieces);
+  explicit FurutaStateDynamics(const model::Parameters<Interval>& p,
+                               const Interval& tau = Interval(0.0));
+  FurutaStateDynamics(const model::Parameters<Interval>& p, std::vector<InputPiece> pieces);
 
-  const FurutaParameters& parameters() const { return p_; }
+  const model::Parameters<Interval>& parameters() const { return p_; }
   const std::vector<InputPiece>& pieces() const { return pieces_; }
   std::vector<double> switch_times() const { return piece_switch_times(pieces_); }
 
@@ -208,13 +181,14 @@ class FurutaStateDynamics {
     const S tau = constant_as<S>(pieces_[std::min(piece, pieces_.size() - 1)].tau);
     dx[q1] = x[dq1];
     dx[q2] = x[dq2];
-    furuta_accelerations(x[q2], x[dq1], x[dq2], constant_as<S>(p_.mu1), constant_as<S>(p_.mu2),
-                         constant_as<S>(p_.mu3), constant_as<S>(p_.mu4), constant_as<S>(p_.mug),
-                         constant_as<S>(p_.fv1), constant_as<S>(p_.fv2), tau, dx[dq1], dx[dq2]);
+    const model::Parameters<S> p = p_.map([](const Interval& v) { return constant_as<S>(v); });
+    const model::JointAccelerations<S> a = model::accelerations(p, x[q2], x[dq1], x[dq2], tau);
+    dx[dq1] = a.ddq1;
+    dx[dq2] = a.ddq2;
   }
 
  private:
-  FurutaParameters p_;
+  model::Parameters<Interval> p_;
   std::vector<InputPiece> pieces_;
 };
 

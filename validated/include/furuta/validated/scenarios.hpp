@@ -5,7 +5,7 @@
 // Fig. 6-style figures. See validated/README.md, "Scenarios and coverage".
 //
 //   const Scenario s = paper_scenario(1);
-//   const ScenarioMeasurement m = measure_scenario(s, bridge::ModelParameters::paper_run1());
+//   const ScenarioMeasurement m = measure_scenario(s, model::paper_run1());
 //   const ScenarioResult r = evaluate_scenario(s, point_parameters("LSMI", estimate), m, {}, {});
 //   std::cout << format_table_three({r});
 
@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/interval/box.hpp"
+#include "furuta/model/model.hpp"
 #include "furuta/validated/coverage.hpp"
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/ode.hpp"
@@ -61,7 +61,8 @@ struct ScenarioMeasurement {
 // The true model from exactly x0 with the scenario's torque, RK4 at options.step_s, sampled
 // every sample period with the encoders' quantisation. std::invalid_argument for a non-positive
 // step, period or duration, or a period that is not a whole number of steps.
-ScenarioMeasurement measure_scenario(const Scenario& scenario, const bridge::ModelParameters& truth,
+ScenarioMeasurement measure_scenario(const Scenario& scenario,
+                                     const model::Parameters<double>& truth,
                                      const MeasurementOptions& options = {});
 
 // The data's uncertainty on the initial state (half-widths): the tube starts from x0 +- these.
@@ -79,14 +80,14 @@ interval::Box initial_state_box(const Scenario& scenario, const StateUncertainty
 // A named set of model parameters for the tubes: intervals (SIVIA) or points (LSMI).
 struct ParameterSet {
   std::string name;
-  FurutaParameters parameters;
+  model::Parameters<Interval> parameters;
 };
 
 // Point parameters (every interval a single value).
-ParameterSet point_parameters(std::string name, const bridge::ModelParameters& p);
+ParameterSet point_parameters(std::string name, const model::Parameters<double>& p);
 // The paper's interval parameters: the mu's as mu_centre +- percent (Table II: 12, 12, 10, 12, 15
 // for mu1, mu2, mu3, mu4, mug), the frictions as given (SIVIA's outer hull).
-ParameterSet interval_parameters(std::string name, const bridge::ModelParameters& mu_centre,
+ParameterSet interval_parameters(std::string name, const model::Parameters<double>& mu_centre,
                                  const std::array<double, 5>& mu_percent,
                                  const interval::Interval& fv1, const interval::Interval& fv2);
 
@@ -129,7 +130,8 @@ struct ScenarioTubes {
 // rest is used as given): FurutaStateDynamics for point parameters, FurutaDynamics (parameters
 // carried as state) for intervals. A run that fails is split into pieces up to split.max_pieces
 // (1: one tube, no splitting).
-ScenarioTubes run_scenario_tubes(const Scenario& scenario, const FurutaParameters& parameters,
+ScenarioTubes run_scenario_tubes(const Scenario& scenario,
+                                 const model::Parameters<Interval>& parameters,
                                  const StateUncertainty& uncertainty, IntegratorOptions options,
                                  const SplitOptions& split = single_tube());
 

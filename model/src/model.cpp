@@ -1,24 +1,16 @@
-#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/model/model.hpp"
 
 #include <cmath>
 #include <numbers>
 
-namespace furuta::bridge {
+namespace furuta::model {
 
 namespace {
 constexpr double kRadPerSToRpm = 60.0 / (2.0 * std::numbers::pi);
 }
 
-ModelParameters ModelParameters::paper_run1() {
-  ModelParameters p;
-  p.mu1 = 1.04082e-3;
-  p.mu2 = 2.56211e-3;
-  p.mu3 = 8.21e-4;
-  p.mu4 = 1.31781e-3;
-  p.mug = 7.4175e-2;
-  p.fv1 = 8.13e-2;
-  p.fv2 = 6.42e-4;
-  return p;
+Parameters<double> paper_run1() {
+  return {1.04082e-3, 2.56211e-3, 8.21e-4, 1.31781e-3, 7.4175e-2, 8.13e-2, 6.42e-4};
 }
 
 double MotorData::arm_torque_nm(double duty, double dq1_rad_s) const {
@@ -38,27 +30,17 @@ double MotorData::motor_current_a(double arm_torque_nm) const {
   return motor_torque_nm / torque_constant_nm_per_a;
 }
 
-JointAccelerations forward_dynamics(const ModelParameters& p, const PendulumState& x, double tau_nm,
-                                    bool arm_clamped) {
-  const double s = std::sin(x.q2);
-  const double c = std::cos(x.q2);
+JointAccelerations<double> forward_dynamics(const Parameters<double>& p, const PendulumState& x,
+                                            double tau_nm, bool arm_clamped) {
   if (arm_clamped) {
     // With dq1 = 0 the centrifugal term of B's second row vanishes and ddq1 = 0 removes the
     // coupling.
-    return {0.0, (-p.mug * s - p.fv2 * x.dq2) / p.mu4};
+    return {0.0, (-p.mug * std::sin(x.q2) - p.fv2 * x.dq2) / p.mu4};
   }
-  const double m11 = p.mu1 + p.mu2 * s * s;
-  const double m12 = p.mu3 * c;
-  const double m22 = p.mu4;
-  const double b1 = 2.0 * p.mu2 * s * c * x.dq1 * x.dq2 - p.mu3 * s * x.dq2 * x.dq2;
-  const double b2 = -p.mu2 * s * c * x.dq1 * x.dq1;
-  const double rhs1 = tau_nm - p.fv1 * x.dq1 - b1;
-  const double rhs2 = -p.fv2 * x.dq2 - b2 - p.mug * s;
-  const double det = m11 * m22 - m12 * m12;
-  return {(m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det};
+  return accelerations(p, x.q2, x.dq1, x.dq2, tau_nm);
 }
 
-double total_energy(const ModelParameters& p, const PendulumState& x) {
+double total_energy(const Parameters<double>& p, const PendulumState& x) {
   const double s = std::sin(x.q2);
   const double c = std::cos(x.q2);
   const double kinetic = 0.5 * ((p.mu1 + p.mu2 * s * s) * x.dq1 * x.dq1 +
@@ -66,8 +48,17 @@ double total_energy(const ModelParameters& p, const PendulumState& x) {
   return kinetic + p.mug * (1.0 - c);
 }
 
-double energy_rate(const ModelParameters& p, const PendulumState& x, double tau_nm) {
+double energy_rate(const Parameters<double>& p, const PendulumState& x, double tau_nm) {
   return tau_nm * x.dq1 - p.fv1 * x.dq1 * x.dq1 - p.fv2 * x.dq2 * x.dq2;
 }
 
-}  // namespace furuta::bridge
+RegressorRows regressor(double q2, double dq1, double dq2, double ddq1, double ddq2) {
+  const double s = std::sin(q2);
+  const double c = std::cos(q2);
+  RegressorRows r;
+  r.row1 = {ddq1, s * s * ddq1 + 2 * s * c * dq1 * dq2, c * ddq2 - s * dq2 * dq2, 0, 0, dq1, 0};
+  r.row2 = {0, -s * c * dq1 * dq1, c * ddq1, ddq2, s, 0, dq2};
+  return r;
+}
+
+}  // namespace furuta::model

@@ -1,4 +1,4 @@
-#include "furuta/firmware_bridge/rig_model.hpp"
+#include "furuta/model/model.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,26 +9,25 @@
 #include <random>
 #include <vector>
 
-#include "furuta/firmware_bridge/simulated_rig.hpp"
-
-namespace furuta::bridge {
+namespace furuta::model {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
+// The simulated rig's integration step (SimulatedRigConfig::integration_step_s).
 double default_step_s() {
-  return SimulatedRigConfig{}.integration_step_s;
+  return 1e-4;
 }
 
-ModelParameters frictionless() {
-  ModelParameters p = ModelParameters::paper_run1();
+model::Parameters<double> frictionless() {
+  model::Parameters<double> p = model::paper_run1();
   p.fv1 = 0.0;
   p.fv2 = 0.0;
   return p;
 }
 
 TEST(RigModel, PaperRun1IsTableIAcquisition1) {
-  const ModelParameters p = ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   EXPECT_DOUBLE_EQ(p.mu1, 1.04082e-3);
   EXPECT_DOUBLE_EQ(p.mu2, 2.56211e-3);
   EXPECT_DOUBLE_EQ(p.mu3, 8.21e-4);
@@ -41,15 +40,15 @@ TEST(RigModel, PaperRun1IsTableIAcquisition1) {
 // The identification regresses y = D(q, dq, ddq) p with y = [tau, 0] (DESIGN.md); the simulator's
 // accelerations must satisfy exactly those rows, or identification would chase a different model.
 TEST(RigModel, ForwardDynamicsSatisfiesTheRegressorRows) {
-  const ModelParameters p = ModelParameters::paper_run1();
+  const model::Parameters<double> p = model::paper_run1();
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> angle(-kPi, kPi);
   std::uniform_real_distribution<double> speed(-8.0, 8.0);
   std::uniform_real_distribution<double> torque(-0.5, 0.5);
   for (int i = 0; i < 200; ++i) {
-    const PendulumState x{angle(rng), speed(rng), angle(rng), speed(rng)};
+    const model::PendulumState x{angle(rng), speed(rng), angle(rng), speed(rng)};
     const double tau = torque(rng);
-    const JointAccelerations a = forward_dynamics(p, x, tau);
+    const model::JointAccelerations<double> a = model::forward_dynamics(p, x, tau);
     const double s = std::sin(x.q2);
     const double c = std::cos(x.q2);
     const double row1 = p.mu1 * a.ddq1 + p.mu2 * (s * s * a.ddq1 + 2 * s * c * x.dq1 * x.dq2) +
@@ -62,37 +61,37 @@ TEST(RigModel, ForwardDynamicsSatisfiesTheRegressorRows) {
 }
 
 TEST(RigModel, ClampedArmSwingsThePendulumAlone) {
-  const ModelParameters p = ModelParameters::paper_run1();
-  const PendulumState x{0.3, 0.0, 0.7, -1.2};
-  const JointAccelerations a = forward_dynamics(p, x, 0.4, true);
+  const model::Parameters<double> p = model::paper_run1();
+  const model::PendulumState x{0.3, 0.0, 0.7, -1.2};
+  const model::JointAccelerations<double> a = model::forward_dynamics(p, x, 0.4, true);
   EXPECT_EQ(a.ddq1, 0.0);
   EXPECT_NEAR(p.mu4 * a.ddq2, -p.mug * std::sin(0.7) - p.fv2 * -1.2, 1e-15);
 }
 
 TEST(RigModel, EnergyRateIsTheDerivativeOfTotalEnergy) {
-  const ModelParameters p = ModelParameters::paper_run1();
-  const PendulumState x{0.2, 1.5, 1.1, -2.0};
+  const model::Parameters<double> p = model::paper_run1();
+  const model::PendulumState x{0.2, 1.5, 1.1, -2.0};
   const double tau = 0.12;
-  auto constant_torque = [tau](const PendulumState&) { return tau; };
+  auto constant_torque = [tau](const model::PendulumState&) { return tau; };
   const double h = 1e-5;
-  const PendulumState ahead = rk4_step(p, x, h, constant_torque);
-  const PendulumState behind = rk4_step(p, x, -h, constant_torque);
-  const double numeric = (total_energy(p, ahead) - total_energy(p, behind)) / (2 * h);
-  EXPECT_NEAR(numeric, energy_rate(p, x, tau), 1e-8);
+  const model::PendulumState ahead = model::rk4_step(p, x, h, constant_torque);
+  const model::PendulumState behind = model::rk4_step(p, x, -h, constant_torque);
+  const double numeric = (model::total_energy(p, ahead) - model::total_energy(p, behind)) / (2 * h);
+  EXPECT_NEAR(numeric, model::energy_rate(p, x, tau), 1e-8);
 }
 
 // Acceptance check 1.
 TEST(RigModel, EnergyIsConservedWithoutFrictionOrTorque) {
-  const ModelParameters p = frictionless();
-  PendulumState x{0.0, 3.0, 2.0, 0.0};
-  const double e0 = total_energy(p, x);
+  const model::Parameters<double> p = frictionless();
+  model::PendulumState x{0.0, 3.0, 2.0, 0.0};
+  const double e0 = model::total_energy(p, x);
   const double dt = default_step_s();
-  auto no_torque = [](const PendulumState&) { return 0.0; };
+  auto no_torque = [](const model::PendulumState&) { return 0.0; };
   double worst = 0.0;
   const int steps = static_cast<int>(std::lround(10.0 / dt));
   for (int i = 0; i < steps; ++i) {
-    x = rk4_step(p, x, dt, no_torque);
-    worst = std::max(worst, std::abs(total_energy(p, x) - e0) / e0);
+    x = model::rk4_step(p, x, dt, no_torque);
+    worst = std::max(worst, std::abs(model::total_energy(p, x) - e0) / e0);
   }
   std::cout << "[ measured ] relative energy drift over 10 s: " << worst << "\n";
   EXPECT_LT(worst, 1e-6);
@@ -102,15 +101,15 @@ TEST(RigModel, EnergyIsConservedWithoutFrictionOrTorque) {
 
 // Acceptance check 2 (the rig-level variant of the clamped arm is in simulated_rig_test.cpp).
 TEST(RigModel, ClampedSmallOscillationHasThePendulumPeriod) {
-  ModelParameters p = ModelParameters::paper_run1();
+  model::Parameters<double> p = model::paper_run1();
   p.fv2 = 0.0;  // undamped, so the period is exactly the natural one
   const double dt = default_step_s();
-  PendulumState x{0.0, 0.0, 0.01, 0.0};
-  auto no_torque = [](const PendulumState&) { return 0.0; };
+  model::PendulumState x{0.0, 0.0, 0.01, 0.0};
+  auto no_torque = [](const model::PendulumState&) { return 0.0; };
   std::vector<double> upward_crossings;
   double t = 0.0;
   for (int i = 0; i < static_cast<int>(20.0 / dt); ++i) {
-    const PendulumState next = rk4_step(p, x, dt, no_torque, true);
+    const model::PendulumState next = model::rk4_step(p, x, dt, no_torque, true);
     if (x.q2 < 0.0 && next.q2 >= 0.0) {
       upward_crossings.push_back(t + dt * (-x.q2) / (next.q2 - x.q2));
     }
@@ -128,7 +127,7 @@ TEST(RigModel, ClampedSmallOscillationHasThePendulumPeriod) {
 }
 
 TEST(RigModel, MotorTorqueFollowsEquation4) {
-  const MotorData m;
+  const model::MotorData m;
   const double k =
       m.total_ratio() * m.motor_efficiency * m.gear_efficiency / m.speed_torque_gradient_rpm_per_nm;
   // Stall torque: the whole no-load speed is available.
@@ -143,7 +142,7 @@ TEST(RigModel, MotorTorqueFollowsEquation4) {
 }
 
 TEST(RigModel, MotorCurrentUsesTheTorqueConstantFromNoLoadSpeed) {
-  const MotorData m;
+  const model::MotorData m;
   const double kt = m.nominal_voltage_v / (m.no_load_speed_rpm * 2 * kPi / 60.0);
   const double arm_torque = 0.25;
   const double current = m.motor_current_a(arm_torque);
@@ -153,4 +152,4 @@ TEST(RigModel, MotorCurrentUsesTheTorqueConstantFromNoLoadSpeed) {
 }
 
 }  // namespace
-}  // namespace furuta::bridge
+}  // namespace furuta::model
