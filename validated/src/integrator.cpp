@@ -24,6 +24,10 @@
 //     z + J C r0 + J B r. Components whose derivative is the constant 0 (parameters carried as
 //     state) get no error part: B = blockdiag(B_LL, I), r = (r_L, 0), the frame chosen on the
 //     live block L alone (checked each step: their rows of J exact unit rows, their rest 0).
+//
+// The interval matrices (interval_matrix.hpp), the quadratic forms in rho (quadratic_form.hpp),
+// the Horner evaluation of the Taylor form (taylor_form.hpp) and the jets of the Taylor
+// coefficients (jets.hpp) are in files of their own in this directory.
 
 #include "furuta/validated/integrator.hpp"
 
@@ -37,102 +41,35 @@
 #include <sstream>
 #include <utility>
 
+#include "interval_matrix.hpp"
+#include "jets.hpp"
+#include "quadratic_form.hpp"
+#include "taylor_form.hpp"
+
 namespace furuta::validated {
 namespace {
 
-using Matrix = Eigen::MatrixXd;
-constexpr std::size_t kMaxDimension = 16;
+using internal::centre_coefficients;
+using internal::form_range;
+using internal::forms_range;
+using internal::frame_inverse;
+using internal::from_point;
+using internal::horner;
+using internal::IMatrix;
+using internal::inverse_enclosure;
+using internal::kMaxDimension;
+using internal::kMaxExtended;
+using internal::Matrix;
+using internal::mid;
+using internal::pair_count;
+using internal::second_order_coefficients;
+using internal::second_order_extended;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Components whose exact part is below this fraction of the widest one are left out of the
 // excess ratio: a component that the flow contracts (the damped arm speed) has a tiny exact
 // part, and its error part's ratio to it says nothing about the set.
 constexpr double kExcessFloor = 0.05;
-
-// A square interval matrix, row-major.
-struct IMatrix {
-  std::size_t n = 0;
-  std::vector<Interval> v;
-
-  explicit IMatrix(std::size_t size = 0) : n(size), v(size * size, Interval(0.0)) {}
-  Interval& operator()(std::size_t i, std::size_t j) { return v[i * n + j]; }
-  const Interval& operator()(std::size_t i, std::size_t j) const { return v[i * n + j]; }
-};
-
-IMatrix from_point(const Matrix& a) {
-  const auto n = static_cast<std::size_t>(a.rows());
-  IMatrix m(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t j = 0; j < n; ++j) {
-      m(i, j) = Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
-    }
-  }
-  return m;
-}
-
-IMatrix from_point(std::size_t n, const std::vector<double>& row_major) {
-  IMatrix m(n);
-  for (std::size_t e = 0; e < n * n; ++e) m.v[e] = Interval(row_major[e]);
-  return m;
-}
-
-IMatrix operator*(const IMatrix& a, const IMatrix& b) {
-  IMatrix c(a.n);
-  for (std::size_t i = 0; i < a.n; ++i) {
-    for (std::size_t l = 0; l < a.n; ++l) {
-      const Interval& ail = a(i, l);
-      for (std::size_t j = 0; j < a.n; ++j) c(i, j) += ail * b(l, j);
-    }
-  }
-  return c;
-}
-
-std::vector<Interval> operator*(const IMatrix& a, const std::vector<Interval>& x) {
-  std::vector<Interval> y(a.n, Interval(0.0));
-  for (std::size_t i = 0; i < a.n; ++i) {
-    for (std::size_t j = 0; j < a.n; ++j) y[i] += a(i, j) * x[j];
-  }
-  return y;
-}
-
-Matrix mid(const IMatrix& a) {
-  const auto n = static_cast<Eigen::Index>(a.n);
-  Matrix m(n, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (Eigen::Index j = 0; j < n; ++j) {
-      m(i, j) = a(static_cast<std::size_t>(i), static_cast<std::size_t>(j)).mid();
-    }
-  }
-  return m;
-}
-
-// An interval matrix containing the inverse of the point matrix q, from an approximate inverse
-// x: with E = I - x q, q^-1 = (I - E)^-1 x, so |q^-1 - x| <= ||E|| ||x|| / (1 - ||E||)
-// entrywise (infinity norms). Nothing when ||E|| > max_error (< 1).
-std::optional<IMatrix> inverse_enclosure(const Matrix& q, const Matrix& x, double max_error) {
-  const auto n = static_cast<std::size_t>(q.rows());
-  const IMatrix qi = from_point(q);
-  const IMatrix b = from_point(x);
-  const IMatrix bq = b * qi;
-  double e_norm = 0.0;
-  double b_norm = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    Interval e_row(0.0);
-    Interval b_row(0.0);
-    for (std::size_t j = 0; j < n; ++j) {
-      const Interval eij = Interval(i == j ? 1.0 : 0.0) - bq(i, j);
-      e_row += Interval(eij.mag());
-      b_row += Interval(b(i, j).mag());
-    }
-    e_norm = std::max(e_norm, e_row.hi());
-    b_norm = std::max(b_norm, b_row.hi());
-  }
-  if (!(e_norm <= max_error && e_norm < 1.0)) return std::nullopt;
-  const double delta =
-      (Interval(e_norm) * Interval(b_norm) / (Interval(1.0) - Interval(e_norm))).hi();
-  IMatrix inv = b;
-  for (Interval& x : inv.v) x += Interval(-delta, delta);
-  return inv;
-}
 
 // A candidate frame B' for the r part of the doubleton, r' and the box B' r'.
 struct Lohner {
@@ -187,278 +124,6 @@ bool is_bounded(const Box& b) {
   return std::all_of(b.begin(), b.end(), [](const Interval& x) { return x.is_bounded(); });
 }
 
-// ---- Jacobian of the Taylor coefficients --------------------------------------------------------
-
-// The Taylor coefficients at the point m (values[i n + v] = x_[i]_v) and their derivatives with
-// respect to the initial state (jac[(i n + v) n + c] = d x_[i]_v / d x0_c), i = 0..order.
-template <std::size_t N>
-void centre_coefficients_n(const Tape& tape, const std::vector<double>& m, int order,
-                           std::vector<Interval>& values, std::vector<Interval>& jac) {
-  std::vector<Grad<N>> x0;
-  x0.reserve(N);
-  for (std::size_t c = 0; c < N; ++c) x0.push_back(Grad<N>::variable(Interval(m[c]), c));
-  TaylorRunner<Grad<N>> runner;
-  runner.run(tape, std::span<const Grad<N>>(x0), order);
-  const auto count = static_cast<std::size_t>(order) + 1;
-  values.resize(count * N);
-  jac.resize(count * N * N);
-  for (std::size_t i = 0; i < count; ++i) {
-    for (std::size_t v = 0; v < N; ++v) {
-      const Grad<N>& g = runner.coefficient(v, static_cast<int>(i));
-      values[i * N + v] = g.v;
-      std::copy(g.d.begin(), g.d.end(), jac.begin() + static_cast<std::ptrdiff_t>((i * N + v) * N));
-    }
-  }
-}
-
-template <std::size_t... Is>
-void centre_dispatch(std::index_sequence<Is...>, const Tape& tape, const std::vector<double>& m,
-                     int order, std::vector<Interval>& values, std::vector<Interval>& jac) {
-  const std::size_t n = m.size();
-  (void)((n == Is + 1 ? (centre_coefficients_n<Is + 1>(tape, m, order, values, jac), true)
-                      : false) ||
-         ...);
-}
-
-void centre_coefficients(const Tape& tape, const std::vector<double>& m, int order,
-                         std::vector<Interval>& values, std::vector<Interval>& jac) {
-  centre_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, m, order, values, jac);
-}
-
-// The second-order term over the set m + C r0 + B r inside the box y: second[i n + v] = half the
-// second derivative of x_[i]_v along delta = C rho + e (rho in r0, e in B r) over y, i = 0..order.
-// The jets' x0: y over the box, the direction's linear form (row v of c) in rho, e = br.
-template <class Jet, std::size_t N>
-std::vector<Jet> direction_jets(const Box& y, const Matrix& c, const std::vector<Interval>& r0,
-                                const std::vector<Interval>& br) {
-  std::vector<Jet> x0(N);
-  for (std::size_t v = 0; v < N; ++v) {
-    x0[v] = Jet(y[v]);
-    for (std::size_t a = 0; a < N; ++a) {
-      x0[v].g[a] = Interval(c(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(a)));
-    }
-    x0[v].e = br[v];
-    x0[v].rho = r0.data();
-    x0[v].changed();
-  }
-  return x0;
-}
-
-// The second-order term over the set inside the box y: second[i n + v] = half the second
-// derivative of x_[i]_v along delta = C rho + e (rho in r0, e in the interval vector `e`) over y,
-// i = 0..order. Both jets enclose the same quantity: the low orders (0..quadratic_order), where
-// the terms are largest, from the quadratic forms (tight, about 6x the cost per operation), the
-// others from Jet2. With `forms` (not null) the low orders also give their quadratic form in rho:
-// forms[(i n + v) P + pair] (interval coefficients over y, P = n (n + 1) / 2 pairs a <= b) and
-// d2e[i n + v] (the terms with e), so that second = forms(rho) + d2e; the other orders have a
-// zero form and d2e = second.
-template <std::size_t N>
-void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
-                    const std::vector<Interval>& r0, const std::vector<Interval>& e, int order,
-                    int quadratic_order, bool quadratic_part, std::vector<Interval>& second,
-                    std::vector<Interval>* forms, std::vector<Interval>* d2e) {
-  constexpr std::size_t kPairs = QuadJet<N>::kPairs;
-  const auto count = static_cast<std::size_t>(order) + 1;
-  second.resize(count * N);
-  if (forms != nullptr) {
-    forms->assign(count * N * kPairs, Interval(0.0));
-    d2e->assign(count * N, Interval(0.0));
-  }
-  const int low = std::min(order, quadratic_order);
-  if (low < order) {
-    const std::vector<Jet2<N>> x0 = direction_jets<Jet2<N>, N>(y, c, r0, e);
-    TaylorRunner<Jet2<N>> runner;
-    runner.run(tape, std::span<const Jet2<N>>(x0), order);
-    for (std::size_t i = static_cast<std::size_t>(low) + 1; i < count; ++i) {
-      for (std::size_t v = 0; v < N; ++v) {
-        second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
-        if (d2e != nullptr) (*d2e)[i * N + v] = second[i * N + v];
-      }
-    }
-  }
-  if (low >= 0 && quadratic_part) {
-    const std::vector<QuadJet<N>> x0 = direction_jets<QuadJet<N>, N>(y, c, r0, e);
-    TaylorRunner<QuadJet<N>> runner;
-    runner.run(tape, std::span<const QuadJet<N>>(x0), low);
-    for (std::size_t i = 0; i <= static_cast<std::size_t>(low); ++i) {
-      for (std::size_t v = 0; v < N; ++v) {
-        const QuadJet<N>& jet = runner.coefficient(v, static_cast<int>(i));
-        second[i * N + v] = jet.range();
-        if (forms != nullptr) {
-          if (jet.rho != nullptr) {
-            std::copy(jet.q.begin(), jet.q.end(),
-                      forms->begin() + static_cast<std::ptrdiff_t>((i * N + v) * kPairs));
-            (*d2e)[i * N + v] = jet.d2e;
-          } else {
-            (*d2e)[i * N + v] = second[i * N + v];  // range() is d2e alone then
-          }
-        }
-      }
-    }
-  }
-}
-
-template <std::size_t... Is>
-void second_order_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
-                           const Matrix& c, const std::vector<Interval>& r0,
-                           const std::vector<Interval>& e, int order, int quadratic_order,
-                           bool quadratic_part, std::vector<Interval>& second,
-                           std::vector<Interval>* forms, std::vector<Interval>* d2e) {
-  const std::size_t n = y.size();
-  (void)((n == Is + 1 ? (second_order_n<Is + 1>(tape, y, c, r0, e, order, quadratic_order,
-                                                quadratic_part, second, forms, d2e),
-                         true)
-                      : false) ||
-         ...);
-}
-
-// quadratic_part false: only the orders above quadratic_order (Jet2); the caller computes the
-// others (second_order_extended_m).
-void second_order_coefficients(const Tape& tape, const Box& y, const Matrix& c,
-                               const std::vector<Interval>& r0, const std::vector<Interval>& e,
-                               int order, int quadratic_order, std::vector<Interval>& second,
-                               std::vector<Interval>* forms = nullptr,
-                               std::vector<Interval>* d2e = nullptr, bool quadratic_part = true) {
-  second_order_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, y, c, r0, e, order,
-                        quadratic_order, quadratic_part, second, forms, d2e);
-}
-
-// The orders 0..quadratic_order with the error part's live coordinates r_L in the jets' linear
-// form too: the direction is delta = C rho + B r + e (e: the interval vector P(r0)), the QuadJet
-// runs on the coordinates (rho (all n), r_l for l in `live`), padded with zero coordinates up to
-// M, so that the products of first-order terms with B r are kept as a form too (the field's large
-// terms cancel in them as in the rho terms). B's columns outside `live` must meet r entries that
-// are exactly 0 (the constant components, see run()). forms (sized by the caller as
-// second_order_n): the rho-rho block; d2e: the jets' d2e plus the range of the blocks with r over
-// (r0, r).
-template <std::size_t M>
-void second_order_extended_m(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
-                             const std::vector<std::size_t>& live, const std::vector<Interval>& r0,
-                             const std::vector<Interval>& r,
-                             const std::vector<Interval>& e_quadratic, int quadratic_order,
-                             std::vector<Interval>& second, std::vector<Interval>& forms,
-                             std::vector<Interval>& d2e) {
-  const std::size_t n = y.size();
-  const std::size_t kPairs = n * (n + 1) / 2;
-  const std::size_t used = n + live.size();
-  std::vector<Interval> coordinates(M, Interval(0.0));
-  std::copy(r0.begin(), r0.end(), coordinates.begin());
-  for (std::size_t l = 0; l < live.size(); ++l) coordinates[n + l] = r[live[l]];
-  std::vector<QuadJet<M>> x0(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    const auto ev = static_cast<Eigen::Index>(v);
-    x0[v] = QuadJet<M>(y[v]);
-    for (std::size_t a = 0; a < n; ++a) x0[v].g[a] = Interval(c(ev, static_cast<Eigen::Index>(a)));
-    for (std::size_t l = 0; l < live.size(); ++l) {
-      x0[v].g[n + l] = Interval(b(ev, static_cast<Eigen::Index>(live[l])));
-    }
-    x0[v].e = e_quadratic[v];
-    x0[v].rho = coordinates.data();
-    x0[v].changed();
-  }
-  TaylorRunner<QuadJet<M>> runner;
-  runner.run(tape, std::span<const QuadJet<M>>(x0), quadratic_order);
-  for (std::size_t i = 0; i <= static_cast<std::size_t>(quadratic_order); ++i) {
-    for (std::size_t v = 0; v < n; ++v) {
-      const QuadJet<M>& jet = runner.coefficient(v, static_cast<int>(i));
-      second[i * n + v] = jet.range();
-      if (jet.rho == nullptr) {
-        d2e[i * n + v] = second[i * n + v];
-        continue;
-      }
-      Interval rest = jet.d2e;
-      std::size_t k = 0;
-      std::size_t kk = 0;
-      for (std::size_t a = 0; a < M; ++a) {
-        for (std::size_t bb = a; bb < M; ++bb, ++k) {
-          if (bb < n) {
-            forms[(i * n + v) * kPairs + kk++] = jet.q[k];
-          } else if (bb >= used) {
-            continue;  // padding: zero coordinates
-          } else if (a == bb) {
-            rest += jet.q[k] * sqr(coordinates[a]);
-          } else {
-            rest += jet.q[k] * (coordinates[a] * coordinates[bb]);
-          }
-        }
-      }
-      d2e[i * n + v] = rest;
-    }
-  }
-}
-
-// The jets over (rho, r_L) run for n + |L| coordinates up to this, padded to the next of
-// kExtendedSizes (each size is an instantiation of the QuadJet runner: QuadJet<15> has 120
-// pairs, about 3x the cost of QuadJet<8> per operation). 15 = the Furuta model with its seven
-// parameters carried as state (11 coordinates of rho, 4 of r).
-constexpr std::size_t kExtendedSizes[] = {2, 4, 6, 8, 10, 12, 15};
-constexpr std::size_t kMaxExtended = 15;
-
-template <std::size_t... Is>
-void second_order_extended_dispatch(std::index_sequence<Is...>, std::size_t size, const Tape& tape,
-                                    const Box& y, const Matrix& c, const Matrix& b,
-                                    const std::vector<std::size_t>& live,
-                                    const std::vector<Interval>& r0, const std::vector<Interval>& r,
-                                    const std::vector<Interval>& e_quadratic, int quadratic_order,
-                                    std::vector<Interval>& second, std::vector<Interval>& forms,
-                                    std::vector<Interval>& d2e) {
-  (void)((size <= kExtendedSizes[Is]
-              ? (second_order_extended_m<kExtendedSizes[Is]>(
-                     tape, y, c, b, live, r0, r, e_quadratic, quadratic_order, second, forms, d2e),
-                 true)
-              : false) ||
-         ...);
-}
-
-// The second-order term of the Taylor coefficients 0..order over the set m + C rho + P(rho) +
-// B r inside y, with the quadratic forms of orders 0..quadratic_order over (rho, r_L) (n + |L|
-// <= kMaxExtended; e_all = B r + P(r0), e_quadratic = P(r0)).
-void second_order_extended(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
-                           const std::vector<std::size_t>& live, const std::vector<Interval>& r0,
-                           const std::vector<Interval>& r, const std::vector<Interval>& e_quadratic,
-                           const std::vector<Interval>& e_all, int order, int quadratic_order,
-                           std::vector<Interval>& second, std::vector<Interval>& forms,
-                           std::vector<Interval>& d2e) {
-  // The orders above quadratic_order from Jet2 (and the sizes of forms and d2e).
-  second_order_coefficients(tape, y, c, r0, e_all, order, quadratic_order, second, &forms, &d2e,
-                            false);
-  const int low = std::min(order, quadratic_order);
-  if (low < 0) return;
-  second_order_extended_dispatch(std::make_index_sequence<std::size(kExtendedSizes)>{},
-                                 y.size() + live.size(), tape, y, c, b, live, r0, r, e_quadratic,
-                                 low, second, forms, d2e);
-}
-
-// ---- Quadratic forms in rho ---------------------------------------------------------------------
-
-std::size_t pair_count(std::size_t n) {
-  return n * (n + 1) / 2;
-}
-
-// The range over the box rho of the quadratic form with coefficients q[0..P) (pairs a <= b, row
-// by row, as QuadJet): each rho_a^2 as a square.
-template <class Coefficient>
-Interval form_range(const Coefficient* q, const std::vector<Interval>& rho) {
-  const std::size_t n = rho.size();
-  Interval out(0.0);
-  std::size_t k = 0;
-  for (std::size_t a = 0; a < n; ++a) {
-    out += Interval(q[k++]) * sqr(rho[a]);
-    for (std::size_t b = a + 1; b < n; ++b) out += Interval(q[k++]) * (rho[a] * rho[b]);
-  }
-  return out;
-}
-
-// The ranges of the n forms p[v P .. (v + 1) P) over rho (zeros when p is empty).
-std::vector<Interval> forms_range(const std::vector<double>& p, const std::vector<Interval>& rho) {
-  const std::size_t n = rho.size();
-  std::vector<Interval> out(n, Interval(0.0));
-  if (p.empty()) return out;
-  const std::size_t pairs = pair_count(n);
-  for (std::size_t v = 0; v < n; ++v) out[v] = form_range(p.data() + v * pairs, rho);
-  return out;
-}
-
 // ---- A priori enclosure -------------------------------------------------------------------------
 
 Box field(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x) {
@@ -495,13 +160,6 @@ std::optional<Box> a_priori(TaylorRunner<Interval>& runner, const Tape& tape, co
     if (inside) return b;
   }
   return std::nullopt;
-}
-
-Interval horner(const std::vector<Interval>& c, std::size_t stride, std::size_t offset, int order,
-                const Interval& s) {
-  Interval y = c[static_cast<std::size_t>(order) * stride + offset];
-  for (int i = order - 1; i >= 0; --i) y = y * s + c[static_cast<std::size_t>(i) * stride + offset];
-  return y;
 }
 
 std::string describe(double value) {
@@ -1015,13 +673,6 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
   }
   result.seconds = elapsed();
   return result;
-}
-
-// An interval enclosure of b^-1 (b invertible in practice: a QR or parallelepiped frame).
-std::optional<IMatrix> frame_inverse(const Matrix& b) {
-  const Matrix approx = b.partialPivLu().inverse();
-  if (!approx.allFinite()) return std::nullopt;
-  return inverse_enclosure(b, approx, 0.5);
 }
 
 }  // namespace
