@@ -26,8 +26,10 @@
 //     live block L alone (checked each step: their rows of J exact unit rows, their rest 0).
 //
 // The interval matrices (interval_matrix.hpp), the quadratic forms in rho (quadratic_form.hpp),
-// the Horner evaluation of the Taylor form (taylor_form.hpp) and the jets of the Taylor
-// coefficients (jets.hpp) are in files of their own in this directory.
+// the Horner evaluation of the Taylor form (taylor_form.hpp), the jets of the Taylor
+// coefficients (jets.hpp), the a priori enclosure (a_priori.hpp), the frame of the error part
+// and the live components (lohner_frame.hpp) and the set at a step boundary with a run's start
+// and restart (doubleton.hpp) are in files of their own in this directory.
 
 #include "furuta/validated/integrator.hpp"
 
@@ -41,27 +43,37 @@
 #include <sstream>
 #include <utility>
 
+#include "a_priori.hpp"
+#include "doubleton.hpp"
 #include "interval_matrix.hpp"
 #include "jets.hpp"
+#include "lohner_frame.hpp"
 #include "quadratic_form.hpp"
 #include "taylor_form.hpp"
 
 namespace furuta::validated {
 namespace {
 
+using internal::a_priori;
 using internal::centre_coefficients;
+using internal::confined_to_live;
+using internal::constant_rows_exact;
+using internal::Doubleton;
 using internal::form_range;
 using internal::forms_range;
-using internal::frame_inverse;
 using internal::from_point;
 using internal::horner;
 using internal::IMatrix;
-using internal::inverse_enclosure;
+using internal::inflation;
 using internal::kMaxDimension;
 using internal::kMaxExtended;
+using internal::live_components;
+using internal::Lohner;
+using internal::lohner_candidate;
 using internal::Matrix;
 using internal::mid;
 using internal::pair_count;
+using internal::qr_frame;
 using internal::second_order_coefficients;
 using internal::second_order_extended;
 
@@ -71,96 +83,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // part, and its error part's ratio to it says nothing about the set.
 constexpr double kExcessFloor = 0.05;
 
-// A candidate frame B' for the r part of the doubleton, r' and the box B' r'.
-struct Lohner {
-  Matrix b;
-  std::vector<Interval> r;
-  std::vector<Interval> box;
-  bool valid = false;
-};
-
-// r' = (B'^-1 J B) r + B'^-1 rest for the frame b (approximate inverse b_inv; empty: b^T).
-Lohner lohner_candidate(const Matrix& b, const Matrix& b_inv, const IMatrix& jb,
-                        const std::vector<Interval>& r, const std::vector<Interval>& rest) {
-  Lohner out;
-  const std::optional<IMatrix> inv = b_inv.size() == 0 ? inverse_enclosure(b, b.transpose(), 0.5)
-                                                       : inverse_enclosure(b, b_inv, 1e-6);
-  if (!inv) return out;
-  out.b = b;
-  out.r = (*inv * jb) * r;
-  const std::vector<Interval> inv_rest = *inv * rest;
-  for (std::size_t v = 0; v < r.size(); ++v) out.r[v] += inv_rest[v];
-  out.box = from_point(b) * out.r;
-  out.valid =
-      std::all_of(out.box.begin(), out.box.end(), [](const Interval& x) { return x.is_bounded(); });
-  return out;
-}
-
-// How much the parallelepiped frame p can inflate a box that goes through it: the Skeel
-// condition number || |p| |p^-1| || (infinity norm) bounds w(p (p^-1 e)) / w(e) for a box e.
-double inflation(const Matrix& p, const Matrix& p_inv) {
-  return (p.cwiseAbs() * p_inv.cwiseAbs()).rowwise().sum().maxCoeff();
-}
-
-// Q of the QR factorisation of p with its columns pivoted by length times the width of r.
-Matrix qr_frame(const Matrix& p, const std::vector<Interval>& r) {
-  const std::size_t n = r.size();
-  std::vector<std::size_t> columns(n);
-  std::iota(columns.begin(), columns.end(), std::size_t{0});
-  std::vector<double> score(n);
-  for (std::size_t col = 0; col < n; ++col) {
-    score[col] = p.col(static_cast<Eigen::Index>(col)).norm() * r[col].width();
-  }
-  std::stable_sort(columns.begin(), columns.end(),
-                   [&](std::size_t c1, std::size_t c2) { return score[c1] > score[c2]; });
-  Matrix pivoted(p.rows(), p.cols());
-  for (std::size_t col = 0; col < n; ++col) {
-    pivoted.col(static_cast<Eigen::Index>(col)) = p.col(static_cast<Eigen::Index>(columns[col]));
-  }
-  return Eigen::HouseholderQR<Matrix>(pivoted).householderQ();
-}
-
 bool is_bounded(const Box& b) {
   return std::all_of(b.begin(), b.end(), [](const Interval& x) { return x.is_bounded(); });
 }
 
 // ---- A priori enclosure -------------------------------------------------------------------------
-
-Box field(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x) {
-  const std::vector<Interval> xs(x.begin(), x.end());
-  runner.run(tape, std::span<const Interval>(xs), 1);
-  Box f(x.size());
-  for (std::size_t v = 0; v < x.size(); ++v) f[v] = runner.coefficient(v, 1);
-  return f;
-}
-
-// A box containing every solution from x over [0, h], or nothing if Picard's test fails.
-std::optional<Box> a_priori(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x,
-                            double h) {
-  const Interval span(0.0, h);
-  const std::size_t n = x.size();
-  Box f = field(runner, tape, x);
-  Box b(n);
-  for (std::size_t v = 0; v < n; ++v) b[v] = x[v] + span * f[v];
-  for (int iteration = 0; iteration < 8; ++iteration) {
-    Box inflated(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      if (!b[v].is_bounded()) return std::nullopt;
-      const double d = 0.1 * b[v].width() + 1e-13 * b[v].mag() + 1e-300;
-      inflated[v] = b[v] + Interval(-d, d);
-    }
-    f = field(runner, tape, inflated);
-    bool inside = true;
-    for (std::size_t v = 0; v < n; ++v) {
-      if (!f[v].is_bounded()) return std::nullopt;
-      b[v] = x[v] + span * f[v];
-      inside = inside && b[v].is_interior_subset(inflated[v]);
-    }
-    // Every solution stays in `inflated`, hence in x + [0, h] f(inflated) = b.
-    if (inside) return b;
-  }
-  return std::nullopt;
-}
 
 std::string describe(double value) {
   std::ostringstream out;
@@ -279,75 +206,6 @@ Box Tube::enclosure_over(double ta, double tb) const {
 }
 
 namespace {
-
-// The live components: those whose derivative is not the constant 0 in some piece's field (the
-// recorder marks the others: parameters carried as state). All of them when none is constant or
-// all are (the frame then spans everything, as for a field without constant components).
-std::vector<std::size_t> live_components(const std::vector<Tape>& tapes, std::size_t n) {
-  std::vector<std::size_t> live;
-  for (std::size_t v = 0; v < n; ++v) {
-    const bool constant = std::all_of(tapes.begin(), tapes.end(), [&](const Tape& tape) {
-      return tape.nodes[v].op == Op::variable && tape.nodes[v].time_constant;
-    });
-    if (!constant) live.push_back(v);
-  }
-  if (live.empty()) {
-    live.resize(n);
-    std::iota(live.begin(), live.end(), std::size_t{0});
-  }
-  return live;
-}
-
-// Whether the error part B r is confined to the live components: B block-diagonal with the
-// identity on the constant ones (no coupling either way) and their r exactly 0.
-bool confined_to_live(const Matrix& b, const std::vector<Interval>& r,
-                      const std::vector<bool>& is_live) {
-  const std::size_t n = r.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (is_live[i]) continue;
-    if (!(r[i].lo() == 0.0 && r[i].hi() == 0.0)) return false;
-    for (std::size_t j = 0; j < n; ++j) {
-      const double want = i == j ? 1.0 : 0.0;
-      const auto ei = static_cast<Eigen::Index>(i);
-      const auto ej = static_cast<Eigen::Index>(j);
-      if (b(ei, ej) != want || b(ej, ei) != want) return false;
-    }
-  }
-  return true;
-}
-
-// Whether the step keeps the constant components constant: their rows of J are exactly the unit
-// rows (thin 0 and 1) and their rest (the new errors) is exactly 0. True by construction for
-// variables of zero derivative (their Taylor coefficients of order >= 1 are exact zeros); checked
-// so that the confined frame is only used where it is sound.
-bool constant_rows_exact(const IMatrix& j, const std::vector<Interval>& rest,
-                         const std::vector<bool>& is_live) {
-  const std::size_t n = rest.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (is_live[i]) continue;
-    if (!(rest[i].lo() == 0.0 && rest[i].hi() == 0.0)) return false;
-    for (std::size_t col = 0; col < n; ++col) {
-      const double want = i == col ? 1.0 : 0.0;
-      if (!(j(i, col).lo() == want && j(i, col).hi() == want)) return false;
-    }
-  }
-  return true;
-}
-
-// Where a run stands at a step boundary: every solution from x0 = origin + rho, rho in r0, is at
-// time t in m + C rho + B r (for some point of r), and in the box x.
-struct Doubleton {
-  double t = 0.0;
-  std::vector<double> origin;
-  std::vector<Interval> r0;
-  std::vector<double> m;
-  Matrix c;
-  std::vector<double> p;  // the quadratic part P(rho): n forms of pair_count(n) coefficients
-  Matrix b;
-  std::vector<Interval> r;
-  Box x;
-  double h_next = 0.0;
-};
 
 // Integrates from `state` on, appending the steps to `tube` (which already covers
 // [tube.t_start, state.t]).
@@ -681,25 +539,13 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
                                   const std::vector<double>& switches, const Box& x0,
                                   const IntegratorOptions& options) {
   validate(tapes, switches, x0, options);
-  const std::size_t n = x0.size();
-  const auto en = static_cast<Eigen::Index>(n);
   Tube tube;
-  tube.dimension = n;
+  tube.dimension = x0.size();
   tube.order = options.order;
   tube.t_start = options.t_start;
   tube.initial = x0;
-  Doubleton start;
-  start.t = options.t_start;
-  start.origin = x0.mid();
-  start.r0.resize(n);
-  for (std::size_t v = 0; v < n; ++v) start.r0[v] = x0[v] - Interval(start.origin[v]);
+  Doubleton start = internal::initial_doubleton(x0, options);
   tube.r0 = start.r0;
-  start.m = start.origin;
-  start.c = Matrix::Identity(en, en);
-  start.b = Matrix::Identity(en, en);
-  start.r.assign(n, Interval(0.0));
-  start.x = x0;
-  start.h_next = std::min(options.h_initial, options.h_max);
   return run(tapes, switches, std::move(tube), std::move(start), options);
 }
 
@@ -714,109 +560,8 @@ IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
   }
   if (step >= tube.steps.size()) throw std::invalid_argument("integrate_sub_box: no such step");
   if (tube.order != options.order) throw std::invalid_argument("integrate_sub_box: order differs");
-  const TubeStep& at = tube.steps[step];
-  const auto en = static_cast<Eigen::Index>(n);
 
-  // The restart state: the doubleton of step `step` at its t0, re-centred on the piece. With
-  // o' = mid(piece) and rho' = x0 - o' = rho - (o' - o): m + C rho = (m + C (o' - o)) + C rho',
-  // the new centre's rounding goes to r through an enclosure of B^-1.
-  Doubleton state;
-  state.t = at.t0;
-  state.origin = piece.mid();
-  state.r0.resize(n);
-  state.c = Matrix(en, en);
-  state.b = Matrix(en, en);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t j = 0; j < n; ++j) {
-      state.c(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = at.c[i * n + j];
-      state.b(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = at.b[i * n + j];
-    }
-  }
-  std::vector<Interval> shift(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    state.r0[v] = piece[v] - Interval(state.origin[v]);
-    shift[v] = Interval(state.origin[v]) - Interval(at.origin[v]);
-  }
-  const std::vector<Interval> moved = from_point(state.c) * shift;
-  std::vector<Interval> residual(n);
-  state.m.resize(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    const Interval centre = at.centre[v] + moved[v];
-    state.m[v] = centre.mid();
-    residual[v] = centre - Interval(state.m[v]);
-  }
-  // The quadratic part: P(rho' + shift) = P(rho') + (the terms with shift), the latter enclosed
-  // over the piece's r0 and put into r with the centre's rounding.
-  if (!at.quad.empty()) {
-    state.p = at.quad;
-    const std::size_t pairs = pair_count(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      std::size_t k = 0;
-      for (std::size_t a = 0; a < n; ++a) {
-        for (std::size_t bb = a; bb < n; ++bb, ++k) {
-          const double coefficient = at.quad[v * pairs + k];
-          if (coefficient == 0.0) continue;
-          const Interval terms =
-              state.r0[a] * shift[bb] + shift[a] * state.r0[bb] + shift[a] * shift[bb];
-          residual[v] += Interval(coefficient) * terms;
-        }
-      }
-    }
-  }
-  // Constant components (method step 9) keep the confined form: such a component is x0_v at
-  // every time, so with its row of C a unit row, its row of P zero and no error part it is
-  // exactly origin'_v + rho'_v: the centre origin'_v, no residual. The live components' residual
-  // then goes to r_L through B_LL^-1 alone (r_K stays exactly 0).
-  const std::vector<std::size_t> live = live_components(tapes, n);
-  std::vector<bool> is_live(n, false);
-  for (std::size_t v : live) is_live[v] = true;
-  bool confined = live.size() < n && confined_to_live(state.b, at.r, is_live);
-  const std::size_t pairs = pair_count(n);
-  for (std::size_t v = 0; v < n && confined; ++v) {
-    if (is_live[v]) continue;
-    for (std::size_t j = 0; j < n; ++j)
-      confined = confined && at.c[v * n + j] == (v == j ? 1.0 : 0.0);
-    for (std::size_t a = 0; a < pairs && !at.quad.empty(); ++a) {
-      confined = confined && at.quad[v * pairs + a] == 0.0;
-    }
-  }
-  state.r = at.r;
-  if (confined) {
-    const auto el = static_cast<Eigen::Index>(live.size());
-    Matrix b_live(el, el);
-    for (std::size_t a = 0; a < live.size(); ++a) {
-      for (std::size_t col = 0; col < live.size(); ++col) {
-        b_live(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(col)) =
-            state.b(static_cast<Eigen::Index>(live[a]), static_cast<Eigen::Index>(live[col]));
-      }
-    }
-    const std::optional<IMatrix> b_inv = frame_inverse(b_live);
-    if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
-    std::vector<Interval> residual_live(live.size());
-    for (std::size_t a = 0; a < live.size(); ++a) residual_live[a] = residual[live[a]];
-    const std::vector<Interval> residual_r = *b_inv * residual_live;
-    for (std::size_t a = 0; a < live.size(); ++a) state.r[live[a]] += residual_r[a];
-    for (std::size_t v = 0; v < n; ++v) {
-      if (!is_live[v]) state.m[v] = state.origin[v];
-    }
-  } else {
-    const std::optional<IMatrix> b_inv = frame_inverse(state.b);
-    if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
-    const std::vector<Interval> residual_r = *b_inv * residual;
-    for (std::size_t v = 0; v < n; ++v) state.r[v] += residual_r[v];
-  }
-  // The box: the re-centred doubleton, inside the parent's box at t0.
-  const std::vector<Interval> part0 = from_point(state.c) * state.r0;
-  const std::vector<Interval> part1 = from_point(state.b) * state.r;
-  const std::vector<Interval> part2 = forms_range(state.p, state.r0);
-  const Box& parent_box = step == 0 ? tube.initial : tube.steps[step - 1].end;
-  state.x = Box(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    state.x[v] = (Interval(state.m[v]) + part0[v] + part2[v] + part1[v]) & parent_box[v];
-  }
-  if (step == 0) state.x = intersect(state.x, piece);
-  state.h_next = std::min(at.h.hi(), options.h_max);
-
+  Doubleton state = internal::restart_doubleton(tapes, tube, step, piece, options);
   Tube prefix;
   prefix.dimension = n;
   prefix.order = tube.order;
