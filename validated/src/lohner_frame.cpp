@@ -90,4 +90,70 @@ bool constant_rows_exact(const IMatrix& j, const std::vector<Interval>& rest,
   return true;
 }
 
+LiveSet::LiveSet(const std::vector<Tape>& tapes, std::size_t n)
+    : live(live_components(tapes, n)), is_live(n, false) {
+  for (std::size_t v : live) is_live[v] = true;
+}
+
+void LiveSet::all() {
+  const std::size_t n = is_live.size();
+  live.resize(n);
+  std::iota(live.begin(), live.end(), std::size_t{0});
+  is_live.assign(n, true);
+}
+
+Frame choose_frame(const IMatrix& j, const IMatrix& jb, const std::vector<Interval>& r,
+                   const std::vector<Interval>& rest, LiveSet& live_set, double max_inflation) {
+  const std::size_t n = r.size();
+  const auto en = static_cast<Eigen::Index>(n);
+  const std::vector<std::size_t>& live = live_set.live;
+  // With r_K = 0 and the constant rows of J exact unit rows, (J B) r + rest is ((J B)_LL r_L +
+  // rest_L, 0) exactly: the frame is chosen on the live block alone (B' = blockdiag(B'_LL, I)).
+  if (live.size() < n && !constant_rows_exact(j, rest, live_set.is_live)) live_set.all();
+  const std::size_t nl = live.size();
+  const auto enl = static_cast<Eigen::Index>(nl);
+  IMatrix jb_live(nl);
+  std::vector<Interval> r_live(nl);
+  std::vector<Interval> rest_live(nl);
+  for (std::size_t a = 0; a < nl; ++a) {
+    for (std::size_t col = 0; col < nl; ++col) jb_live(a, col) = jb(live[a], live[col]);
+    r_live[a] = r[live[a]];
+    rest_live[a] = rest[live[a]];
+  }
+  const Matrix p = mid(jb_live);
+  const Matrix p_inv = p.partialPivLu().inverse();
+  const double kappa = inflation(p, p_inv);
+  Lohner parallelepiped;
+  Lohner qr;
+  Lohner* chosen = nullptr;
+  if (kappa <= max_inflation) {
+    parallelepiped = lohner_candidate(p, p_inv, jb_live, r_live, rest_live);
+    if (parallelepiped.valid) chosen = &parallelepiped;
+  }
+  if (chosen == nullptr) {
+    qr = lohner_candidate(qr_frame(p, r_live), Matrix(), jb_live, r_live, rest_live);
+    if (qr.valid) chosen = &qr;
+  }
+  Lohner identity_frame;
+  if (chosen == nullptr) {  // never seen; B' = I keeps the step sound (only wider)
+    identity_frame = lohner_candidate(Matrix::Identity(enl, enl), Matrix::Identity(enl, enl),
+                                      jb_live, r_live, rest_live);
+    chosen = &identity_frame;
+  }
+  Frame out;
+  out.qr = chosen == &qr;
+  out.b = Matrix::Identity(en, en);
+  out.r.assign(n, Interval(0.0));
+  out.box.assign(n, Interval(0.0));
+  for (std::size_t a = 0; a < nl; ++a) {
+    for (std::size_t col = 0; col < nl; ++col) {
+      out.b(static_cast<Eigen::Index>(live[a]), static_cast<Eigen::Index>(live[col])) =
+          chosen->b(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(col));
+    }
+    out.r[live[a]] = chosen->r[a];
+    out.box[live[a]] = chosen->box[a];
+  }
+  return out;
+}
+
 }  // namespace furuta::validated::internal

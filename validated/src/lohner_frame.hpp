@@ -52,4 +52,30 @@ bool confined_to_live(const Matrix& b, const std::vector<Interval>& r,
 bool constant_rows_exact(const IMatrix& j, const std::vector<Interval>& rest,
                          const std::vector<bool>& is_live);
 
+// The live components of a run, `live` in increasing order and `is_live` per component. A start
+// that is not confined to them (a restart from a tube that fell back), or a step whose constant
+// rows are not exact, falls back to all components (all()) for the rest of the run.
+struct LiveSet {
+  std::vector<std::size_t> live;
+  std::vector<bool> is_live;
+
+  LiveSet(const std::vector<Tape>& tapes, std::size_t n);
+  void all();
+};
+
+// The frame chosen for a step: B' and r' (n x n and n, B' = I and r' = 0 off the live block) and
+// the box B' r'.
+struct Frame {
+  Matrix b;
+  std::vector<Interval> r;
+  std::vector<Interval> box;
+  bool qr = false;  // the QR frame (else the parallelepiped or, never seen, the identity)
+};
+
+// B' for r' = (B'^-1 J B) r + B'^-1 rest: the parallelepiped while its inflation is at most
+// max_inflation, else QR, on the live block of `live` (which falls back to all components when
+// the step's constant rows of J or of rest are not exact).
+Frame choose_frame(const IMatrix& j, const IMatrix& jb, const std::vector<Interval>& r,
+                   const std::vector<Interval>& rest, LiveSet& live, double max_inflation);
+
 }  // namespace furuta::validated::internal
