@@ -24,497 +24,55 @@
 //     z + J C r0 + J B r. Components whose derivative is the constant 0 (parameters carried as
 //     state) get no error part: B = blockdiag(B_LL, I), r = (r_L, 0), the frame chosen on the
 //     live block L alone (checked each step: their rows of J exact unit rows, their rest 0).
+//
+// This file holds the run (run(): the outline of a step) and the public entry points; the parts
+// are in this directory, one concept each (private headers, see validated/README.md):
+// a_priori (steps 1-2 and the step size), jets (the coefficients at the centre and the
+// second-order term), step (steps 3-5: the Taylor map and Lohner's update), lohner_frame (the
+// frame of the error part, the live components), doubleton (the set at a step boundary, a run's
+// start and restart), tube (the Tube's steps and enclosures), interval_matrix, quadratic_form,
+// taylor_form.
 
 #include "furuta/validated/integrator.hpp"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <numeric>
+#include <limits>
 #include <optional>
-#include <sstream>
+#include <string>
 #include <utility>
+
+#include "a_priori.hpp"
+#include "doubleton.hpp"
+#include "jets.hpp"
+#include "lohner_frame.hpp"
+#include "quadratic_form.hpp"
+#include "reason.hpp"
+#include "step.hpp"
+#include "tube.hpp"
 
 namespace furuta::validated {
 namespace {
 
-using Matrix = Eigen::MatrixXd;
-constexpr std::size_t kMaxDimension = 16;
+using internal::describe;
+using internal::Doubleton;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Components whose exact part is below this fraction of the widest one are left out of the
 // excess ratio: a component that the flow contracts (the damped arm speed) has a tiny exact
 // part, and its error part's ratio to it says nothing about the set.
 constexpr double kExcessFloor = 0.05;
 
-// A square interval matrix, row-major.
-struct IMatrix {
-  std::size_t n = 0;
-  std::vector<Interval> v;
-
-  explicit IMatrix(std::size_t size = 0) : n(size), v(size * size, Interval(0.0)) {}
-  Interval& operator()(std::size_t i, std::size_t j) { return v[i * n + j]; }
-  const Interval& operator()(std::size_t i, std::size_t j) const { return v[i * n + j]; }
-};
-
-IMatrix from_point(const Matrix& a) {
-  const auto n = static_cast<std::size_t>(a.rows());
-  IMatrix m(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t j = 0; j < n; ++j) {
-      m(i, j) = Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)));
-    }
-  }
-  return m;
-}
-
-IMatrix from_point(std::size_t n, const std::vector<double>& row_major) {
-  IMatrix m(n);
-  for (std::size_t e = 0; e < n * n; ++e) m.v[e] = Interval(row_major[e]);
-  return m;
-}
-
-IMatrix operator*(const IMatrix& a, const IMatrix& b) {
-  IMatrix c(a.n);
-  for (std::size_t i = 0; i < a.n; ++i) {
-    for (std::size_t l = 0; l < a.n; ++l) {
-      const Interval& ail = a(i, l);
-      for (std::size_t j = 0; j < a.n; ++j) c(i, j) += ail * b(l, j);
-    }
-  }
-  return c;
-}
-
-std::vector<Interval> operator*(const IMatrix& a, const std::vector<Interval>& x) {
-  std::vector<Interval> y(a.n, Interval(0.0));
-  for (std::size_t i = 0; i < a.n; ++i) {
-    for (std::size_t j = 0; j < a.n; ++j) y[i] += a(i, j) * x[j];
-  }
-  return y;
-}
-
-Matrix mid(const IMatrix& a) {
-  const auto n = static_cast<Eigen::Index>(a.n);
-  Matrix m(n, n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (Eigen::Index j = 0; j < n; ++j) {
-      m(i, j) = a(static_cast<std::size_t>(i), static_cast<std::size_t>(j)).mid();
-    }
-  }
-  return m;
-}
-
-// An interval matrix containing the inverse of the point matrix q, from an approximate inverse
-// x: with E = I - x q, q^-1 = (I - E)^-1 x, so |q^-1 - x| <= ||E|| ||x|| / (1 - ||E||)
-// entrywise (infinity norms). Nothing when ||E|| > max_error (< 1).
-std::optional<IMatrix> inverse_enclosure(const Matrix& q, const Matrix& x, double max_error) {
-  const auto n = static_cast<std::size_t>(q.rows());
-  const IMatrix qi = from_point(q);
-  const IMatrix b = from_point(x);
-  const IMatrix bq = b * qi;
-  double e_norm = 0.0;
-  double b_norm = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    Interval e_row(0.0);
-    Interval b_row(0.0);
-    for (std::size_t j = 0; j < n; ++j) {
-      const Interval eij = Interval(i == j ? 1.0 : 0.0) - bq(i, j);
-      e_row += Interval(eij.mag());
-      b_row += Interval(b(i, j).mag());
-    }
-    e_norm = std::max(e_norm, e_row.hi());
-    b_norm = std::max(b_norm, b_row.hi());
-  }
-  if (!(e_norm <= max_error && e_norm < 1.0)) return std::nullopt;
-  const double delta =
-      (Interval(e_norm) * Interval(b_norm) / (Interval(1.0) - Interval(e_norm))).hi();
-  IMatrix inv = b;
-  for (Interval& x : inv.v) x += Interval(-delta, delta);
-  return inv;
-}
-
-// A candidate frame B' for the r part of the doubleton, r' and the box B' r'.
-struct Lohner {
-  Matrix b;
-  std::vector<Interval> r;
-  std::vector<Interval> box;
-  bool valid = false;
-};
-
-// r' = (B'^-1 J B) r + B'^-1 rest for the frame b (approximate inverse b_inv; empty: b^T).
-Lohner lohner_candidate(const Matrix& b, const Matrix& b_inv, const IMatrix& jb,
-                        const std::vector<Interval>& r, const std::vector<Interval>& rest) {
-  Lohner out;
-  const std::optional<IMatrix> inv = b_inv.size() == 0 ? inverse_enclosure(b, b.transpose(), 0.5)
-                                                       : inverse_enclosure(b, b_inv, 1e-6);
-  if (!inv) return out;
-  out.b = b;
-  out.r = (*inv * jb) * r;
-  const std::vector<Interval> inv_rest = *inv * rest;
-  for (std::size_t v = 0; v < r.size(); ++v) out.r[v] += inv_rest[v];
-  out.box = from_point(b) * out.r;
-  out.valid =
-      std::all_of(out.box.begin(), out.box.end(), [](const Interval& x) { return x.is_bounded(); });
-  return out;
-}
-
-// How much the parallelepiped frame p can inflate a box that goes through it: the Skeel
-// condition number || |p| |p^-1| || (infinity norm) bounds w(p (p^-1 e)) / w(e) for a box e.
-double inflation(const Matrix& p, const Matrix& p_inv) {
-  return (p.cwiseAbs() * p_inv.cwiseAbs()).rowwise().sum().maxCoeff();
-}
-
-// Q of the QR factorisation of p with its columns pivoted by length times the width of r.
-Matrix qr_frame(const Matrix& p, const std::vector<Interval>& r) {
-  const std::size_t n = r.size();
-  std::vector<std::size_t> columns(n);
-  std::iota(columns.begin(), columns.end(), std::size_t{0});
-  std::vector<double> score(n);
-  for (std::size_t col = 0; col < n; ++col) {
-    score[col] = p.col(static_cast<Eigen::Index>(col)).norm() * r[col].width();
-  }
-  std::stable_sort(columns.begin(), columns.end(),
-                   [&](std::size_t c1, std::size_t c2) { return score[c1] > score[c2]; });
-  Matrix pivoted(p.rows(), p.cols());
-  for (std::size_t col = 0; col < n; ++col) {
-    pivoted.col(static_cast<Eigen::Index>(col)) = p.col(static_cast<Eigen::Index>(columns[col]));
-  }
-  return Eigen::HouseholderQR<Matrix>(pivoted).householderQ();
-}
-
 bool is_bounded(const Box& b) {
   return std::all_of(b.begin(), b.end(), [](const Interval& x) { return x.is_bounded(); });
-}
-
-// ---- Jacobian of the Taylor coefficients --------------------------------------------------------
-
-// The Taylor coefficients at the point m (values[i n + v] = x_[i]_v) and their derivatives with
-// respect to the initial state (jac[(i n + v) n + c] = d x_[i]_v / d x0_c), i = 0..order.
-template <std::size_t N>
-void centre_coefficients_n(const Tape& tape, const std::vector<double>& m, int order,
-                           std::vector<Interval>& values, std::vector<Interval>& jac) {
-  std::vector<Grad<N>> x0;
-  x0.reserve(N);
-  for (std::size_t c = 0; c < N; ++c) x0.push_back(Grad<N>::variable(Interval(m[c]), c));
-  TaylorRunner<Grad<N>> runner;
-  runner.run(tape, std::span<const Grad<N>>(x0), order);
-  const auto count = static_cast<std::size_t>(order) + 1;
-  values.resize(count * N);
-  jac.resize(count * N * N);
-  for (std::size_t i = 0; i < count; ++i) {
-    for (std::size_t v = 0; v < N; ++v) {
-      const Grad<N>& g = runner.coefficient(v, static_cast<int>(i));
-      values[i * N + v] = g.v;
-      std::copy(g.d.begin(), g.d.end(), jac.begin() + static_cast<std::ptrdiff_t>((i * N + v) * N));
-    }
-  }
-}
-
-template <std::size_t... Is>
-void centre_dispatch(std::index_sequence<Is...>, const Tape& tape, const std::vector<double>& m,
-                     int order, std::vector<Interval>& values, std::vector<Interval>& jac) {
-  const std::size_t n = m.size();
-  (void)((n == Is + 1 ? (centre_coefficients_n<Is + 1>(tape, m, order, values, jac), true)
-                      : false) ||
-         ...);
-}
-
-void centre_coefficients(const Tape& tape, const std::vector<double>& m, int order,
-                         std::vector<Interval>& values, std::vector<Interval>& jac) {
-  centre_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, m, order, values, jac);
-}
-
-// The second-order term over the set m + C r0 + B r inside the box y: second[i n + v] = half the
-// second derivative of x_[i]_v along delta = C rho + e (rho in r0, e in B r) over y, i = 0..order.
-// The jets' x0: y over the box, the direction's linear form (row v of c) in rho, e = br.
-template <class Jet, std::size_t N>
-std::vector<Jet> direction_jets(const Box& y, const Matrix& c, const std::vector<Interval>& r0,
-                                const std::vector<Interval>& br) {
-  std::vector<Jet> x0(N);
-  for (std::size_t v = 0; v < N; ++v) {
-    x0[v] = Jet(y[v]);
-    for (std::size_t a = 0; a < N; ++a) {
-      x0[v].g[a] = Interval(c(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(a)));
-    }
-    x0[v].e = br[v];
-    x0[v].rho = r0.data();
-    x0[v].changed();
-  }
-  return x0;
-}
-
-// The second-order term over the set inside the box y: second[i n + v] = half the second
-// derivative of x_[i]_v along delta = C rho + e (rho in r0, e in the interval vector `e`) over y,
-// i = 0..order. Both jets enclose the same quantity: the low orders (0..quadratic_order), where
-// the terms are largest, from the quadratic forms (tight, about 6x the cost per operation), the
-// others from Jet2. With `forms` (not null) the low orders also give their quadratic form in rho:
-// forms[(i n + v) P + pair] (interval coefficients over y, P = n (n + 1) / 2 pairs a <= b) and
-// d2e[i n + v] (the terms with e), so that second = forms(rho) + d2e; the other orders have a
-// zero form and d2e = second.
-template <std::size_t N>
-void second_order_n(const Tape& tape, const Box& y, const Matrix& c,
-                    const std::vector<Interval>& r0, const std::vector<Interval>& e, int order,
-                    int quadratic_order, bool quadratic_part, std::vector<Interval>& second,
-                    std::vector<Interval>* forms, std::vector<Interval>* d2e) {
-  constexpr std::size_t kPairs = QuadJet<N>::kPairs;
-  const auto count = static_cast<std::size_t>(order) + 1;
-  second.resize(count * N);
-  if (forms != nullptr) {
-    forms->assign(count * N * kPairs, Interval(0.0));
-    d2e->assign(count * N, Interval(0.0));
-  }
-  const int low = std::min(order, quadratic_order);
-  if (low < order) {
-    const std::vector<Jet2<N>> x0 = direction_jets<Jet2<N>, N>(y, c, r0, e);
-    TaylorRunner<Jet2<N>> runner;
-    runner.run(tape, std::span<const Jet2<N>>(x0), order);
-    for (std::size_t i = static_cast<std::size_t>(low) + 1; i < count; ++i) {
-      for (std::size_t v = 0; v < N; ++v) {
-        second[i * N + v] = runner.coefficient(v, static_cast<int>(i)).d2;
-        if (d2e != nullptr) (*d2e)[i * N + v] = second[i * N + v];
-      }
-    }
-  }
-  if (low >= 0 && quadratic_part) {
-    const std::vector<QuadJet<N>> x0 = direction_jets<QuadJet<N>, N>(y, c, r0, e);
-    TaylorRunner<QuadJet<N>> runner;
-    runner.run(tape, std::span<const QuadJet<N>>(x0), low);
-    for (std::size_t i = 0; i <= static_cast<std::size_t>(low); ++i) {
-      for (std::size_t v = 0; v < N; ++v) {
-        const QuadJet<N>& jet = runner.coefficient(v, static_cast<int>(i));
-        second[i * N + v] = jet.range();
-        if (forms != nullptr) {
-          if (jet.rho != nullptr) {
-            std::copy(jet.q.begin(), jet.q.end(),
-                      forms->begin() + static_cast<std::ptrdiff_t>((i * N + v) * kPairs));
-            (*d2e)[i * N + v] = jet.d2e;
-          } else {
-            (*d2e)[i * N + v] = second[i * N + v];  // range() is d2e alone then
-          }
-        }
-      }
-    }
-  }
-}
-
-template <std::size_t... Is>
-void second_order_dispatch(std::index_sequence<Is...>, const Tape& tape, const Box& y,
-                           const Matrix& c, const std::vector<Interval>& r0,
-                           const std::vector<Interval>& e, int order, int quadratic_order,
-                           bool quadratic_part, std::vector<Interval>& second,
-                           std::vector<Interval>* forms, std::vector<Interval>* d2e) {
-  const std::size_t n = y.size();
-  (void)((n == Is + 1 ? (second_order_n<Is + 1>(tape, y, c, r0, e, order, quadratic_order,
-                                                quadratic_part, second, forms, d2e),
-                         true)
-                      : false) ||
-         ...);
-}
-
-// quadratic_part false: only the orders above quadratic_order (Jet2); the caller computes the
-// others (second_order_extended_m).
-void second_order_coefficients(const Tape& tape, const Box& y, const Matrix& c,
-                               const std::vector<Interval>& r0, const std::vector<Interval>& e,
-                               int order, int quadratic_order, std::vector<Interval>& second,
-                               std::vector<Interval>* forms = nullptr,
-                               std::vector<Interval>* d2e = nullptr, bool quadratic_part = true) {
-  second_order_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, y, c, r0, e, order,
-                        quadratic_order, quadratic_part, second, forms, d2e);
-}
-
-// The orders 0..quadratic_order with the error part's live coordinates r_L in the jets' linear
-// form too: the direction is delta = C rho + B r + e (e: the interval vector P(r0)), the QuadJet
-// runs on the coordinates (rho (all n), r_l for l in `live`), padded with zero coordinates up to
-// M, so that the products of first-order terms with B r are kept as a form too (the field's large
-// terms cancel in them as in the rho terms). B's columns outside `live` must meet r entries that
-// are exactly 0 (the constant components, see run()). forms (sized by the caller as
-// second_order_n): the rho-rho block; d2e: the jets' d2e plus the range of the blocks with r over
-// (r0, r).
-template <std::size_t M>
-void second_order_extended_m(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
-                             const std::vector<std::size_t>& live, const std::vector<Interval>& r0,
-                             const std::vector<Interval>& r,
-                             const std::vector<Interval>& e_quadratic, int quadratic_order,
-                             std::vector<Interval>& second, std::vector<Interval>& forms,
-                             std::vector<Interval>& d2e) {
-  const std::size_t n = y.size();
-  const std::size_t kPairs = n * (n + 1) / 2;
-  const std::size_t used = n + live.size();
-  std::vector<Interval> coordinates(M, Interval(0.0));
-  std::copy(r0.begin(), r0.end(), coordinates.begin());
-  for (std::size_t l = 0; l < live.size(); ++l) coordinates[n + l] = r[live[l]];
-  std::vector<QuadJet<M>> x0(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    const auto ev = static_cast<Eigen::Index>(v);
-    x0[v] = QuadJet<M>(y[v]);
-    for (std::size_t a = 0; a < n; ++a) x0[v].g[a] = Interval(c(ev, static_cast<Eigen::Index>(a)));
-    for (std::size_t l = 0; l < live.size(); ++l) {
-      x0[v].g[n + l] = Interval(b(ev, static_cast<Eigen::Index>(live[l])));
-    }
-    x0[v].e = e_quadratic[v];
-    x0[v].rho = coordinates.data();
-    x0[v].changed();
-  }
-  TaylorRunner<QuadJet<M>> runner;
-  runner.run(tape, std::span<const QuadJet<M>>(x0), quadratic_order);
-  for (std::size_t i = 0; i <= static_cast<std::size_t>(quadratic_order); ++i) {
-    for (std::size_t v = 0; v < n; ++v) {
-      const QuadJet<M>& jet = runner.coefficient(v, static_cast<int>(i));
-      second[i * n + v] = jet.range();
-      if (jet.rho == nullptr) {
-        d2e[i * n + v] = second[i * n + v];
-        continue;
-      }
-      Interval rest = jet.d2e;
-      std::size_t k = 0;
-      std::size_t kk = 0;
-      for (std::size_t a = 0; a < M; ++a) {
-        for (std::size_t bb = a; bb < M; ++bb, ++k) {
-          if (bb < n) {
-            forms[(i * n + v) * kPairs + kk++] = jet.q[k];
-          } else if (bb >= used) {
-            continue;  // padding: zero coordinates
-          } else if (a == bb) {
-            rest += jet.q[k] * sqr(coordinates[a]);
-          } else {
-            rest += jet.q[k] * (coordinates[a] * coordinates[bb]);
-          }
-        }
-      }
-      d2e[i * n + v] = rest;
-    }
-  }
-}
-
-// The jets over (rho, r_L) run for n + |L| coordinates up to this, padded to the next of
-// kExtendedSizes (each size is an instantiation of the QuadJet runner: QuadJet<15> has 120
-// pairs, about 3x the cost of QuadJet<8> per operation). 15 = the Furuta model with its seven
-// parameters carried as state (11 coordinates of rho, 4 of r).
-constexpr std::size_t kExtendedSizes[] = {2, 4, 6, 8, 10, 12, 15};
-constexpr std::size_t kMaxExtended = 15;
-
-template <std::size_t... Is>
-void second_order_extended_dispatch(std::index_sequence<Is...>, std::size_t size, const Tape& tape,
-                                    const Box& y, const Matrix& c, const Matrix& b,
-                                    const std::vector<std::size_t>& live,
-                                    const std::vector<Interval>& r0, const std::vector<Interval>& r,
-                                    const std::vector<Interval>& e_quadratic, int quadratic_order,
-                                    std::vector<Interval>& second, std::vector<Interval>& forms,
-                                    std::vector<Interval>& d2e) {
-  (void)((size <= kExtendedSizes[Is]
-              ? (second_order_extended_m<kExtendedSizes[Is]>(
-                     tape, y, c, b, live, r0, r, e_quadratic, quadratic_order, second, forms, d2e),
-                 true)
-              : false) ||
-         ...);
-}
-
-// The second-order term of the Taylor coefficients 0..order over the set m + C rho + P(rho) +
-// B r inside y, with the quadratic forms of orders 0..quadratic_order over (rho, r_L) (n + |L|
-// <= kMaxExtended; e_all = B r + P(r0), e_quadratic = P(r0)).
-void second_order_extended(const Tape& tape, const Box& y, const Matrix& c, const Matrix& b,
-                           const std::vector<std::size_t>& live, const std::vector<Interval>& r0,
-                           const std::vector<Interval>& r, const std::vector<Interval>& e_quadratic,
-                           const std::vector<Interval>& e_all, int order, int quadratic_order,
-                           std::vector<Interval>& second, std::vector<Interval>& forms,
-                           std::vector<Interval>& d2e) {
-  // The orders above quadratic_order from Jet2 (and the sizes of forms and d2e).
-  second_order_coefficients(tape, y, c, r0, e_all, order, quadratic_order, second, &forms, &d2e,
-                            false);
-  const int low = std::min(order, quadratic_order);
-  if (low < 0) return;
-  second_order_extended_dispatch(std::make_index_sequence<std::size(kExtendedSizes)>{},
-                                 y.size() + live.size(), tape, y, c, b, live, r0, r, e_quadratic,
-                                 low, second, forms, d2e);
-}
-
-// ---- Quadratic forms in rho ---------------------------------------------------------------------
-
-std::size_t pair_count(std::size_t n) {
-  return n * (n + 1) / 2;
-}
-
-// The range over the box rho of the quadratic form with coefficients q[0..P) (pairs a <= b, row
-// by row, as QuadJet): each rho_a^2 as a square.
-template <class Coefficient>
-Interval form_range(const Coefficient* q, const std::vector<Interval>& rho) {
-  const std::size_t n = rho.size();
-  Interval out(0.0);
-  std::size_t k = 0;
-  for (std::size_t a = 0; a < n; ++a) {
-    out += Interval(q[k++]) * sqr(rho[a]);
-    for (std::size_t b = a + 1; b < n; ++b) out += Interval(q[k++]) * (rho[a] * rho[b]);
-  }
-  return out;
-}
-
-// The ranges of the n forms p[v P .. (v + 1) P) over rho (zeros when p is empty).
-std::vector<Interval> forms_range(const std::vector<double>& p, const std::vector<Interval>& rho) {
-  const std::size_t n = rho.size();
-  std::vector<Interval> out(n, Interval(0.0));
-  if (p.empty()) return out;
-  const std::size_t pairs = pair_count(n);
-  for (std::size_t v = 0; v < n; ++v) out[v] = form_range(p.data() + v * pairs, rho);
-  return out;
-}
-
-// ---- A priori enclosure -------------------------------------------------------------------------
-
-Box field(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x) {
-  const std::vector<Interval> xs(x.begin(), x.end());
-  runner.run(tape, std::span<const Interval>(xs), 1);
-  Box f(x.size());
-  for (std::size_t v = 0; v < x.size(); ++v) f[v] = runner.coefficient(v, 1);
-  return f;
-}
-
-// A box containing every solution from x over [0, h], or nothing if Picard's test fails.
-std::optional<Box> a_priori(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x,
-                            double h) {
-  const Interval span(0.0, h);
-  const std::size_t n = x.size();
-  Box f = field(runner, tape, x);
-  Box b(n);
-  for (std::size_t v = 0; v < n; ++v) b[v] = x[v] + span * f[v];
-  for (int iteration = 0; iteration < 8; ++iteration) {
-    Box inflated(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      if (!b[v].is_bounded()) return std::nullopt;
-      const double d = 0.1 * b[v].width() + 1e-13 * b[v].mag() + 1e-300;
-      inflated[v] = b[v] + Interval(-d, d);
-    }
-    f = field(runner, tape, inflated);
-    bool inside = true;
-    for (std::size_t v = 0; v < n; ++v) {
-      if (!f[v].is_bounded()) return std::nullopt;
-      b[v] = x[v] + span * f[v];
-      inside = inside && b[v].is_interior_subset(inflated[v]);
-    }
-    // Every solution stays in `inflated`, hence in x + [0, h] f(inflated) = b.
-    if (inside) return b;
-  }
-  return std::nullopt;
-}
-
-Interval horner(const std::vector<Interval>& c, std::size_t stride, std::size_t offset, int order,
-                const Interval& s) {
-  Interval y = c[static_cast<std::size_t>(order) * stride + offset];
-  for (int i = order - 1; i >= 0; --i) y = y * s + c[static_cast<std::size_t>(i) * stride + offset];
-  return y;
-}
-
-std::string describe(double value) {
-  std::ostringstream out;
-  out.precision(17);
-  out << value;
-  return out.str();
 }
 
 void validate(const std::vector<Tape>& tapes, const std::vector<double>& switches, const Box& x0,
               const IntegratorOptions& o) {
   const std::size_t n = x0.size();
-  if (n == 0 || n > kMaxDimension) throw std::invalid_argument("x0: dimension must be 1..16");
+  if (n == 0 || n > internal::kMaxDimension)
+    throw std::invalid_argument("x0: dimension must be 1..16");
   if (x0.is_empty() || !is_bounded(x0)) throw std::invalid_argument("x0: empty or unbounded");
   if (tapes.size() != switches.size() + 1) throw std::invalid_argument("tapes: one per piece");
   for (const Tape& t : tapes) {
@@ -560,151 +118,57 @@ const char* to_string(IntegrationResult::Status status) {
   return "unknown";
 }
 
-Box Tube::step_form(std::size_t index, const Interval& s) const {
-  const TubeStep& step = steps.at(index);
-  const std::size_t n = dimension;
-  const auto k = static_cast<std::size_t>(order);
-  // V(s) = sum_i s^i V_i by Horner.
-  IMatrix v(n);
-  std::copy(step.jacobian.begin() + static_cast<std::ptrdiff_t>(k * n * n),
-            step.jacobian.begin() + static_cast<std::ptrdiff_t>((k + 1) * n * n), v.v.begin());
-  for (std::size_t i = k; i-- > 0;) {
-    for (std::size_t e = 0; e < n * n; ++e) v.v[e] = v.v[e] * s + step.jacobian[i * n * n + e];
-  }
-  const std::vector<Interval>& step_r0 = step.r0.empty() ? r0 : step.r0;
-  const std::vector<Interval> linear0 = (v * from_point(n, step.c)) * step_r0;
-  const std::vector<Interval> linear = (v * from_point(n, step.b)) * step.r;
-  // The quadratic part of the set at t0 (P(r0), if any), through V(s) as the rest.
-  const std::vector<Interval> quadratic = v * forms_range(step.quad, step_r0);
-  const Interval s_k1 = pow(s, order + 1);
-  Box out(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    out[i] = horner(step.centre, n, i, order, s) + horner(step.second, n, i, order, s) +
-             linear0[i] + quadratic[i] + linear[i] + s_k1 * step.remainder[i];
-  }
-  return out;
-}
-
-Box Tube::enclosure_at(double t) const {
-  if (!(t >= t_start && t <= t_end())) return Box(dimension, Interval::empty());
-  if (t == t_start) return initial;
-  const auto it = std::lower_bound(steps.begin(), steps.end(), t,
-                                   [](const TubeStep& s, double time) { return s.t1 < time; });
-  if (it->t1 == t) return it->end;
-  const Interval s = (Interval(t) - Interval(it->t0)) & Interval(0.0, it->h.hi());
-  return intersect(step_form(static_cast<std::size_t>(it - steps.begin()), s), it->over);
-}
-
-Box Tube::enclosure_over(double ta, double tb) const {
-  if (!(ta <= tb)) return Box(dimension, Interval::empty());
-  ta = std::max(ta, t_start);
-  tb = std::min(tb, t_end());
-  if (!(ta <= tb)) return Box(dimension, Interval::empty());
-  if (ta == tb) return enclosure_at(ta);
-  Box hull_box = ta == t_start ? initial : Box(dimension, Interval::empty());
-  auto it = std::lower_bound(steps.begin(), steps.end(), ta,
-                             [](const TubeStep& s, double time) { return s.t1 < time; });
-  for (; it != steps.end() && it->t0 < tb; ++it) {
-    const double a = std::max(ta, it->t0);
-    const double b = std::min(tb, it->t1);
-    Box part;
-    if (a == it->t1) {
-      part = it->end;
-    } else {
-      const Interval s = ((Interval(a) - Interval(it->t0)) | (Interval(b) - Interval(it->t0))) &
-                         Interval(0.0, it->h.hi());
-      part = intersect(step_form(static_cast<std::size_t>(it - steps.begin()), s), it->over);
-    }
-    hull_box = hull(hull_box, part);
-  }
-  return hull_box;
-}
-
 namespace {
 
-// The live components: those whose derivative is not the constant 0 in some piece's field (the
-// recorder marks the others: parameters carried as state). All of them when none is constant or
-// all are (the frame then spans everything, as for a field without constant components).
-std::vector<std::size_t> live_components(const std::vector<Tape>& tapes, std::size_t n) {
-  std::vector<std::size_t> live;
-  for (std::size_t v = 0; v < n; ++v) {
-    const bool constant = std::all_of(tapes.begin(), tapes.end(), [&](const Tape& tape) {
-      return tape.nodes[v].op == Op::variable && tape.nodes[v].time_constant;
-    });
-    if (!constant) live.push_back(v);
-  }
-  if (live.empty()) {
-    live.resize(n);
-    std::iota(live.begin(), live.end(), std::size_t{0});
-  }
-  return live;
-}
-
-// Whether the error part B r is confined to the live components: B block-diagonal with the
-// identity on the constant ones (no coupling either way) and their r exactly 0.
-bool confined_to_live(const Matrix& b, const std::vector<Interval>& r,
-                      const std::vector<bool>& is_live) {
-  const std::size_t n = r.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (is_live[i]) continue;
-    if (!(r[i].lo() == 0.0 && r[i].hi() == 0.0)) return false;
-    for (std::size_t j = 0; j < n; ++j) {
-      const double want = i == j ? 1.0 : 0.0;
-      const auto ei = static_cast<Eigen::Index>(i);
-      const auto ej = static_cast<Eigen::Index>(j);
-      if (b(ei, ej) != want || b(ej, ei) != want) return false;
-    }
-  }
-  return true;
-}
-
-// Whether the step keeps the constant components constant: their rows of J are exactly the unit
-// rows (thin 0 and 1) and their rest (the new errors) is exactly 0. True by construction for
-// variables of zero derivative (their Taylor coefficients of order >= 1 are exact zeros); checked
-// so that the confined frame is only used where it is sound.
-bool constant_rows_exact(const IMatrix& j, const std::vector<Interval>& rest,
-                         const std::vector<bool>& is_live) {
-  const std::size_t n = rest.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (is_live[i]) continue;
-    if (!(rest[i].lo() == 0.0 && rest[i].hi() == 0.0)) return false;
-    for (std::size_t col = 0; col < n; ++col) {
-      const double want = i == col ? 1.0 : 0.0;
-      if (!(j(i, col).lo() == want && j(i, col).hi() == want)) return false;
-    }
-  }
-  return true;
-}
-
-// Where a run stands at a step boundary: every solution from x0 = origin + rho, rho in r0, is at
-// time t in m + C rho + B r (for some point of r), and in the box x.
-struct Doubleton {
-  double t = 0.0;
-  std::vector<double> origin;
-  std::vector<Interval> r0;
-  std::vector<double> m;
-  Matrix c;
-  std::vector<double> p;  // the quadratic part P(rho): n forms of pair_count(n) coefficients
-  Matrix b;
-  std::vector<Interval> r;
-  Box x;
-  double h_next = 0.0;
+// Why a run ends at the end of a step, when it does.
+struct Stop {
+  IntegrationResult::Status status;
+  std::string reason;
 };
+
+// The acceptance of the set at the end of a step (`next`, at next.set.t): not empty (both its
+// forms contain every solution), within max_width, and its error part within max_excess of its
+// exact part.
+std::optional<Stop> refused(const internal::LohnerStep& next, const IntegratorOptions& options) {
+  const std::size_t n = next.set.m.size();
+  const Box& x = next.set.x;
+  const double t = next.set.t;
+  if (x.is_empty()) {  // both forms contain every solution: cannot happen unless a bug
+    return Stop{IntegrationResult::Status::step_not_validated,
+                "empty enclosure at t = " + describe(t) + " (internal error)"};
+  }
+  const double width = is_bounded(x) ? x.max_width() : kInf;
+  if (!(width <= options.max_width)) {
+    return Stop{IntegrationResult::Status::width_exceeded,
+                "enclosure width " + describe(width) + " > max_width " +
+                    describe(options.max_width) + " at t = " + describe(t)};
+  }
+  // The error part against the part carried exactly (the image of r0): when it dominates, the
+  // set is no longer followed, only wrapped (a split run then bisects the box).
+  if (options.max_excess < kInf) {
+    std::vector<double> exact(n);
+    std::vector<double> error(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      exact[v] = (next.exact[v] + next.exact_quadratic[v]).width();
+      error[v] = next.error[v].width();
+    }
+    const double ratio = excess_ratio(exact, error);
+    if (ratio > options.max_excess) {
+      return Stop{IntegrationResult::Status::width_exceeded,
+                  "error part " + describe(ratio) + " x the exact part (max_excess " +
+                      describe(options.max_excess) + ") at t = " + describe(t)};
+    }
+  }
+  return std::nullopt;
+}
 
 // Integrates from `state` on, appending the steps to `tube` (which already covers
 // [tube.t_start, state.t]).
 IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>& switches,
                       Tube tube, Doubleton state, const IntegratorOptions& options) {
   const auto started = std::chrono::steady_clock::now();
-  const std::size_t n = tube.dimension;
-  const auto en = static_cast<Eigen::Index>(n);
-  const int k = options.order;
-  const auto uk = static_cast<std::size_t>(k);
-  const double root = 1.0 / (k + 1);
-
   IntegrationResult result;
   result.tube = std::move(tube);
-  Tube& tube_out = result.tube;
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   };
@@ -715,313 +179,51 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     result.seconds = elapsed();
     return result;
   };
-
-  const std::vector<double> origin = std::move(state.origin);
-  const std::vector<Interval> r0 = std::move(state.r0);
-  std::vector<double> m = std::move(state.m);
-  Matrix c = std::move(state.c);
-  std::vector<double> quad = std::move(state.p);
-  const std::size_t pairs = pair_count(n);
-  if (quad.size() != n * pairs) quad.assign(n * pairs, 0.0);
-  Matrix b = std::move(state.b);
-  std::vector<Interval> r = std::move(state.r);
-  Box x = std::move(state.x);
+  const std::size_t n = result.tube.dimension;
+  const std::size_t pairs = internal::pair_count(n);
+  if (state.p.size() != n * pairs) state.p.assign(n * pairs, 0.0);
   // The error part B r is kept on the live components (those of nonzero field; the constant
   // ones, parameters carried as state, never get new errors): B = blockdiag(B_LL, I), r_K = 0.
   // The frame is then chosen on the live block alone and the quadratic jets run over (rho, r_L):
   // n + |L| coordinates instead of 2n. Without constant components L is everything (as before).
   // A start that does not have this form (a restart from a tube that fell back), or a step
   // whose constant rows are not exact, falls back to the full frame for the rest of the run.
-  std::vector<std::size_t> live = live_components(tapes, n);
-  std::vector<bool> is_live(n, false);
-  for (std::size_t v : live) is_live[v] = true;
-  auto all_live = [&] {
-    live.resize(n);
-    std::iota(live.begin(), live.end(), std::size_t{0});
-    is_live.assign(n, true);
-  };
-  if (live.size() < n && !confined_to_live(b, r, is_live)) all_live();
+  internal::LiveSet live(tapes, n);
+  if (live.live.size() < n && !internal::confined_to_live(state.b, state.r, live.is_live)) {
+    live.all();
+  }
 
   TaylorRunner<Interval> runner;
-  double t = state.t;
-  double h_next = state.h_next;
-  while (t < options.t_end) {
-    const std::size_t piece = piece_at(switches, t);
+  while (state.t < options.t_end) {
+    const std::size_t piece = piece_at(switches, state.t);
     const Tape& tape = tapes[piece];
     const double t_limit =
         std::min(options.t_end, piece < switches.size() ? switches[piece] : kInf);
-
     // 1-2. A priori enclosure and remainder; the step shrinks until both are acceptable.
-    double h = std::min(h_next, t_limit - t);
-    bool capped = h_next >= t_limit - t;  // the step ends at t_limit, not where h_next says
-    double t1 = t_limit;
-    Interval hi;
-    Box apriori;
-    std::vector<Interval> remainder_coefficient(n);
-    Box remainder(n);
-    double remainder_width = 0.0;
-    for (;;) {
-      t1 = h >= t_limit - t ? t_limit : t + h;
-      if (!(t1 > t)) {
-        return finish(IntegrationResult::Status::step_not_validated, t,
-                      "step below the time resolution at t = " + describe(t));
-      }
-      hi = Interval(t1) - Interval(t);
-      std::optional<Box> enclosure = a_priori(runner, tape, x, hi.hi());
-      bool bounded = false;
-      if (enclosure) {
-        const std::vector<Interval> bs(enclosure->begin(), enclosure->end());
-        runner.run(tape, std::span<const Interval>(bs), k + 1);
-        const Interval h_k1 = pow(hi, k + 1);
-        remainder_width = 0.0;
-        bounded = true;
-        for (std::size_t v = 0; v < n; ++v) {
-          remainder_coefficient[v] = runner.coefficient(v, k + 1);
-          remainder[v] = h_k1 * remainder_coefficient[v];
-          bounded = bounded && remainder[v].is_bounded();
-          remainder_width = std::max(remainder_width, remainder[v].width());
-        }
-        if (bounded && (remainder_width <= options.tolerance || h <= options.h_min)) {
-          apriori = std::move(*enclosure);
-          break;
-        }
-      }
-      ++result.rejected;
-      if (h <= options.h_min) {
-        return finish(IntegrationResult::Status::step_not_validated, t,
-                      "no a priori enclosure (Picard) at t = " + describe(t) +
-                          " with h = " + describe(h) + " (h_min)");
-      }
-      double shrink = 0.5;
-      if (bounded) {
-        shrink = std::clamp(0.9 * std::pow(options.tolerance / remainder_width, root), 0.1, 0.9);
-      }
-      h = std::max(options.h_min, h * shrink);
-      capped = false;
+    const internal::StepEnclosure enclosure = internal::enclose_step(
+        runner, tape, state.x, state.t, t_limit, state.h_next, options, result.rejected);
+    if (!enclosure.failure.empty()) {
+      return finish(IntegrationResult::Status::step_not_validated, state.t, enclosure.failure);
     }
-
-    TubeStep step;
-    step.t0 = t;
-    step.t1 = t1;
-    step.h = hi;
-    {
-      const Matrix ct = c.transpose();
-      const Matrix bt = b.transpose();
-      step.c.assign(ct.data(), ct.data() + n * n);
-      step.b.assign(bt.data(), bt.data() + n * n);
-    }
-    step.r = r;
-    step.r0 = r0;
-    step.origin = origin;
-    step.remainder = remainder_coefficient;
-    step.quad = quad;
-
-    // 3. Taylor coefficients at the centre m and their Jacobian V_[i](m) (thin: m is a point).
-    centre_coefficients(tape, m, k, step.centre, step.jacobian);
-    // 4. The second-order term over the set: coefficient s^2 of x_[i](y + s delta) over y in the
-    // box (with the centre) and delta in C r0 + B r.
-    const IMatrix ci = from_point(c);
-    const IMatrix bi = from_point(b);
-    // The set at t is m + C rho + P(rho) + B r: the direction's interval part e holds P(r0) and
-    // B r (P is zero without the quadratic model).
-    const std::vector<Interval> p_range = forms_range(quad, r0);
-    std::vector<Interval> forms;
-    std::vector<Interval> d2e;
-    {
-      std::vector<Interval> e = bi * r;
-      for (std::size_t v = 0; v < n; ++v) e[v] += p_range[v];
-      Box y = x;
-      for (std::size_t v = 0; v < n; ++v) y[v] = y[v] | Interval(m[v]);
-      if (options.quadratic_model && n + live.size() <= kMaxExtended) {
-        second_order_extended(tape, y, c, b, live, r0, r, p_range, e, k, options.quadratic_order,
-                              step.second, forms, d2e);
-      } else {
-        second_order_coefficients(tape, y, c, r0, e, k, options.quadratic_order, step.second,
-                                  options.quadratic_model ? &forms : nullptr,
-                                  options.quadratic_model ? &d2e : nullptr);
-      }
-    }
-    // J = sum_i h^i V_[i](m).
-    IMatrix j(n);
-    std::copy(step.jacobian.begin() + static_cast<std::ptrdiff_t>(uk * n * n), step.jacobian.end(),
-              j.v.begin());
-    for (std::size_t i = uk; i-- > 0;) {
-      for (std::size_t e = 0; e < n * n; ++e) j.v[e] = j.v[e] * hi + step.jacobian[i * n * n + e];
-    }
-    // T(x0) = T(m) + J (C rho + P(rho) + e) + S(rho) + R, S the second-order term. Without the
-    // quadratic model S is enclosed by sum_i h^i q_i (its range) and P = 0. With it, S(rho) =
-    // Q(rho) + D, Q the quadratic form sum_i h^i forms_i (interval coefficients) and D the
-    // interval sum_i h^i d2e_i; the new quadratic part is P'(rho) = mid(J P + Q)(rho) and the
-    // coefficients' rest ((J P + Q) - P')(rho) over r0, with D, goes to the error part.
-    std::vector<double> p_next(n * pairs, 0.0);
-    std::vector<Interval> second_rest(n, Interval(0.0));
-    if (options.quadratic_model) {
-      std::vector<Interval> coefficients(n * pairs, Interval(0.0));
-      for (std::size_t v = 0; v < n; ++v) {
-        for (std::size_t a = 0; a < pairs; ++a) {
-          Interval sum = forms[(uk * n + v) * pairs + a];
-          for (std::size_t i = uk; i-- > 0;) sum = sum * hi + forms[(i * n + v) * pairs + a];
-          for (std::size_t w = 0; w < n; ++w) {
-            if (quad[w * pairs + a] != 0.0) sum += j(v, w) * Interval(quad[w * pairs + a]);
-          }
-          p_next[v * pairs + a] = sum.is_bounded() ? sum.mid() : 0.0;
-          coefficients[v * pairs + a] = sum - Interval(p_next[v * pairs + a]);
-        }
-        second_rest[v] = form_range(coefficients.data() + v * pairs, r0) + horner(d2e, n, v, k, hi);
-      }
-    } else {
-      // P is zero unless the run was restarted (integrate_sub_box) from a tube that carried it:
-      // then J P(rho) goes into the error part too.
-      const std::vector<Interval> image = j * p_range;
-      for (std::size_t v = 0; v < n; ++v) {
-        second_rest[v] = horner(step.second, n, v, k, hi) + image[v];
-      }
-    }
-    // z: the image of the centre, with what the second-order term leaves and the remainder.
-    std::vector<Interval> z(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      z[v] = horner(step.centre, n, v, k, hi) + second_rest[v] + remainder[v];
-    }
-
-    // 5. Lohner's step on the doubleton.
-    const IMatrix jc = j * ci;
-    const IMatrix jb = j * bi;
-    const Matrix c_next = mid(jc);
-    // m' = mid(z); the rest of z, with the rounding of C' = mid(J C), goes to the r part.
-    std::vector<double> m_next(n);
-    std::vector<Interval> rest(n);
-    IMatrix jc_error = jc;
-    for (std::size_t i = 0; i < n; ++i) {
-      for (std::size_t col = 0; col < n; ++col) {
-        jc_error(i, col) -=
-            Interval(c_next(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(col)));
-      }
-    }
-    const std::vector<Interval> jc_error_r0 = jc_error * r0;
-    for (std::size_t v = 0; v < n; ++v) {
-      m_next[v] = z[v].mid();
-      rest[v] = z[v] - Interval(m_next[v]) + jc_error_r0[v];
-    }
-    // B' = mid(J B) (the parallelepiped method: r is not wrapped, only the rest is, through
-    // B'^-1) while it is well conditioned, else Q of the QR of mid(J B) with columns pivoted by
-    // their length times the width of r (Lohner's QR method); r' = (B'^-1 J B) r + B'^-1 rest.
-    // On a field with constant components the frame is chosen on the live block alone (B' =
-    // blockdiag(B'_LL, I), r'_K = 0): with r_K = 0 and the constant rows of J exact unit rows,
-    // (J B) r + rest is ((J B)_LL r_L + rest_L, 0) exactly.
-    if (live.size() < n && !constant_rows_exact(j, rest, is_live)) all_live();
-    const std::size_t nl = live.size();
-    const auto enl = static_cast<Eigen::Index>(nl);
-    IMatrix jb_live(nl);
-    std::vector<Interval> r_live(nl);
-    std::vector<Interval> rest_live(nl);
-    for (std::size_t a = 0; a < nl; ++a) {
-      for (std::size_t col = 0; col < nl; ++col) jb_live(a, col) = jb(live[a], live[col]);
-      r_live[a] = r[live[a]];
-      rest_live[a] = rest[live[a]];
-    }
-    const Matrix p = mid(jb_live);
-    const Matrix p_inv = p.partialPivLu().inverse();
-    const double kappa = inflation(p, p_inv);
-    Lohner parallelepiped;
-    Lohner qr;
-    Lohner* chosen = nullptr;
-    if (kappa <= options.max_inflation) {
-      parallelepiped = lohner_candidate(p, p_inv, jb_live, r_live, rest_live);
-      if (parallelepiped.valid) chosen = &parallelepiped;
-    }
-    if (chosen == nullptr) {
-      qr = lohner_candidate(qr_frame(p, r_live), Matrix(), jb_live, r_live, rest_live);
-      if (qr.valid) chosen = &qr;
-    }
-    Lohner identity_frame;
-    if (chosen == nullptr) {  // never seen; B' = I keeps the step sound (only wider)
-      identity_frame = lohner_candidate(Matrix::Identity(enl, enl), Matrix::Identity(enl, enl),
-                                        jb_live, r_live, rest_live);
-      chosen = &identity_frame;
-    }
-    if (chosen == &qr) ++result.qr_steps;
-    Matrix b_next = Matrix::Identity(en, en);
-    std::vector<Interval> r_next(n, Interval(0.0));
-    std::vector<Interval> new1(n, Interval(0.0));
-    for (std::size_t a = 0; a < nl; ++a) {
-      for (std::size_t col = 0; col < nl; ++col) {
-        b_next(static_cast<Eigen::Index>(live[a]), static_cast<Eigen::Index>(live[col])) =
-            chosen->b(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(col));
-      }
-      r_next[live[a]] = chosen->r[a];
-      new1[live[a]] = chosen->box[a];
-    }
-    // The tight enclosure: the new doubleton, intersected with the direct image.
-    const std::vector<Interval> new0 = from_point(c_next) * r0;
-    const std::vector<Interval> new_quadratic = forms_range(p_next, r0);
-    const std::vector<Interval> old0 = jc * r0;
-    const std::vector<Interval> old_quadratic = j * p_range;
-    const std::vector<Interval> old1 = jb * r;
-    Box end(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      const Interval direct = horner(step.centre, n, v, k, hi) + horner(step.second, n, v, k, hi) +
-                              remainder[v] + old0[v] + old_quadratic[v] + old1[v];
-      end[v] = (Interval(m_next[v]) + new0[v] + new_quadratic[v] + new1[v]) & direct;
-    }
-
-    step.apriori = apriori;
-    step.end = end;
-    tube_out.steps.push_back(std::move(step));
-    TubeStep& stored = tube_out.steps.back();
-    stored.over =
-        intersect(tube_out.step_form(tube_out.steps.size() - 1, Interval(0.0, hi.hi())), apriori);
+    // 3-4. The Taylor map: at the centre with its Jacobian, the second-order term over the set.
+    TubeStep step = internal::start_step(state, enclosure);
+    const internal::TaylorMap map =
+        internal::taylor_map(tape, state, live.live, enclosure, options, step);
+    // 5. Lohner's step on the doubleton, and the tight enclosure at t1.
+    internal::LohnerStep next = internal::lohner_step(state, map, step, enclosure, live, options);
+    if (next.qr) ++result.qr_steps;
+    // The step goes into the tube, then the set at its end is accepted or the run ends.
+    internal::append_step(result.tube, std::move(step), enclosure.apriori, next.set.x);
     ++result.steps;
-    m = std::move(m_next);
-    c = c_next;
-    quad = std::move(p_next);
-    b = std::move(b_next);
-    r = std::move(r_next);
-    x = std::move(end);
-    t = t1;
-
-    if (x.is_empty()) {  // both forms contain every solution: cannot happen unless a bug
-      return finish(IntegrationResult::Status::step_not_validated, t,
-                    "empty enclosure at t = " + describe(t) + " (internal error)");
+    if (const std::optional<Stop> stop = refused(next, options)) {
+      return finish(stop->status, next.set.t, stop->reason);
     }
-    const double width = is_bounded(x) ? x.max_width() : kInf;
-    if (!(width <= options.max_width)) {
-      return finish(IntegrationResult::Status::width_exceeded, t,
-                    "enclosure width " + describe(width) + " > max_width " +
-                        describe(options.max_width) + " at t = " + describe(t));
-    }
-    // The error part against the part carried exactly (the image of r0): when it dominates, the
-    // set is no longer followed, only wrapped (a split run then bisects the box).
-    if (options.max_excess < kInf) {
-      std::vector<double> exact(n);
-      std::vector<double> error(n);
-      for (std::size_t v = 0; v < n; ++v) {
-        exact[v] = (new0[v] + new_quadratic[v]).width();
-        error[v] = new1[v].width();
-      }
-      const double ratio = excess_ratio(exact, error);
-      if (ratio > options.max_excess) {
-        return finish(IntegrationResult::Status::width_exceeded, t,
-                      "error part " + describe(ratio) + " x the exact part (max_excess " +
-                          describe(options.max_excess) + ") at t = " + describe(t));
-      }
-    }
-    if (!capped) {
-      const double grow =
-          remainder_width > 0.0
-              ? std::clamp(0.9 * std::pow(options.tolerance / remainder_width, root), 0.25, 2.0)
-              : 2.0;
-      h_next = std::min(options.h_max, std::max(options.h_min, h * grow));
-    }
+    state = std::move(next.set);
+    // 6. The next step size from this step's remainder.
+    state.h_next = internal::next_step_size(enclosure, state.h_next, options);
   }
   result.seconds = elapsed();
   return result;
-}
-
-// An interval enclosure of b^-1 (b invertible in practice: a QR or parallelepiped frame).
-std::optional<IMatrix> frame_inverse(const Matrix& b) {
-  const Matrix approx = b.partialPivLu().inverse();
-  if (!approx.allFinite()) return std::nullopt;
-  return inverse_enclosure(b, approx, 0.5);
 }
 
 }  // namespace
@@ -1030,25 +232,13 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
                                   const std::vector<double>& switches, const Box& x0,
                                   const IntegratorOptions& options) {
   validate(tapes, switches, x0, options);
-  const std::size_t n = x0.size();
-  const auto en = static_cast<Eigen::Index>(n);
   Tube tube;
-  tube.dimension = n;
+  tube.dimension = x0.size();
   tube.order = options.order;
   tube.t_start = options.t_start;
   tube.initial = x0;
-  Doubleton start;
-  start.t = options.t_start;
-  start.origin = x0.mid();
-  start.r0.resize(n);
-  for (std::size_t v = 0; v < n; ++v) start.r0[v] = x0[v] - Interval(start.origin[v]);
+  Doubleton start = internal::initial_doubleton(x0, options);
   tube.r0 = start.r0;
-  start.m = start.origin;
-  start.c = Matrix::Identity(en, en);
-  start.b = Matrix::Identity(en, en);
-  start.r.assign(n, Interval(0.0));
-  start.x = x0;
-  start.h_next = std::min(options.h_initial, options.h_max);
   return run(tapes, switches, std::move(tube), std::move(start), options);
 }
 
@@ -1063,109 +253,8 @@ IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
   }
   if (step >= tube.steps.size()) throw std::invalid_argument("integrate_sub_box: no such step");
   if (tube.order != options.order) throw std::invalid_argument("integrate_sub_box: order differs");
-  const TubeStep& at = tube.steps[step];
-  const auto en = static_cast<Eigen::Index>(n);
 
-  // The restart state: the doubleton of step `step` at its t0, re-centred on the piece. With
-  // o' = mid(piece) and rho' = x0 - o' = rho - (o' - o): m + C rho = (m + C (o' - o)) + C rho',
-  // the new centre's rounding goes to r through an enclosure of B^-1.
-  Doubleton state;
-  state.t = at.t0;
-  state.origin = piece.mid();
-  state.r0.resize(n);
-  state.c = Matrix(en, en);
-  state.b = Matrix(en, en);
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t j = 0; j < n; ++j) {
-      state.c(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = at.c[i * n + j];
-      state.b(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = at.b[i * n + j];
-    }
-  }
-  std::vector<Interval> shift(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    state.r0[v] = piece[v] - Interval(state.origin[v]);
-    shift[v] = Interval(state.origin[v]) - Interval(at.origin[v]);
-  }
-  const std::vector<Interval> moved = from_point(state.c) * shift;
-  std::vector<Interval> residual(n);
-  state.m.resize(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    const Interval centre = at.centre[v] + moved[v];
-    state.m[v] = centre.mid();
-    residual[v] = centre - Interval(state.m[v]);
-  }
-  // The quadratic part: P(rho' + shift) = P(rho') + (the terms with shift), the latter enclosed
-  // over the piece's r0 and put into r with the centre's rounding.
-  if (!at.quad.empty()) {
-    state.p = at.quad;
-    const std::size_t pairs = pair_count(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      std::size_t k = 0;
-      for (std::size_t a = 0; a < n; ++a) {
-        for (std::size_t bb = a; bb < n; ++bb, ++k) {
-          const double coefficient = at.quad[v * pairs + k];
-          if (coefficient == 0.0) continue;
-          const Interval terms =
-              state.r0[a] * shift[bb] + shift[a] * state.r0[bb] + shift[a] * shift[bb];
-          residual[v] += Interval(coefficient) * terms;
-        }
-      }
-    }
-  }
-  // Constant components (method step 9) keep the confined form: such a component is x0_v at
-  // every time, so with its row of C a unit row, its row of P zero and no error part it is
-  // exactly origin'_v + rho'_v: the centre origin'_v, no residual. The live components' residual
-  // then goes to r_L through B_LL^-1 alone (r_K stays exactly 0).
-  const std::vector<std::size_t> live = live_components(tapes, n);
-  std::vector<bool> is_live(n, false);
-  for (std::size_t v : live) is_live[v] = true;
-  bool confined = live.size() < n && confined_to_live(state.b, at.r, is_live);
-  const std::size_t pairs = pair_count(n);
-  for (std::size_t v = 0; v < n && confined; ++v) {
-    if (is_live[v]) continue;
-    for (std::size_t j = 0; j < n; ++j)
-      confined = confined && at.c[v * n + j] == (v == j ? 1.0 : 0.0);
-    for (std::size_t a = 0; a < pairs && !at.quad.empty(); ++a) {
-      confined = confined && at.quad[v * pairs + a] == 0.0;
-    }
-  }
-  state.r = at.r;
-  if (confined) {
-    const auto el = static_cast<Eigen::Index>(live.size());
-    Matrix b_live(el, el);
-    for (std::size_t a = 0; a < live.size(); ++a) {
-      for (std::size_t col = 0; col < live.size(); ++col) {
-        b_live(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(col)) =
-            state.b(static_cast<Eigen::Index>(live[a]), static_cast<Eigen::Index>(live[col]));
-      }
-    }
-    const std::optional<IMatrix> b_inv = frame_inverse(b_live);
-    if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
-    std::vector<Interval> residual_live(live.size());
-    for (std::size_t a = 0; a < live.size(); ++a) residual_live[a] = residual[live[a]];
-    const std::vector<Interval> residual_r = *b_inv * residual_live;
-    for (std::size_t a = 0; a < live.size(); ++a) state.r[live[a]] += residual_r[a];
-    for (std::size_t v = 0; v < n; ++v) {
-      if (!is_live[v]) state.m[v] = state.origin[v];
-    }
-  } else {
-    const std::optional<IMatrix> b_inv = frame_inverse(state.b);
-    if (!b_inv) throw std::invalid_argument("integrate_sub_box: the step's frame is singular");
-    const std::vector<Interval> residual_r = *b_inv * residual;
-    for (std::size_t v = 0; v < n; ++v) state.r[v] += residual_r[v];
-  }
-  // The box: the re-centred doubleton, inside the parent's box at t0.
-  const std::vector<Interval> part0 = from_point(state.c) * state.r0;
-  const std::vector<Interval> part1 = from_point(state.b) * state.r;
-  const std::vector<Interval> part2 = forms_range(state.p, state.r0);
-  const Box& parent_box = step == 0 ? tube.initial : tube.steps[step - 1].end;
-  state.x = Box(n);
-  for (std::size_t v = 0; v < n; ++v) {
-    state.x[v] = (Interval(state.m[v]) + part0[v] + part2[v] + part1[v]) & parent_box[v];
-  }
-  if (step == 0) state.x = intersect(state.x, piece);
-  state.h_next = std::min(at.h.hi(), options.h_max);
-
+  Doubleton state = internal::restart_doubleton(tapes, tube, step, piece, options);
   Tube prefix;
   prefix.dimension = n;
   prefix.order = tube.order;
