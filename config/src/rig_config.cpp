@@ -1,7 +1,5 @@
 #include "furuta/config/rig_config.hpp"
 
-#include <toml++/toml.h>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -10,192 +8,13 @@
 #include <set>
 #include <sstream>
 
-namespace furuta::config {
+#include "furuta/config/toml_section.hpp"
 
-ConfigError::ConfigError(std::string file, int line, std::string field, const std::string& problem)
-    : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
-                         (field.empty() ? std::string() : field + ": ") + problem),
-      file_(std::move(file)),
-      line_(line),
-      field_(std::move(field)) {}
+namespace furuta::config {
 
 namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
-
-// Reads one TOML table, remembering which keys were used so the rest can be reported as unknown.
-class Section {
- public:
-  Section(const toml::table* table, std::string path, const std::string& file, int line)
-      : table_(table), path_(std::move(path)), file_(file), line_(line) {}
-
-  Section child(const std::string& key) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (node && !node->is_table()) fail(key, node, "must be a table ([" + field(key) + "])");
-    return Section(node ? node->as_table() : nullptr, field(key), file_,
-                   node ? line_of(node) : line_);
-  }
-  bool present() const { return table_ != nullptr; }
-  // For errors about a key's value found valid on its own: points at its line when it is there.
-  const toml::node* node(const std::string& key) const {
-    return table_ ? table_->get(key) : nullptr;
-  }
-  bool has(const std::string& key) const { return table_ && table_->contains(key); }
-
-  double number(const std::string& key, double fallback,
-                const std::function<bool(double)>& valid = {}, const char* rule = "") {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    double value = 0;
-    if (auto i = node->as_integer()) {
-      value = static_cast<double>(i->get());
-    } else if (auto f = node->as_floating_point()) {
-      value = f->get();
-    } else {
-      fail(key, node, "must be a number");
-    }
-    if (!std::isfinite(value)) fail(key, node, "must be finite");
-    if (valid && !valid(value)) fail(key, node, std::string("must be ") + rule);
-    return value;
-  }
-  std::int64_t integer(const std::string& key, std::int64_t fallback,
-                       const std::function<bool(std::int64_t)>& valid = {}, const char* rule = "") {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    auto i = node->as_integer();
-    if (!i) fail(key, node, "must be an integer");
-    if (valid && !valid(i->get())) fail(key, node, std::string("must be ") + rule);
-    return i->get();
-  }
-  bool boolean(const std::string& key, bool fallback) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    auto b = node->as_boolean();
-    if (!b) fail(key, node, "must be true or false");
-    return b->get();
-  }
-  std::string text(const std::string& key, const std::string& fallback) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    auto s = node->as_string();
-    if (!s) fail(key, node, "must be a string");
-    return s->get();
-  }
-  std::string choice(const std::string& key, const std::string& fallback,
-                     std::initializer_list<const char*> allowed) {
-    const std::string value = text(key, fallback);
-    std::string list;
-    for (const char* a : allowed) {
-      if (value == a) return value;
-      list += list.empty() ? a : std::string(", ") + a;
-    }
-    fail(key, table_->get(key), "'" + value + "' is not one of: " + list);
-  }
-  // A fixed-length array of numbers, each checked.
-  template <std::size_t N>
-  std::array<double, N> numbers(const std::string& key, const std::array<double, N>& fallback,
-                                const std::function<bool(double)>& valid = {},
-                                const char* rule = "") {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    const toml::array* a = node->as_array();
-    if (!a || a->size() != N) {
-      fail(key, node, "must be an array of " + std::to_string(N) + " numbers");
-    }
-    std::array<double, N> out{};
-    for (std::size_t i = 0; i < N; ++i) {
-      const toml::node& e = *a->get(i);
-      if (auto v = e.as_integer()) {
-        out[i] = static_cast<double>(v->get());
-      } else if (auto f = e.as_floating_point()) {
-        out[i] = f->get();
-      } else {
-        fail(key, node, "must be an array of " + std::to_string(N) + " numbers");
-      }
-      if (!std::isfinite(out[i])) fail(key, node, "must be finite");
-      if (valid && !valid(out[i])) fail(key, node, std::string("entries must be ") + rule);
-    }
-    return out;
-  }
-  // An array of strings, each one of `allowed`, no repeats.
-  std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
-                                   std::initializer_list<const char*> allowed) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    const toml::array* a = node->as_array();
-    if (!a) fail(key, node, "must be an array of names");
-    std::vector<std::string> out;
-    for (const toml::node& e : *a) {
-      const auto s = e.as_string();
-      if (!s) fail(key, node, "must be an array of names");
-      const std::string value = s->get();
-      bool known = false;
-      std::string list;
-      for (const char* name : allowed) {
-        known = known || value == name;
-        list += list.empty() ? name : std::string(", ") + name;
-      }
-      if (!known) fail(key, node, "'" + value + "' is not one of: " + list);
-      if (std::find(out.begin(), out.end(), value) != out.end()) {
-        fail(key, node, "'" + value + "' is given twice");
-      }
-      out.push_back(value);
-    }
-    return out;
-  }
-  // An array of free-form names (labels): each non-empty, no repeats.
-  std::vector<std::string> names(const std::string& key, const std::vector<std::string>& fallback) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    const toml::array* a = node->as_array();
-    if (!a) fail(key, node, "must be an array of strings");
-    std::vector<std::string> out;
-    for (const toml::node& e : *a) {
-      const auto s = e.as_string();
-      if (!s) fail(key, node, "must be an array of strings");
-      const std::string value = s->get();
-      if (value.empty()) fail(key, node, "names must not be empty");
-      if (std::find(out.begin(), out.end(), value) != out.end()) {
-        fail(key, node, "'" + value + "' is given twice");
-      }
-      out.push_back(value);
-    }
-    return out;
-  }
-  // Call after reading every key this section knows.
-  void reject_unknown_keys() const {
-    if (!table_) return;
-    for (auto&& [key, node] : *table_) {
-      const std::string name(key.str());
-      if (!used_.count(name)) fail(name, &node, "unknown key");
-    }
-  }
-
-  [[noreturn]] void fail(const std::string& key, const toml::node* node,
-                         const std::string& problem) const {
-    throw ConfigError(file_, node ? line_of(node) : line_, field(key), problem);
-  }
-
- private:
-  std::string field(const std::string& key) const {
-    return path_.empty() ? key : path_ + "." + key;
-  }
-  static int line_of(const toml::node* node) { return static_cast<int>(node->source().begin.line); }
-
-  const toml::table* table_;
-  std::string path_;
-  const std::string& file_;
-  int line_;
-  std::set<std::string> used_;
-};
 
 bool positive(double v) {
   return v > 0;
@@ -235,18 +54,12 @@ bridge::ModelParameters read_parameters(Section s, const bridge::ModelParameters
 }  // namespace
 
 RigConfig parse_rig_config(const std::string& text, const std::string& source_name) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name);
-  } catch (const toml::parse_error& e) {
-    throw ConfigError(source_name, static_cast<int>(e.source().begin.line), "",
-                      std::string(e.description()));
-  }
+  const toml::table root = parse_toml(text, source_name);
 
   RigConfig c;
   c.source_text = text;
   c.source_name = source_name;
-  Section top(&root, "", source_name, 0);
+  Section top(root, source_name);
 
   Section rig = top.child("rig");
   c.name = rig.text("name", "furuta");

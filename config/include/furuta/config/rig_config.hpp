@@ -6,29 +6,15 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "furuta/config/config_error.hpp"
 #include "furuta/firmware_bridge/encoder_geometry.hpp"
 #include "furuta/firmware_bridge/rig_model.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 
 namespace furuta::config {
-
-// A configuration problem, located: "rig.toml:12: encoders.arm.counts_per_rev: must be > 0".
-class ConfigError : public std::runtime_error {
- public:
-  ConfigError(std::string file, int line, std::string field, const std::string& problem);
-  const std::string& file() const { return file_; }
-  int line() const { return line_; }  // 0 when the problem has no line (a missing key)
-  const std::string& field() const { return field_; }
-
- private:
-  std::string file_;
-  int line_;
-  std::string field_;
-};
 
 enum class UsbBackend : std::uint8_t { simulated, hidapi, libusb };
 
