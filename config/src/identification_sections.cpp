@@ -59,7 +59,10 @@ SiviaConfig read_sivia(Section s) {
   sc.epsilon_relative = s.boolean("epsilon_relative", sc.epsilon_relative);
   sc.contract = s.boolean("contract", sc.contract);
   sc.inner_test = s.choice("inner_test", sc.inner_test,
-                           {"witness", "intermediate_value", "for_all_data", "none"});
+                           {{"witness", SiviaInnerTest::witness},
+                            {"intermediate_value", SiviaInnerTest::intermediate_value},
+                            {"for_all_data", SiviaInnerTest::for_all_data},
+                            {"none", SiviaInnerTest::none}});
   sc.q = static_cast<int>(s.integer("q", sc.q, non_negative_integer, ">= 0"));
   sc.threads = static_cast<int>(s.integer(
       "threads", sc.threads, [](std::int64_t v) { return v >= 0 && v <= 1024; }, "in [0, 1024]"));

@@ -47,10 +47,10 @@ bridge::ModelParameters read_parameters(Section s, const bridge::ModelParameters
 
 void read_rig(Section rig, RigConfig& c) {
   c.name = rig.text("name", "furuta");
-  const std::string backend = rig.choice("backend", "simulated", {"simulated", "hidapi", "libusb"});
-  c.backend = backend == "hidapi"   ? UsbBackend::hidapi
-              : backend == "libusb" ? UsbBackend::libusb
-                                    : UsbBackend::simulated;
+  c.backend = rig.choice("backend", UsbBackend::simulated,
+                         {{"simulated", UsbBackend::simulated},
+                          {"hidapi", UsbBackend::hidapi},
+                          {"libusb", UsbBackend::libusb}});
   rig.reject_unknown_keys();
 }
 

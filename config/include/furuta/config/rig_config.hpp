@@ -76,6 +76,10 @@ struct IdentificationConfig {
   std::optional<double> input_lag_ms;
 };
 
+// [sivia] inner_test: how SIVIA proves a box inside the feasible set (identification::InnerTest),
+// spelled in rig.toml as the value's name.
+enum class SiviaInnerTest : std::uint8_t { witness, intermediate_value, for_all_data, none };
+
 // [sivia]: guaranteed identification (furuta identify --sivia).
 struct SiviaConfig {
   // Which of mu1, mu2, mu3, mu4, mug, fv1, fv2 are unknowns (bisected); the others are carried as
@@ -87,9 +91,9 @@ struct SiviaConfig {
   double epsilon = 0.01;
   bool epsilon_relative = true;  // to each unknown's prior width; else absolute
   bool contract = true;
-  std::string inner_test = "witness";  // witness | intermediate_value | for_all_data | none
-  int q = 0;                           // samples allowed to be inconsistent
-  int threads = 0;                     // 0: all cores
+  SiviaInnerTest inner_test = SiviaInnerTest::witness;
+  int q = 0;        // samples allowed to be inconsistent
+  int threads = 0;  // 0: all cores
   // Error bounds of the preprocessed data, [absolute, relative] per channel (SI units):
   // |error| <= absolute + relative * |value|.
   std::array<double, 2> q2_bound = {0.0, 0.0};
