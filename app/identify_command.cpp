@@ -79,6 +79,21 @@ identification::DataErrorBounds data_error_bounds(const config::SiviaConfig& cfg
   return bounds;
 }
 
+identification::InnerTest inner_test(config::SiviaInnerTest test) {
+  using identification::InnerTest;
+  switch (test) {
+    case config::SiviaInnerTest::witness:
+      return InnerTest::witness;
+    case config::SiviaInnerTest::intermediate_value:
+      return InnerTest::intermediate_value;
+    case config::SiviaInnerTest::for_all_data:
+      return InnerTest::for_all_data;
+    case config::SiviaInnerTest::none:
+      break;
+  }
+  return InnerTest::none;
+}
+
 // SIVIA over the fitted sessions: the mu's around the combined LSMI estimate (Table II style), the
 // frictions' priors, the data bounds and the paver settings from [sivia].
 GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
@@ -100,10 +115,7 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
   g.epsilon = cfg.epsilon;
   g.epsilon_relative = cfg.epsilon_relative;
   g.contract = cfg.contract;
-  g.inner = cfg.inner_test == "witness"              ? InnerTest::witness
-            : cfg.inner_test == "intermediate_value" ? InnerTest::intermediate_value
-            : cfg.inner_test == "for_all_data"       ? InnerTest::for_all_data
-                                                     : InnerTest::none;
+  g.inner = inner_test(cfg.inner_test);
   g.q = cfg.q;
   g.threads = options.threads.value_or(cfg.threads);
   // Progress only on a terminal: logs and CI stay quiet.

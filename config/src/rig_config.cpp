@@ -1,211 +1,24 @@
+// rig.toml: parse_rig_config, which reads it one section at a time, and the readers of the rig's
+// own sections ([rig], [boards.*], [motor], [encoders.*], [simulation], [nominal]). The daemon's
+// and identification's sections are read in daemon_sections.cpp and identification_sections.cpp.
 #include "furuta/config/rig_config.hpp"
 
-#include <toml++/toml.h>
-
-#include <algorithm>
-#include <cmath>
 #include <fstream>
-#include <functional>
-#include <numbers>
-#include <set>
 #include <sstream>
+
+#include "furuta/config/toml_section.hpp"
+#include "sections.hpp"
 
 namespace furuta::config {
 
-ConfigError::ConfigError(std::string file, int line, std::string field, const std::string& problem)
-    : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
-                         (field.empty() ? std::string() : field + ": ") + problem),
-      file_(std::move(file)),
-      line_(line),
-      field_(std::move(field)) {}
-
 namespace {
 
-constexpr double kDegToRad = std::numbers::pi / 180.0;
+using detail::fraction;
+using detail::kDegToRad;
+using detail::non_negative;
+using detail::non_negative_integer;
+using detail::positive;
 
-// Reads one TOML table, remembering which keys were used so the rest can be reported as unknown.
-class Section {
- public:
-  Section(const toml::table* table, std::string path, const std::string& file, int line)
-      : table_(table), path_(std::move(path)), file_(file), line_(line) {}
-
-  Section child(const std::string& key) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (node && !node->is_table()) fail(key, node, "must be a table ([" + field(key) + "])");
-    return Section(node ? node->as_table() : nullptr, field(key), file_,
-                   node ? line_of(node) : line_);
-  }
-  bool present() const { return table_ != nullptr; }
-  // For errors about a key's value found valid on its own: points at its line when it is there.
-  const toml::node* node(const std::string& key) const {
-    return table_ ? table_->get(key) : nullptr;
-  }
-  bool has(const std::string& key) const { return table_ && table_->contains(key); }
-
-  double number(const std::string& key, double fallback,
-                const std::function<bool(double)>& valid = {}, const char* rule = "") {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    double value = 0;
-    if (auto i = node->as_integer()) {
-      value = static_cast<double>(i->get());
-    } else if (auto f = node->as_floating_point()) {
-      value = f->get();
-    } else {
-      fail(key, node, "must be a number");
-    }
-    if (!std::isfinite(value)) fail(key, node, "must be finite");
-    if (valid && !valid(value)) fail(key, node, std::string("must be ") + rule);
-    return value;
-  }
-  std::int64_t integer(const std::string& key, std::int64_t fallback,
-                       const std::function<bool(std::int64_t)>& valid = {}, const char* rule = "") {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    auto i = node->as_integer();
-    if (!i) fail(key, node, "must be an integer");
-    if (valid && !valid(i->get())) fail(key, node, std::string("must be ") + rule);
-    return i->get();
-  }
-  bool boolean(const std::string& key, bool fallback) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    auto b = node->as_boolean();
-    if (!b) fail(key, node, "must be true or false");
-    return b->get();
-  }
-  std::string text(const std::string& key, const std::string& fallback) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    auto s = node->as_string();
-    if (!s) fail(key, node, "must be a string");
-    return s->get();
-  }
-  std::string choice(const std::string& key, const std::string& fallback,
-                     std::initializer_list<const char*> allowed) {
-    const std::string value = text(key, fallback);
-    std::string list;
-    for (const char* a : allowed) {
-      if (value == a) return value;
-      list += list.empty() ? a : std::string(", ") + a;
-    }
-    fail(key, table_->get(key), "'" + value + "' is not one of: " + list);
-  }
-  // A fixed-length array of numbers, each checked.
-  template <std::size_t N>
-  std::array<double, N> numbers(const std::string& key, const std::array<double, N>& fallback,
-                                const std::function<bool(double)>& valid = {},
-                                const char* rule = "") {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    const toml::array* a = node->as_array();
-    if (!a || a->size() != N) {
-      fail(key, node, "must be an array of " + std::to_string(N) + " numbers");
-    }
-    std::array<double, N> out{};
-    for (std::size_t i = 0; i < N; ++i) {
-      const toml::node& e = *a->get(i);
-      if (auto v = e.as_integer()) {
-        out[i] = static_cast<double>(v->get());
-      } else if (auto f = e.as_floating_point()) {
-        out[i] = f->get();
-      } else {
-        fail(key, node, "must be an array of " + std::to_string(N) + " numbers");
-      }
-      if (!std::isfinite(out[i])) fail(key, node, "must be finite");
-      if (valid && !valid(out[i])) fail(key, node, std::string("entries must be ") + rule);
-    }
-    return out;
-  }
-  // An array of strings, each one of `allowed`, no repeats.
-  std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
-                                   std::initializer_list<const char*> allowed) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    const toml::array* a = node->as_array();
-    if (!a) fail(key, node, "must be an array of names");
-    std::vector<std::string> out;
-    for (const toml::node& e : *a) {
-      const auto s = e.as_string();
-      if (!s) fail(key, node, "must be an array of names");
-      const std::string value = s->get();
-      bool known = false;
-      std::string list;
-      for (const char* name : allowed) {
-        known = known || value == name;
-        list += list.empty() ? name : std::string(", ") + name;
-      }
-      if (!known) fail(key, node, "'" + value + "' is not one of: " + list);
-      if (std::find(out.begin(), out.end(), value) != out.end()) {
-        fail(key, node, "'" + value + "' is given twice");
-      }
-      out.push_back(value);
-    }
-    return out;
-  }
-  // An array of free-form names (labels): each non-empty, no repeats.
-  std::vector<std::string> names(const std::string& key, const std::vector<std::string>& fallback) {
-    used_.insert(key);
-    const toml::node* node = table_ ? table_->get(key) : nullptr;
-    if (!node) return fallback;
-    const toml::array* a = node->as_array();
-    if (!a) fail(key, node, "must be an array of strings");
-    std::vector<std::string> out;
-    for (const toml::node& e : *a) {
-      const auto s = e.as_string();
-      if (!s) fail(key, node, "must be an array of strings");
-      const std::string value = s->get();
-      if (value.empty()) fail(key, node, "names must not be empty");
-      if (std::find(out.begin(), out.end(), value) != out.end()) {
-        fail(key, node, "'" + value + "' is given twice");
-      }
-      out.push_back(value);
-    }
-    return out;
-  }
-  // Call after reading every key this section knows.
-  void reject_unknown_keys() const {
-    if (!table_) return;
-    for (auto&& [key, node] : *table_) {
-      const std::string name(key.str());
-      if (!used_.count(name)) fail(name, &node, "unknown key");
-    }
-  }
-
-  [[noreturn]] void fail(const std::string& key, const toml::node* node,
-                         const std::string& problem) const {
-    throw ConfigError(file_, node ? line_of(node) : line_, field(key), problem);
-  }
-
- private:
-  std::string field(const std::string& key) const {
-    return path_.empty() ? key : path_ + "." + key;
-  }
-  static int line_of(const toml::node* node) { return static_cast<int>(node->source().begin.line); }
-
-  const toml::table* table_;
-  std::string path_;
-  const std::string& file_;
-  int line_;
-  std::set<std::string> used_;
-};
-
-bool positive(double v) {
-  return v > 0;
-}
-bool fraction(double v) {
-  return v > 0 && v <= 1;
-}
-bool non_negative(double v) {
-  return v >= 0;
-}
 bool unit_sign(std::int64_t v) {
   return v == 1 || v == -1;
 }
@@ -232,87 +45,82 @@ model::Parameters<double> read_parameters(Section s, const model::Parameters<dou
   return p;
 }
 
-}  // namespace
-
-RigConfig parse_rig_config(const std::string& text, const std::string& source_name) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name);
-  } catch (const toml::parse_error& e) {
-    throw ConfigError(source_name, static_cast<int>(e.source().begin.line), "",
-                      std::string(e.description()));
-  }
-
-  RigConfig c;
-  c.source_text = text;
-  c.source_name = source_name;
-  Section top(&root, "", source_name, 0);
-
-  Section rig = top.child("rig");
+void read_rig(Section rig, RigConfig& c) {
   c.name = rig.text("name", "furuta");
-  const std::string backend = rig.choice("backend", "simulated", {"simulated", "hidapi", "libusb"});
-  c.backend = backend == "hidapi"   ? UsbBackend::hidapi
-              : backend == "libusb" ? UsbBackend::libusb
-                                    : UsbBackend::simulated;
+  c.backend = rig.choice("backend", UsbBackend::simulated,
+                         {{"simulated", UsbBackend::simulated},
+                          {"hidapi", UsbBackend::hidapi},
+                          {"libusb", UsbBackend::libusb}});
   rig.reject_unknown_keys();
+}
 
-  Section boards = top.child("boards");
-  auto read_board = [](Section& s) {
-    BoardSelection b;
-    const std::string serial = s.text("serial", "");
-    if (!serial.empty()) b.serial = serial;
-    b.allow_untested_firmware = s.boolean("allow_untested_firmware", false);
-    return b;
-  };
-  {
-    Section motor = boards.child("motor");
-    c.motor_board = read_board(motor);
-    motor.reject_unknown_keys();
-    Section encoder = boards.child("encoder");
-    c.encoder_board = read_board(encoder);
-    c.pendulum_channel = static_cast<int>(encoder.integer(
-        "pendulum_channel", 0, [](std::int64_t v) { return v >= 0 && v < 4; }, "0..3"));
-    encoder.reject_unknown_keys();
-  }
-  boards.reject_unknown_keys();
+BoardSelection read_board(Section& s) {
+  BoardSelection b;
+  const std::string serial = s.text("serial", "");
+  if (!serial.empty()) b.serial = serial;
+  b.allow_untested_firmware = s.boolean("allow_untested_firmware", false);
+  return b;
+}
 
-  Section motor = top.child("motor");
-  const model::MotorData dm;
-  c.motor.rotor_inertia_kg_m2 =
-      motor.number("rotor_inertia_kg_m2", dm.rotor_inertia_kg_m2, non_negative, ">= 0");
-  c.motor.no_load_speed_rpm =
-      motor.number("no_load_speed_rpm", dm.no_load_speed_rpm, positive, "> 0");
-  c.motor.speed_torque_gradient_rpm_per_nm = motor.number(
-      "speed_torque_gradient_rpm_per_nm", dm.speed_torque_gradient_rpm_per_nm, positive, "> 0");
-  c.motor.motor_efficiency =
-      motor.number("motor_efficiency", dm.motor_efficiency, fraction, "in (0, 1]");
-  c.motor.gear_efficiency =
-      motor.number("gear_efficiency", dm.gear_efficiency, fraction, "in (0, 1]");
-  c.motor.motor_ratio = motor.number("motor_ratio", dm.motor_ratio, positive, "> 0");
-  c.motor.gear_ratio = motor.number("gear_ratio", dm.gear_ratio, positive, "> 0");
-  c.motor.nominal_voltage_v =
-      motor.number("nominal_voltage_v", dm.nominal_voltage_v, positive, "> 0");
+// [boards.motor] (the 1065) and [boards.encoder] (the 1047, and the pendulum's channel on it).
+void read_boards(Section boards, RigConfig& c) {
+  Section motor = boards.child("motor");
+  c.motor_board = read_board(motor);
   motor.reject_unknown_keys();
+  Section encoder = boards.child("encoder");
+  c.encoder_board = read_board(encoder);
+  c.pendulum_channel = static_cast<int>(encoder.integer(
+      "pendulum_channel", 0, [](std::int64_t v) { return v >= 0 && v < 4; }, "0..3"));
+  encoder.reject_unknown_keys();
+  boards.reject_unknown_keys();
+}
 
-  Section encoders = top.child("encoders");
+model::MotorData read_motor(Section motor) {
+  const model::MotorData dm;
+  model::MotorData m;
+  m.rotor_inertia_kg_m2 =
+      motor.number("rotor_inertia_kg_m2", dm.rotor_inertia_kg_m2, non_negative, ">= 0");
+  m.no_load_speed_rpm = motor.number("no_load_speed_rpm", dm.no_load_speed_rpm, positive, "> 0");
+  m.speed_torque_gradient_rpm_per_nm = motor.number(
+      "speed_torque_gradient_rpm_per_nm", dm.speed_torque_gradient_rpm_per_nm, positive, "> 0");
+  m.motor_efficiency = motor.number("motor_efficiency", dm.motor_efficiency, fraction, "in (0, 1]");
+  m.gear_efficiency = motor.number("gear_efficiency", dm.gear_efficiency, fraction, "in (0, 1]");
+  m.motor_ratio = motor.number("motor_ratio", dm.motor_ratio, positive, "> 0");
+  m.gear_ratio = motor.number("gear_ratio", dm.gear_ratio, positive, "> 0");
+  m.nominal_voltage_v = motor.number("nominal_voltage_v", dm.nominal_voltage_v, positive, "> 0");
+  motor.reject_unknown_keys();
+  return m;
+}
+
+// [encoders.arm] and [encoders.pendulum]; the arm's gear ratio is the motor's (read before).
+void read_encoders(Section encoders, RigConfig& c) {
   c.arm_encoder = read_encoder(encoders.child("arm"), 1024.0);
   c.arm_encoder.gear_ratio = c.motor.total_ratio();
   c.pendulum_encoder = read_encoder(encoders.child("pendulum"), 4096.0);
   encoders.reject_unknown_keys();
+}
 
-  Section sim = top.child("simulation");
-  bridge::SimulatedRigConfig& s = c.simulation;
-  s.seed = static_cast<std::uint64_t>(sim.integer(
-      "seed", 1, [](std::int64_t v) { return v >= 0; }, ">= 0"));
+// [simulation.initial_state], in degrees.
+void read_initial_state(Section x0, bridge::SimulatedRigConfig& s) {
+  s.initial_state.q1 = x0.number("q1_deg", 0.0) * kDegToRad;
+  s.initial_state.dq1 = x0.number("dq1_deg_per_s", 0.0) * kDegToRad;
+  s.initial_state.q2 = x0.number("q2_deg", 0.0) * kDegToRad;
+  s.initial_state.dq2 = x0.number("dq2_deg_per_s", 0.0) * kDegToRad;
+  x0.reject_unknown_keys();
+}
+
+// [simulation]: the simulated rig's own settings (its boards are the configured ones, see
+// simulate_the_configured_rig).
+bridge::SimulatedRigConfig read_simulation(Section sim) {
+  bridge::SimulatedRigConfig s;
+  s.seed = static_cast<std::uint64_t>(sim.integer("seed", 1, non_negative_integer, ">= 0"));
   s.integration_step_s = sim.number(
       "integration_step_s", s.integration_step_s, [](double v) { return v > 0 && v <= 1e-3; },
       "in (0, 1e-3]");
   s.arm_angle_noise_rad = sim.number("arm_angle_noise_rad", 0.0, non_negative, ">= 0");
   s.pendulum_angle_noise_rad = sim.number("pendulum_angle_noise_rad", 0.0, non_negative, ">= 0");
-  s.usb_latency_ns = sim.integer(
-      "usb_latency_ns", s.usb_latency_ns, [](std::int64_t v) { return v >= 0; }, ">= 0");
-  s.usb_latency_jitter_ns = sim.integer(
-      "usb_latency_jitter_ns", 0, [](std::int64_t v) { return v >= 0; }, ">= 0");
+  s.usb_latency_ns = sim.integer("usb_latency_ns", s.usb_latency_ns, non_negative_integer, ">= 0");
+  s.usb_latency_jitter_ns = sim.integer("usb_latency_jitter_ns", 0, non_negative_integer, ">= 0");
   s.supply_voltage_v = sim.number("supply_voltage_v", s.supply_voltage_v, positive, "> 0");
   const auto firmware = [](std::int64_t v) { return v >= 100 && v <= 999; };
   s.firmware_1065 =
@@ -320,250 +128,47 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   s.firmware_1047 =
       static_cast<int>(sim.integer("firmware_1047", s.firmware_1047, firmware, "in [100, 999]"));
   s.parameters = read_parameters(sim.child("parameters"), model::paper_run1());
-  {
-    Section x0 = sim.child("initial_state");
-    s.initial_state.q1 = x0.number("q1_deg", 0.0) * kDegToRad;
-    s.initial_state.dq1 = x0.number("dq1_deg_per_s", 0.0) * kDegToRad;
-    s.initial_state.q2 = x0.number("q2_deg", 0.0) * kDegToRad;
-    s.initial_state.dq2 = x0.number("dq2_deg_per_s", 0.0) * kDegToRad;
-    x0.reject_unknown_keys();
-  }
+  read_initial_state(sim.child("initial_state"), s);
   sim.reject_unknown_keys();
-  // The simulated boards are built like the configured ones.
+  return s;
+}
+
+// The simulated boards are built like the configured ones.
+void simulate_the_configured_rig(RigConfig& c) {
+  bridge::SimulatedRigConfig& s = c.simulation;
   s.motor = c.motor;
   s.motor_encoder_counts_per_rev = c.arm_encoder.counts_per_rev;
   s.pendulum_encoder_counts_per_rev = c.pendulum_encoder.counts_per_rev;
   s.pendulum_channel = c.pendulum_channel;
   if (c.motor_board.serial) s.serial_1065 = *c.motor_board.serial;
   if (c.encoder_board.serial) s.serial_1047 = *c.encoder_board.serial;
+}
 
-  {
-    Section d = top.child("daemon");
-    DaemonConfig& dc = c.daemon;
-    const double period_ms = d.number(
-        "period_ms", 16.0, [](double v) { return v >= 0.1 && v <= 1000.0; }, "in [0.1, 1000]");
-    dc.period_ns = std::llround(period_ms * 1e6);
-    dc.lcm_url = d.text("lcm_url", dc.lcm_url);
-    dc.logs_dir = d.text("logs_dir", dc.logs_dir);
-    if (dc.logs_dir.empty()) d.fail("logs_dir", d.node("logs_dir"), "must not be empty");
-    dc.flush_interval_ms = d.integer(
-        "flush_interval_ms", dc.flush_interval_ms,
-        [](std::int64_t v) { return v >= 10 && v <= 60'000; }, "in [10, 60000]");
-    dc.rest_check_s = d.number(
-        "rest_check_s", dc.rest_check_s, [](double v) { return v >= 0 && v <= 60; }, "in [0, 60]");
-    dc.reconnect_interval_ms = d.integer(
-        "reconnect_interval_ms", dc.reconnect_interval_ms,
-        [](std::int64_t v) { return v >= 10 && v <= 10'000; }, "in [10, 10000]");
-    dc.queue_capacity = d.integer(
-        "queue_capacity", dc.queue_capacity,
-        [](std::int64_t v) { return v >= 64 && v <= 1'000'000; }, "in [64, 1000000]");
-    Section rt = d.child("realtime");
-    dc.realtime = rt.boolean("enabled", dc.realtime);
-    dc.fifo_priority = static_cast<int>(rt.integer(
-        "fifo_priority", dc.fifo_priority, [](std::int64_t v) { return v >= 1 && v <= 99; },
-        "in [1, 99]"));
-    dc.cpu = static_cast<int>(rt.integer(
-        "cpu", dc.cpu, [](std::int64_t v) { return v >= -1 && v < 1024; }, ">= -1"));
-    dc.lock_memory = rt.boolean("lock_memory", dc.lock_memory);
-    rt.reject_unknown_keys();
-    d.reject_unknown_keys();
-  }
-  {
-    Section s = top.child("safety");
-    SafetyConfig& sc = c.safety;
-    // Safety limits have no silent defaults from a typo: unknown keys are rejected below, and each
-    // value is range-checked.
-    sc.arm_limit_rad = s.number(
-                           "arm_limit_deg", sc.arm_limit_rad / kDegToRad,
-                           [](double v) { return v > 0 && v <= 720; }, "in (0, 720]") *
-                       kDegToRad;
-    sc.max_duty = s.number("max_duty", sc.max_duty, fraction, "in (0, 1]");
-    sc.stale_report_cycles = static_cast<int>(s.integer(
-        "stale_report_cycles", sc.stale_report_cycles,
-        [](std::int64_t v) { return v >= 1 && v <= 1000; }, "in [1, 1000]"));
-    // The boards report every 8 ms: fewer than two report periods of silence is not a fault.
-    if (static_cast<double>(sc.stale_report_cycles) * static_cast<double>(c.daemon.period_ns) <
-        16e6) {
-      s.fail("stale_report_cycles", s.node("stale_report_cycles"),
-             std::to_string(sc.stale_report_cycles) + " cycles of " +
-                 std::to_string(c.daemon.period_ns / 1000) +
-                 " us are shorter than two 8 ms report periods");
-    }
-    sc.min_supply_v = s.number("min_supply_v", sc.min_supply_v, non_negative, ">= 0");
-    sc.max_supply_v = s.number("max_supply_v", sc.max_supply_v, positive, "> 0");
-    if (sc.max_supply_v <= sc.min_supply_v) {
-      // Blame the value the file gave: a min_supply_v above the default max is the min's fault.
-      if (s.has("max_supply_v") || !s.has("min_supply_v")) {
-        s.fail("max_supply_v", s.node("max_supply_v"), "must be above min_supply_v");
-      }
-      s.fail("min_supply_v", s.node("min_supply_v"), "must be below max_supply_v");
-    }
-    sc.stop_braking_fraction = s.number(
-        "stop_braking", sc.stop_braking_fraction, [](double v) { return v >= 0 && v <= 1; },
-        "in [0, 1]");
-    sc.stuck_arm_cycles = static_cast<int>(s.integer(
-        "stuck_arm_cycles", sc.stuck_arm_cycles, [](std::int64_t v) { return v >= 1 && v <= 1000; },
-        "in [1, 1000]"));
-    sc.stuck_arm_min_duty =
-        s.number("stuck_arm_min_duty", sc.stuck_arm_min_duty, fraction, "in (0, 1]");
-    sc.stuck_pendulum_arm_travel_rad =
-        s.number(
-            "stuck_pendulum_arm_travel_deg", sc.stuck_pendulum_arm_travel_rad / kDegToRad,
-            [](double v) { return v > 0 && v <= 36000; }, "in (0, 36000]") *
-        kDegToRad;
-    s.reject_unknown_keys();
-  }
-  {
-    Section l = top.child("limits");
-    CommandLimitsConfig& lc = c.limits;
-    lc.max_amplitude_duty =
-        l.number("max_amplitude_duty", lc.max_amplitude_duty, fraction, "in (0, 1]");
-    if (lc.max_amplitude_duty > c.safety.max_duty) {
-      l.fail("max_amplitude_duty", l.node("max_amplitude_duty"), "must not exceed safety.max_duty");
-    }
-    lc.max_duration_s = l.number("max_duration_s", lc.max_duration_s, positive, "> 0");
-    lc.max_arm_switch_rad =
-        l.number("max_arm_switch_deg", lc.max_arm_switch_rad / kDegToRad, positive, "> 0") *
-        kDegToRad;
-    if (lc.max_arm_switch_rad >= c.safety.arm_limit_rad) {
-      l.fail("max_arm_switch_deg", l.node("max_arm_switch_deg"),
-             "must be below safety.arm_limit_deg");
-    }
-    lc.max_commands_per_s = static_cast<int>(l.integer(
-        "max_commands_per_s", lc.max_commands_per_s,
-        [](std::int64_t v) { return v >= 1 && v <= 1000; }, "in [1, 1000]"));
-    l.reject_unknown_keys();
-  }
-  {
-    Section e = top.child("excitation");
-    ExcitationConfig& ec = c.excitation;
-    ec.profile = e.choice("profile", ec.profile,
-                          {"bang_bang", "free_decay", "step", "prbs", "chirp", "multisine"});
-    ec.amplitude_duty = e.number("amplitude_duty", ec.amplitude_duty, fraction, "in (0, 1]");
-    if (ec.amplitude_duty > c.limits.max_amplitude_duty) {
-      e.fail("amplitude_duty", e.node("amplitude_duty"),
-             "must not exceed limits.max_amplitude_duty");
-    }
-    ec.duration_s = e.number("duration_s", ec.duration_s, positive, "> 0");
-    ec.seed = e.integer(
-        "seed", ec.seed, [](std::int64_t v) { return v >= 0; }, ">= 0");
-    ec.switch_period_s = e.number("switch_period_s", ec.switch_period_s, non_negative, ">= 0");
-    ec.switch_period_jitter = e.number(
-        "switch_period_jitter", ec.switch_period_jitter, [](double v) { return v >= 0 && v < 1; },
-        "in [0, 1)");
-    ec.arm_switch_rad =
-        e.number("arm_switch_deg", ec.arm_switch_rad / kDegToRad, non_negative, ">= 0") * kDegToRad;
-    if (ec.arm_switch_rad > c.limits.max_arm_switch_rad) {
-      e.fail("arm_switch_deg", e.node("arm_switch_deg"),
-             "must not exceed limits.max_arm_switch_deg");
-    }
-    ec.step_time_s = e.number("step_time_s", ec.step_time_s, non_negative, ">= 0");
-    ec.prbs_bit_period_s = e.number("prbs_bit_period_s", ec.prbs_bit_period_s, positive, "> 0");
-    ec.prbs_order = static_cast<int>(e.integer(
-        "prbs_order", ec.prbs_order, [](std::int64_t v) { return v >= 2 && v <= 16; },
-        "in [2, 16]"));
-    ec.chirp_f0_hz = e.number("chirp_f0_hz", ec.chirp_f0_hz, non_negative, ">= 0");
-    ec.chirp_f1_hz = e.number("chirp_f1_hz", ec.chirp_f1_hz, positive, "> 0");
-    ec.multisine_components = static_cast<int>(e.integer(
-        "multisine_components", ec.multisine_components,
-        [](std::int64_t v) { return v >= 1 && v <= 16; }, "in [1, 16]"));
-    ec.multisine_f_min_hz = e.number("multisine_f_min_hz", ec.multisine_f_min_hz, positive, "> 0");
-    ec.multisine_f_max_hz = e.number("multisine_f_max_hz", ec.multisine_f_max_hz, positive, "> 0");
-    ec.board_acceleration_pct_per_s = e.number(
-        "board_acceleration_pct_per_s", ec.board_acceleration_pct_per_s,
-        [](double v) {
-          return v >= bridge::k1065MinAccelerationPctPerS &&
-                 v <= bridge::k1065FullScaleAccelerationPctPerS;
-        },
-        "in [24.51, 6250] (the vendor library's range for the 1065)");
-    e.reject_unknown_keys();
-  }
+}  // namespace
 
-  {
-    Section s = top.child("identification");
-    IdentificationConfig& ic = c.identification;
-    const double nyquist_hz = 0.5e9 / static_cast<double>(c.daemon.period_ns);
-    ic.cutoff_hz = s.number(
-        "cutoff_hz", ic.cutoff_hz, [&](double v) { return v > 0 && 2 * v < nyquist_hz; },
-        "in (0, Nyquist / 2) (the differentiator's stop band starts at twice it)");
-    ic.butterworth_order = static_cast<int>(s.integer(
-        "butterworth_order", ic.butterworth_order, [](std::int64_t v) { return v >= 1 && v <= 16; },
-        "in [1, 16]"));
-    ic.differentiator_taps = static_cast<int>(s.integer(
-        "differentiator_taps", ic.differentiator_taps,
-        [](std::int64_t v) { return v >= 5 && v <= 201 && v % 2 == 1; }, "odd, in [5, 201]"));
-    if (s.has("input_lag_ms")) {
-      ic.input_lag_ms = s.number(
-          "input_lag_ms", 0.0, [](double v) { return std::abs(v) <= 100; }, "in [-100, 100]");
-    }
-    s.reject_unknown_keys();
-  }
-
-  {
-    Section s = top.child("sivia");
-    SiviaConfig& sc = c.sivia;
-    sc.unknowns =
-        s.choices("unknowns", sc.unknowns, {"mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"});
-    if (sc.unknowns.empty())
-      s.fail("unknowns", s.node("unknowns"), "must name at least one parameter");
-    sc.mu_uncertainty_pct =
-        s.numbers("mu_uncertainty_pct", sc.mu_uncertainty_pct, non_negative, ">= 0");
-    const auto ordered_prior = [&](const char* key, std::array<double, 2> fallback) {
-      const std::array<double, 2> v = s.numbers(key, fallback);
-      if (!(v[0] < v[1])) s.fail(key, s.node(key), "must be [low, high] with low < high");
-      return v;
-    };
-    sc.fv1_prior = ordered_prior("fv1", sc.fv1_prior);
-    sc.fv2_prior = ordered_prior("fv2", sc.fv2_prior);
-    sc.epsilon = s.number("epsilon", sc.epsilon, positive, "> 0");
-    sc.epsilon_relative = s.boolean("epsilon_relative", sc.epsilon_relative);
-    sc.contract = s.boolean("contract", sc.contract);
-    sc.inner_test = s.choice("inner_test", sc.inner_test,
-                             {"witness", "intermediate_value", "for_all_data", "none"});
-    sc.q = static_cast<int>(s.integer(
-        "q", sc.q, [](std::int64_t v) { return v >= 0; }, ">= 0"));
-    sc.threads = static_cast<int>(s.integer(
-        "threads", sc.threads, [](std::int64_t v) { return v >= 0 && v <= 1024; }, "in [0, 1024]"));
-    sc.q2_bound = s.numbers("q2_bound", sc.q2_bound, non_negative, ">= 0");
-    sc.dq1_bound = s.numbers("dq1_bound", sc.dq1_bound, non_negative, ">= 0");
-    sc.dq2_bound = s.numbers("dq2_bound", sc.dq2_bound, non_negative, ">= 0");
-    sc.ddq1_bound = s.numbers("ddq1_bound", sc.ddq1_bound, non_negative, ">= 0");
-    sc.ddq2_bound = s.numbers("ddq2_bound", sc.ddq2_bound, non_negative, ">= 0");
-    sc.tau_bound = s.numbers("tau_bound", sc.tau_bound, non_negative, ">= 0");
-    s.reject_unknown_keys();
-  }
-
-  {
-    Section s = top.child("automation");
-    AutomationConfig& ac = c.automation;
-    ac.fit_labels = s.names("fit_labels", ac.fit_labels);
-    if (ac.fit_labels.empty())
-      s.fail("fit_labels", s.node("fit_labels"), "must name at least one label");
-    ac.fit_sessions = static_cast<int>(s.integer(
-        "fit_sessions", ac.fit_sessions, [](std::int64_t v) { return v >= 1 && v <= 100; },
-        "in [1, 100]"));
-    ac.validation_label = s.text("validation_label", ac.validation_label);
-    // A session cannot be both fitted and held out: the validation would not be independent.
-    if (std::find(ac.fit_labels.begin(), ac.fit_labels.end(), ac.validation_label) !=
-        ac.fit_labels.end()) {
-      s.fail("validation_label", s.node("validation_label"),
-             "'" + ac.validation_label + "' is also one of fit_labels");
-    }
-    ac.sivia = s.boolean("sivia", ac.sivia);
-    ac.simulate = s.boolean("simulate", ac.simulate);
-    ac.simulate_seconds = s.number(
-        "simulate_seconds", ac.simulate_seconds, [](double v) { return v >= 0.01 && v <= 60; },
-        "in [0.01, 60]");
-    ac.identifications_dir = s.text("identifications_dir", ac.identifications_dir);
-    if (ac.identifications_dir.empty()) {
-      s.fail("identifications_dir", s.node("identifications_dir"), "must not be empty");
-    }
-    s.reject_unknown_keys();
-  }
-
+// Sections are read in this order (a file with several problems reports the first): a section
+// checked against another comes after it.
+RigConfig parse_rig_config(const std::string& text, const std::string& source_name) {
+  const toml::table root = parse_toml(text, source_name);
+  RigConfig c;
+  c.source_text = text;
+  c.source_name = source_name;
+  Section top(root, source_name);
+  read_rig(top.child("rig"), c);
+  read_boards(top.child("boards"), c);
+  c.motor = read_motor(top.child("motor"));
+  read_encoders(top.child("encoders"), c);
+  c.simulation = read_simulation(top.child("simulation"));
+  simulate_the_configured_rig(c);
+  c.daemon = detail::read_daemon(top.child("daemon"));
+  c.safety = detail::read_safety(top.child("safety"), c.daemon);
+  c.limits = detail::read_limits(top.child("limits"), c.safety);
+  c.excitation = detail::read_excitation(top.child("excitation"), c.limits);
+  c.identification = detail::read_identification(top.child("identification"), c.daemon);
+  c.sivia = detail::read_sivia(top.child("sivia"));
+  c.automation = detail::read_automation(top.child("automation"));
   Section nominal = top.child("nominal");
   if (nominal.present()) c.nominal = read_parameters(nominal, model::Parameters<double>{});
-
   top.reject_unknown_keys();
   return c;
 }

@@ -1,7 +1,5 @@
 #include "furuta/identification/csv_import.hpp"
 
-#include <toml++/toml.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -13,19 +11,17 @@
 #include <memory>
 #include <numbers>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <string_view>
 #include <utility>
 
 #include "furuta/config/rig_config.hpp"
+#include "furuta/config/toml_section.hpp"
 #include "furuta/identification/preprocessing.hpp"
 
 namespace furuta::identification {
 
 namespace {
-
-using config::ConfigError;
 
 // Same shape as ConfigError's message, so a user sees one style for every located problem.
 std::string located(const std::string& file, int line, const std::string& field,
@@ -62,100 +58,16 @@ std::optional<std::size_t> column_index(const std::string& text) {
 // ---------------------------------------------------------------------------------------------
 // The import spec (TOML)
 
-// Reads one table ([csv], [motor]), remembering which keys were used so the rest can be reported as
-// unknown (the rig configuration's rule: a mistyped key must never become a silent default).
-int line_of(const toml::node* node) {
-  return static_cast<int>(node->source().begin.line);
+// The spec's tables ([csv], [motor]) are read with config::Section, the rig configuration's
+// checked reader: a mistyped key must never become a silent default.
+using config::Choice;
+using config::Section;
+
+bool positive(double v) {
+  return v > 0;
 }
 
-class SpecTable {
- public:
-  SpecTable(const toml::table& table, const std::string& file, std::string name)
-      : table_(table), file_(file), name_(std::move(name)), line_(line_of(&table)) {}
-
-  const toml::node* get(const std::string& key) {
-    used_.insert(key);
-    return table_.get(key);
-  }
-  bool has(const std::string& key) const { return table_.contains(key); }
-
-  std::string required_text(const std::string& key, const std::string& what) {
-    const toml::node* node = get(key);
-    if (!node) fail(key, nullptr, "missing: " + what);
-    auto s = node->as_string();
-    if (!s) fail(key, node, "must be a string");
-    if (s->get().empty()) fail(key, node, "must not be empty");
-    return s->get();
-  }
-  std::string text(const std::string& key, const std::string& fallback) {
-    const toml::node* node = get(key);
-    if (!node) return fallback;
-    auto s = node->as_string();
-    if (!s) fail(key, node, "must be a string");
-    return s->get();
-  }
-  // Every choice is required: units, the pendulum's zero and the input's kind change every number,
-  // so none of them is guessed.
-  std::string choice(const std::string& key, std::initializer_list<const char*> allowed) {
-    std::string list;
-    for (const char* a : allowed) list += list.empty() ? a : std::string(", ") + a;
-    const std::string value = required_text(key, "one of " + list);
-    for (const char* a : allowed) {
-      if (value == a) return value;
-    }
-    fail(key, table_.get(key), "'" + value + "' is not one of: " + list);
-  }
-  std::optional<double> number(const std::string& key) {
-    const toml::node* node = get(key);
-    if (!node) return std::nullopt;
-    double value = 0;
-    if (auto i = node->as_integer()) {
-      value = static_cast<double>(i->get());
-    } else if (auto f = node->as_floating_point()) {
-      value = f->get();
-    } else {
-      fail(key, node, "must be a number");
-    }
-    if (!std::isfinite(value)) fail(key, node, "must be finite");
-    return value;
-  }
-  // A required number > 0 (a motor constant).
-  double positive(const std::string& key, const std::string& what) {
-    const std::optional<double> value = number(key);
-    if (!value) fail(key, nullptr, "missing: " + what);
-    if (!(*value > 0)) fail(key, node(key), "must be > 0");
-    return *value;
-  }
-  bool boolean(const std::string& key, bool fallback) {
-    const toml::node* node = get(key);
-    if (!node) return fallback;
-    auto b = node->as_boolean();
-    if (!b) fail(key, node, "must be true or false");
-    return b->get();
-  }
-  void reject_unknown_keys() const {
-    for (auto&& [key, node] : table_) {
-      const std::string name(key.str());
-      if (!used_.count(name)) fail(name, &node, "unknown key");
-    }
-  }
-
-  // A missing key is reported at the table's line ([csv], [motor]): the place to add it.
-  [[noreturn]] void fail(const std::string& key, const toml::node* node,
-                         const std::string& problem) const {
-    throw ConfigError(file_, node ? line_of(node) : line_, name_ + "." + key, problem);
-  }
-  const toml::node* node(const std::string& key) const { return table_.get(key); }
-
- private:
-  const toml::table& table_;
-  const std::string& file_;
-  std::string name_;
-  int line_;
-  std::set<std::string> used_;
-};
-
-CsvColumn read_column(SpecTable& s, const std::string& key, bool has_header, bool has_scale,
+CsvColumn read_column(Section& s, const std::string& key, bool has_header, bool has_scale,
                       const char* what) {
   CsvColumn c;
   c.name = s.required_text(key, what);
@@ -170,50 +82,127 @@ CsvColumn read_column(SpecTable& s, const std::string& key, bool has_header, boo
   }
   if (has_scale) {
     const std::string scale_key = key + "_scale";
-    c.scale = s.number(scale_key).value_or(1.0);
+    c.scale = s.number(scale_key, 1.0);
     if (c.scale == 0) s.fail(scale_key, s.node(scale_key), "must not be 0");
   }
   return c;
 }
 
+// Each column is named once: two quantities read from one column is a typo.
+void read_columns(Section& s, CsvImportSpec& spec) {
+  const bool h = spec.has_header;
+  spec.time = read_column(s, "time", h, false, "the time column");
+  spec.arm_angle = read_column(s, "arm_angle", h, true, "the arm angle column");
+  spec.pendulum_angle = read_column(s, "pendulum_angle", h, true, "the pendulum angle column");
+  spec.input = read_column(s, "input", h, true, "the input column (duty, voltage or torque)");
+  const std::array<std::pair<const char*, const CsvColumn*>, 4> columns = {{
+      {"time", &spec.time},
+      {"arm_angle", &spec.arm_angle},
+      {"pendulum_angle", &spec.pendulum_angle},
+      {"input", &spec.input},
+  }};
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (columns[i].second->name == columns[j].second->name) {
+        s.fail(columns[i].first, s.node(columns[i].first),
+               "same column as " + std::string(columns[j].first) + " ('" + columns[i].second->name +
+                   "')");
+      }
+    }
+  }
+}
+
+char read_delimiter(Section& s) {
+  const std::string delimiter = s.text("delimiter", ",");
+  if (delimiter.size() != 1) {
+    s.fail("delimiter", s.node("delimiter"),
+           "must be a single ASCII character, e.g. \",\", \";\" or \"\\t\"");
+  }
+  const auto d = static_cast<unsigned char>(delimiter[0]);
+  // Characters that occur inside numbers or quoted fields would split them.
+  if (d >= 0x80 || std::isalnum(d) ||
+      std::string_view("\".+-\r\n").find(delimiter[0]) != std::string_view::npos) {
+    s.fail("delimiter", s.node("delimiter"),
+           "'" + delimiter + "' cannot separate fields (it occurs in numbers or quoting)");
+  }
+  return delimiter[0];
+}
+
+// Every unit and convention is required: they change every number, so none of them is guessed.
+void read_units(Section& s, CsvImportSpec& spec) {
+  spec.time_scale_s =
+      s.required_choice<double>("time_unit", {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}});
+  spec.angle_unit = s.required_choice<AngleUnit>(
+      "angle_unit",
+      {{"rad", AngleUnit::rad}, {"deg", AngleUnit::deg}, {"counts", AngleUnit::counts}});
+  for (const char* key : {"arm_counts_per_rev", "pendulum_counts_per_rev"}) {
+    const std::optional<double> cpr = s.optional_number(key);
+    if (spec.angle_unit != AngleUnit::counts) {
+      // A resolution that does nothing hints the unit is not what the writer meant.
+      if (cpr) s.fail(key, s.node(key), "only applies when angle_unit = \"counts\"");
+      continue;
+    }
+    if (!cpr) s.fail(key, nullptr, "missing: required when angle_unit = \"counts\"");
+    if (*cpr <= 0) s.fail(key, s.node(key), "must be > 0");
+    (std::string_view(key) == "arm_counts_per_rev" ? spec.arm_counts_per_rev
+                                                   : spec.pendulum_counts_per_rev) = *cpr;
+  }
+  spec.pendulum_zero = s.required_choice<PendulumZero>(
+      "pendulum_zero", {{"down", PendulumZero::down}, {"up", PendulumZero::up}});
+  spec.input_kind = s.required_choice<InputKind>(
+      "input_kind",
+      {{"duty", InputKind::duty}, {"voltage", InputKind::voltage}, {"torque", InputKind::torque}});
+}
+
 // The [motor] table: the DC motor of a voltage-driven rig. Required with input_kind = "voltage"
 // (k_t, k_e and R have no sensible default) and refused with the other kinds, where it would be
 // silently ignored: duty input takes eq. 4's motor from the rig configuration, torque needs none.
-std::optional<VoltageMotor> parse_motor_table(const toml::table& root, SpecTable& csv,
-                                              const std::string& input_kind,
-                                              const std::string& file) {
-  const toml::node* node = root.get("motor");  // a table, if there (checked by the caller)
-  if (input_kind != "voltage") {
-    if (!node) return std::nullopt;
-    throw ConfigError(
-        file, line_of(node), "motor",
-        "only applies when csv.input_kind = \"voltage\" (it is \"" + input_kind + "\"; " +
-            (input_kind == "duty" ? "duty input uses the rig configuration's motor, eq. 4)"
-                                  : "torque input needs no motor)"));
+std::optional<VoltageMotor> read_motor_table(Section& top, Section& csv, InputKind input_kind) {
+  if (input_kind != InputKind::voltage) {
+    if (!top.has("motor")) return std::nullopt;
+    const bool duty = input_kind == InputKind::duty;
+    top.fail("motor", top.node("motor"),
+             std::string("only applies when csv.input_kind = \"voltage\" (it is \"") +
+                 (duty ? "duty" : "torque") + "\"; " +
+                 (duty ? "duty input uses the rig configuration's motor, eq. 4)"
+                       : "torque input needs no motor)"));
   }
-  if (!node) {
+  if (!top.has("motor")) {
     csv.fail("input_kind", csv.node("input_kind"),
              "\"voltage\" needs a [motor] table: torque_constant_nm_per_a, back_emf_v_s_per_rad, "
              "resistance_ohm (gear_ratio and efficiency default to 1)");
   }
-  SpecTable m(*node->as_table(), file, "motor");
+  Section m = top.child("motor");
   VoltageMotor motor;
-  motor.torque_constant_nm_per_a =
-      m.positive("torque_constant_nm_per_a", "the motor's torque constant k_t [N m/A]");
-  motor.back_emf_v_s_per_rad =
-      m.positive("back_emf_v_s_per_rad", "the motor's back-EMF constant k_e [V s/rad]");
-  motor.resistance_ohm = m.positive("resistance_ohm", "the motor's winding resistance R [ohm]");
-  motor.gear_ratio = m.number("gear_ratio").value_or(1.0);
-  if (!(motor.gear_ratio > 0)) {
-    m.fail("gear_ratio", m.node("gear_ratio"),
-           "must be > 0 (motor turns per arm turn; a reversed arm is arm_angle_scale = -1)");
-  }
-  motor.efficiency = m.number("efficiency").value_or(1.0);
-  if (!(motor.efficiency > 0 && motor.efficiency <= 1)) {
-    m.fail("efficiency", m.node("efficiency"), "must be in (0, 1]");
-  }
+  motor.torque_constant_nm_per_a = m.required_number(
+      "torque_constant_nm_per_a", "the motor's torque constant k_t [N m/A]", positive, "> 0");
+  motor.back_emf_v_s_per_rad = m.required_number(
+      "back_emf_v_s_per_rad", "the motor's back-EMF constant k_e [V s/rad]", positive, "> 0");
+  motor.resistance_ohm = m.required_number(
+      "resistance_ohm", "the motor's winding resistance R [ohm]", positive, "> 0");
+  motor.gear_ratio =
+      m.number("gear_ratio", 1.0, positive,
+               "> 0 (motor turns per arm turn; a reversed arm is arm_angle_scale = -1)");
+  motor.efficiency = m.number(
+      "efficiency", 1.0, [](double v) { return v > 0 && v <= 1; }, "in (0, 1]");
   m.reject_unknown_keys();
   return motor;
+}
+
+// The document's top level: [csv] is required; other tables may hold other readers' settings, but
+// a bare key at the top belongs to nobody and is most likely a [csv] key written above the table.
+Section read_csv_table(const toml::table& root, Section& top) {
+  Section csv = top.child("csv");
+  for (auto&& [key, node] : root) {
+    if (!node.is_table()) {
+      const std::string name(key.str());
+      top.fail(name, &node,
+               name == "motor" ? "must be a table ([motor])"
+                               : "unknown key (the import keys belong in [csv])");
+    }
+  }
+  if (!csv.present()) top.fail("csv", nullptr, "missing table [csv]");
+  return csv;
 }
 
 }  // namespace
@@ -226,99 +215,16 @@ CsvImportError::CsvImportError(const std::string& file, int line, const std::str
       field_(field) {}
 
 CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& source_name) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source_name);
-  } catch (const toml::parse_error& e) {
-    throw ConfigError(source_name, static_cast<int>(e.source().begin.line), "",
-                      std::string(e.description()));
-  }
-  const toml::node* csv_node = root.get("csv");
-  if (csv_node && !csv_node->is_table()) {
-    throw ConfigError(source_name, static_cast<int>(csv_node->source().begin.line), "csv",
-                      "must be a table ([csv])");
-  }
-  // Other tables may hold other readers' settings; a bare key at the top belongs to nobody and is
-  // most likely a [csv] key written above the table.
-  for (auto&& [key, node] : root) {
-    if (!node.is_table()) {
-      const bool motor = key.str() == "motor";
-      throw ConfigError(
-          source_name, line_of(&node), std::string(key.str()),
-          motor ? "must be a table ([motor])" : "unknown key (the import keys belong in [csv])");
-    }
-  }
-  if (!csv_node) throw ConfigError(source_name, 0, "csv", "missing table [csv]");
-
-  SpecTable s(*csv_node->as_table(), source_name, "csv");
+  const toml::table root = config::parse_toml(text, source_name);
+  Section top(root, source_name);
+  Section s = read_csv_table(root, top);
   CsvImportSpec spec;
-
-  const std::string delimiter = s.text("delimiter", ",");
-  if (delimiter.size() != 1) {
-    s.fail("delimiter", s.node("delimiter"),
-           "must be a single ASCII character, e.g. \",\", \";\" or \"\\t\"");
-  }
-  spec.delimiter = delimiter[0];
-  const auto d = static_cast<unsigned char>(spec.delimiter);
-  // Characters that occur inside numbers or quoted fields would split them.
-  if (d >= 0x80 || std::isalnum(d) ||
-      std::string_view("\".+-\r\n").find(spec.delimiter) != std::string_view::npos) {
-    s.fail("delimiter", s.node("delimiter"),
-           "'" + delimiter + "' cannot separate fields (it occurs in numbers or quoting)");
-  }
+  spec.delimiter = read_delimiter(s);
   spec.has_header = s.boolean("has_header", true);
-
-  const bool h = spec.has_header;
-  spec.time = read_column(s, "time", h, false, "the time column");
-  spec.arm_angle = read_column(s, "arm_angle", h, true, "the arm angle column");
-  spec.pendulum_angle = read_column(s, "pendulum_angle", h, true, "the pendulum angle column");
-  spec.input = read_column(s, "input", h, true, "the input column (duty, voltage or torque)");
-  {
-    const std::array<std::pair<const char*, const CsvColumn*>, 4> columns = {{
-        {"time", &spec.time},
-        {"arm_angle", &spec.arm_angle},
-        {"pendulum_angle", &spec.pendulum_angle},
-        {"input", &spec.input},
-    }};
-    for (std::size_t i = 0; i < columns.size(); ++i) {
-      for (std::size_t j = 0; j < i; ++j) {
-        if (columns[i].second->name == columns[j].second->name) {
-          s.fail(columns[i].first, s.node(columns[i].first),
-                 "same column as " + std::string(columns[j].first) + " ('" +
-                     columns[i].second->name + "')");
-        }
-      }
-    }
-  }
-
-  const std::string time_unit = s.choice("time_unit", {"s", "ms", "us"});
-  spec.time_scale_s = time_unit == "ms" ? 1e-3 : time_unit == "us" ? 1e-6 : 1.0;
-
-  const std::string angle_unit = s.choice("angle_unit", {"rad", "deg", "counts"});
-  spec.angle_unit = angle_unit == "deg"      ? AngleUnit::deg
-                    : angle_unit == "counts" ? AngleUnit::counts
-                                             : AngleUnit::rad;
-  for (const char* key : {"arm_counts_per_rev", "pendulum_counts_per_rev"}) {
-    const std::optional<double> cpr = s.number(key);
-    if (spec.angle_unit != AngleUnit::counts) {
-      // A resolution that does nothing hints the unit is not what the writer meant.
-      if (cpr) s.fail(key, s.node(key), "only applies when angle_unit = \"counts\"");
-      continue;
-    }
-    if (!cpr) s.fail(key, nullptr, "missing: required when angle_unit = \"counts\"");
-    if (*cpr <= 0) s.fail(key, s.node(key), "must be > 0");
-    (std::string_view(key) == "arm_counts_per_rev" ? spec.arm_counts_per_rev
-                                                   : spec.pendulum_counts_per_rev) = *cpr;
-  }
-
-  spec.pendulum_zero =
-      s.choice("pendulum_zero", {"down", "up"}) == "up" ? PendulumZero::up : PendulumZero::down;
-  const std::string kind = s.choice("input_kind", {"duty", "voltage", "torque"});
-  spec.input_kind = kind == "voltage"  ? InputKind::voltage
-                    : kind == "torque" ? InputKind::torque
-                                       : InputKind::duty;
+  read_columns(s, spec);
+  read_units(s, spec);
   s.reject_unknown_keys();
-  spec.voltage_motor = parse_motor_table(root, s, kind, source_name);
+  spec.voltage_motor = read_motor_table(top, s, spec.input_kind);
   return spec;
 }
 

@@ -288,3 +288,37 @@ TEST(RigConfig, ALimitMisspelledOrInTheWrongSectionIsAnError) {
 
 }  // namespace
 }  // namespace furuta::config
+
+namespace furuta::config {
+namespace {
+
+// Choices are read once, into the enum of the configuration: a user compares no strings.
+TEST(RigConfig, ChoicesAreReadAsTheirEnumValues) {
+  EXPECT_EQ(load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml").sivia.inner_test,
+            SiviaInnerTest::witness);
+  EXPECT_EQ(parse_rig_config("", "empty.toml").sivia.inner_test, SiviaInnerTest::witness);
+  const std::vector<std::pair<const char*, SiviaInnerTest>> inner = {
+      {"witness", SiviaInnerTest::witness},
+      {"intermediate_value", SiviaInnerTest::intermediate_value},
+      {"for_all_data", SiviaInnerTest::for_all_data},
+      {"none", SiviaInnerTest::none},
+  };
+  for (const auto& [name, value] : inner) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(parse_rig_config(std::string("[sivia]\ninner_test = \"") + name + "\"\n", "rig.toml")
+                  .sivia.inner_test,
+              value);
+  }
+  EXPECT_STREQ(error_of("[sivia]\n\ninner_test = \"Witness\"\n").what(),
+               "rig.toml:3: sivia.inner_test: 'Witness' is not one of: witness, "
+               "intermediate_value, for_all_data, none");
+  EXPECT_EQ(parse_rig_config("[rig]\nbackend = \"libusb\"\n", "rig.toml").backend,
+            UsbBackend::libusb);
+  EXPECT_EQ(parse_rig_config("[rig]\nbackend = \"hidapi\"\n", "rig.toml").backend,
+            UsbBackend::hidapi);
+  EXPECT_STREQ(error_of("[rig]\nbackend = \"usb\"\n").what(),
+               "rig.toml:2: rig.backend: 'usb' is not one of: simulated, hidapi, libusb");
+}
+
+}  // namespace
+}  // namespace furuta::config

@@ -35,46 +35,24 @@
 #include <vector>
 
 #include "furuta/identification/guaranteed.hpp"
+#include "mpfr_oracle.hpp"
 
 namespace furuta::identification {
 namespace {
 
-constexpr mpfr_prec_t kPrec = 200;
+using furuta::testing::d_str;
+using furuta::testing::Mp;
+
+// The oracle's numbers in the reports of a violation.
+std::string mp_str(mpfr_srcptr v) {
+  return furuta::testing::mp_str(v, 40);
+}
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 int scale() {
   const char* v = std::getenv("FURUTA_LONG_TESTS");
   return (v != nullptr && std::string(v) == "1") ? 10 : 1;
-}
-
-class Mp {
- public:
-  Mp() { mpfr_init2(v_, kPrec); }
-  ~Mp() { mpfr_clear(v_); }
-  Mp(const Mp&) = delete;
-  Mp& operator=(const Mp&) = delete;
-  mpfr_ptr get() { return v_; }
-  mpfr_srcptr get() const { return v_; }
-  operator mpfr_ptr() { return v_; }           // NOLINT(google-explicit-constructor)
-  operator mpfr_srcptr() const { return v_; }  // NOLINT(google-explicit-constructor)
-
- private:
-  mpfr_t v_;
-};
-
-std::string mp_str(mpfr_srcptr v) {
-  char* s = nullptr;
-  mpfr_asprintf(&s, "%.40Rg", v);
-  std::string r(s);
-  mpfr_free_str(s);
-  return r;
-}
-
-std::string d_str(double x) {
-  std::ostringstream s;
-  s.precision(std::numeric_limits<double>::max_digits10);
-  s << x;
-  return s.str();
 }
 
 std::string i_str(const Interval& x) {

@@ -26,11 +26,11 @@
 #include <string>
 
 #include "furuta/interval/interval.hpp"
+#include "mpfr_oracle.hpp"
 
 namespace furuta::interval {
 namespace {
 
-constexpr mpfr_prec_t kPrec = 200;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kMax = std::numeric_limits<double>::max();
 
@@ -41,32 +41,12 @@ int scale() {
 
 // ---- MPFR helpers -------------------------------------------------------------------------------
 
-class Mp {
- public:
-  Mp() { mpfr_init2(v_, kPrec); }
-  ~Mp() { mpfr_clear(v_); }
-  Mp(const Mp&) = delete;
-  Mp& operator=(const Mp&) = delete;
-  mpfr_ptr get() { return v_; }
-  mpfr_srcptr get() const { return v_; }
+using furuta::testing::d_str;
+using furuta::testing::Mp;
 
- private:
-  mpfr_t v_;
-};
-
+// The oracle's numbers in the reports of a violation.
 std::string mp_str(mpfr_srcptr v) {
-  char* s = nullptr;
-  mpfr_asprintf(&s, "%.64Rg", v);
-  std::string r(s);
-  mpfr_free_str(s);
-  return r;
-}
-
-std::string d_str(double x) {
-  std::ostringstream s;
-  s.precision(std::numeric_limits<double>::max_digits10);
-  s << x;
-  return s.str();
+  return furuta::testing::mp_str(v, 64);
 }
 
 // Signed distance in ulps from a to b (b >= a), through zero and subnormals.

@@ -6,29 +6,15 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "furuta/config/config_error.hpp"
 #include "furuta/firmware_bridge/encoder_geometry.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/model/model.hpp"
 
 namespace furuta::config {
-
-// A configuration problem, located: "rig.toml:12: encoders.arm.counts_per_rev: must be > 0".
-class ConfigError : public std::runtime_error {
- public:
-  ConfigError(std::string file, int line, std::string field, const std::string& problem);
-  const std::string& file() const { return file_; }
-  int line() const { return line_; }  // 0 when the problem has no line (a missing key)
-  const std::string& field() const { return field_; }
-
- private:
-  std::string file_;
-  int line_;
-  std::string field_;
-};
 
 enum class UsbBackend : std::uint8_t { simulated, hidapi, libusb };
 
@@ -90,6 +76,10 @@ struct IdentificationConfig {
   std::optional<double> input_lag_ms;
 };
 
+// [sivia] inner_test: how SIVIA proves a box inside the feasible set (identification::InnerTest),
+// spelled in rig.toml as the value's name.
+enum class SiviaInnerTest : std::uint8_t { witness, intermediate_value, for_all_data, none };
+
 // [sivia]: guaranteed identification (furuta identify --sivia).
 struct SiviaConfig {
   // Which of mu1, mu2, mu3, mu4, mug, fv1, fv2 are unknowns (bisected); the others are carried as
@@ -101,9 +91,9 @@ struct SiviaConfig {
   double epsilon = 0.01;
   bool epsilon_relative = true;  // to each unknown's prior width; else absolute
   bool contract = true;
-  std::string inner_test = "witness";  // witness | intermediate_value | for_all_data | none
-  int q = 0;                           // samples allowed to be inconsistent
-  int threads = 0;                     // 0: all cores
+  SiviaInnerTest inner_test = SiviaInnerTest::witness;
+  int q = 0;        // samples allowed to be inconsistent
+  int threads = 0;  // 0: all cores
   // Error bounds of the preprocessed data, [absolute, relative] per channel (SI units):
   // |error| <= absolute + relative * |value|.
   std::array<double, 2> q2_bound = {0.0, 0.0};

@@ -1,0 +1,103 @@
+// rig.toml's sections for identification: [identification], [sivia], [automation].
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "sections.hpp"
+
+namespace furuta::config::detail {
+
+namespace {
+
+// [sivia]'s error bounds of the preprocessed data, [absolute, relative] per channel.
+void read_data_bounds(Section& s, SiviaConfig& sc) {
+  sc.q2_bound = s.numbers("q2_bound", sc.q2_bound, non_negative, ">= 0");
+  sc.dq1_bound = s.numbers("dq1_bound", sc.dq1_bound, non_negative, ">= 0");
+  sc.dq2_bound = s.numbers("dq2_bound", sc.dq2_bound, non_negative, ">= 0");
+  sc.ddq1_bound = s.numbers("ddq1_bound", sc.ddq1_bound, non_negative, ">= 0");
+  sc.ddq2_bound = s.numbers("ddq2_bound", sc.ddq2_bound, non_negative, ">= 0");
+  sc.tau_bound = s.numbers("tau_bound", sc.tau_bound, non_negative, ">= 0");
+}
+
+}  // namespace
+
+IdentificationConfig read_identification(Section s, const DaemonConfig& daemon) {
+  IdentificationConfig ic;
+  const double nyquist_hz = 0.5e9 / static_cast<double>(daemon.period_ns);
+  ic.cutoff_hz = s.number(
+      "cutoff_hz", ic.cutoff_hz, [&](double v) { return v > 0 && 2 * v < nyquist_hz; },
+      "in (0, Nyquist / 2) (the differentiator's stop band starts at twice it)");
+  ic.butterworth_order = static_cast<int>(s.integer(
+      "butterworth_order", ic.butterworth_order, [](std::int64_t v) { return v >= 1 && v <= 16; },
+      "in [1, 16]"));
+  ic.differentiator_taps = static_cast<int>(s.integer(
+      "differentiator_taps", ic.differentiator_taps,
+      [](std::int64_t v) { return v >= 5 && v <= 201 && v % 2 == 1; }, "odd, in [5, 201]"));
+  ic.input_lag_ms = s.optional_number(
+      "input_lag_ms", [](double v) { return std::abs(v) <= 100; }, "in [-100, 100]");
+  s.reject_unknown_keys();
+  return ic;
+}
+
+SiviaConfig read_sivia(Section s) {
+  SiviaConfig sc;
+  sc.unknowns =
+      s.choices("unknowns", sc.unknowns, {"mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"});
+  if (sc.unknowns.empty()) {
+    s.fail("unknowns", s.node("unknowns"), "must name at least one parameter");
+  }
+  sc.mu_uncertainty_pct =
+      s.numbers("mu_uncertainty_pct", sc.mu_uncertainty_pct, non_negative, ">= 0");
+  const auto ordered_prior = [&](const char* key, std::array<double, 2> fallback) {
+    const std::array<double, 2> v = s.numbers(key, fallback);
+    if (!(v[0] < v[1])) s.fail(key, s.node(key), "must be [low, high] with low < high");
+    return v;
+  };
+  sc.fv1_prior = ordered_prior("fv1", sc.fv1_prior);
+  sc.fv2_prior = ordered_prior("fv2", sc.fv2_prior);
+  sc.epsilon = s.number("epsilon", sc.epsilon, positive, "> 0");
+  sc.epsilon_relative = s.boolean("epsilon_relative", sc.epsilon_relative);
+  sc.contract = s.boolean("contract", sc.contract);
+  sc.inner_test = s.choice("inner_test", sc.inner_test,
+                           {{"witness", SiviaInnerTest::witness},
+                            {"intermediate_value", SiviaInnerTest::intermediate_value},
+                            {"for_all_data", SiviaInnerTest::for_all_data},
+                            {"none", SiviaInnerTest::none}});
+  sc.q = static_cast<int>(s.integer("q", sc.q, non_negative_integer, ">= 0"));
+  sc.threads = static_cast<int>(s.integer(
+      "threads", sc.threads, [](std::int64_t v) { return v >= 0 && v <= 1024; }, "in [0, 1024]"));
+  read_data_bounds(s, sc);
+  s.reject_unknown_keys();
+  return sc;
+}
+
+AutomationConfig read_automation(Section s) {
+  AutomationConfig ac;
+  ac.fit_labels = s.names("fit_labels", ac.fit_labels);
+  if (ac.fit_labels.empty()) {
+    s.fail("fit_labels", s.node("fit_labels"), "must name at least one label");
+  }
+  ac.fit_sessions = static_cast<int>(s.integer(
+      "fit_sessions", ac.fit_sessions, [](std::int64_t v) { return v >= 1 && v <= 100; },
+      "in [1, 100]"));
+  ac.validation_label = s.text("validation_label", ac.validation_label);
+  // A session cannot be both fitted and held out: the validation would not be independent.
+  if (std::find(ac.fit_labels.begin(), ac.fit_labels.end(), ac.validation_label) !=
+      ac.fit_labels.end()) {
+    s.fail("validation_label", s.node("validation_label"),
+           "'" + ac.validation_label + "' is also one of fit_labels");
+  }
+  ac.sivia = s.boolean("sivia", ac.sivia);
+  ac.simulate = s.boolean("simulate", ac.simulate);
+  ac.simulate_seconds = s.number(
+      "simulate_seconds", ac.simulate_seconds, [](double v) { return v >= 0.01 && v <= 60; },
+      "in [0.01, 60]");
+  ac.identifications_dir = s.text("identifications_dir", ac.identifications_dir);
+  if (ac.identifications_dir.empty()) {
+    s.fail("identifications_dir", s.node("identifications_dir"), "must not be empty");
+  }
+  s.reject_unknown_keys();
+  return ac;
+}
+
+}  // namespace furuta::config::detail

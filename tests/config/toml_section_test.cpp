@@ -1,0 +1,125 @@
+#include "furuta/config/toml_section.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace furuta::config {
+namespace {
+
+enum class Colour { red, green };
+
+// The problem `read` reports for the document `text` (named "t.toml").
+template <typename Read>
+ConfigError error_of(const std::string& text, Read read) {
+  const toml::table root = parse_toml(text, "t.toml");
+  Section top(root, "t.toml");
+  try {
+    read(top);
+  } catch (const ConfigError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no ConfigError for:\n" << text;
+  return ConfigError("", 0, "", "");
+}
+
+TEST(TomlSection, ValuesAbsentTakeTheirFallbacks) {
+  const toml::table root = parse_toml("[a]\nx = 2\n", "t.toml");
+  Section top(root, "t.toml");
+  Section a = top.child("a");
+  Section b = top.child("b");
+  EXPECT_TRUE(a.present());
+  EXPECT_FALSE(b.present());
+  EXPECT_EQ(a.number("x", 1.0), 2.0);  // an integer reads as a number
+  EXPECT_EQ(a.number("y", 1.5), 1.5);
+  EXPECT_FALSE(a.optional_number("y").has_value());
+  EXPECT_EQ(b.integer("n", 7), 7);
+  EXPECT_TRUE(b.boolean("on", true));
+  EXPECT_EQ(b.text("s", "d"), "d");
+  EXPECT_EQ(b.choice("c", Colour::green, {{"red", Colour::red}, {"green", Colour::green}}),
+            Colour::green);
+  a.reject_unknown_keys();
+  b.reject_unknown_keys();
+  top.reject_unknown_keys();
+}
+
+TEST(TomlSection, ErrorsNameFileLineAndDottedField) {
+  const ConfigError e = error_of("[a.b]\n\nx = -1\n", [](Section& top) {
+    top.child("a").child("b").number(
+        "x", 1.0, [](double v) { return v > 0; }, "> 0");
+  });
+  EXPECT_EQ(e.file(), "t.toml");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.field(), "a.b.x");
+  EXPECT_STREQ(e.what(), "t.toml:3: a.b.x: must be > 0");
+  EXPECT_STREQ(error_of("x = nan\n", [](Section& top) { top.number("x", 0.0); }).what(),
+               "t.toml:1: x: must be finite");
+  EXPECT_STREQ(error_of("a = 1\n", [](Section& top) { top.child("a"); }).what(),
+               "t.toml:1: a: must be a table ([a])");
+}
+
+TEST(TomlSection, ARequiredKeyMissingIsReportedAtItsTable) {
+  const ConfigError e = error_of("# first\n[csv]\nother = 1\n", [](Section& top) {
+    top.child("csv").required_text("time", "the time column");
+  });
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_STREQ(e.what(), "t.toml:2: csv.time: missing: the time column");
+  EXPECT_STREQ(error_of("[m]\nk = 0\n",
+                        [](Section& top) {
+                          top.child("m").required_number(
+                              "k", "a constant", [](double v) { return v > 0; }, "> 0");
+                        })
+                   .what(),
+               "t.toml:2: m.k: must be > 0");
+  EXPECT_STREQ(
+      error_of("[m]\n", [](Section& top) { top.child("m").required_number("k", "k_t"); }).what(),
+      "t.toml:1: m.k: missing: k_t");
+  EXPECT_STREQ(
+      error_of("s = \"\"\n", [](Section& top) { top.required_text("s", "a name"); }).what(),
+      "t.toml:1: s: must not be empty");
+}
+
+TEST(TomlSection, ChoicesReadAsTheirValuesAndListTheAllowedSpellings) {
+  const toml::table root = parse_toml("c = \"red\"\nu = \"ms\"\n", "t.toml");
+  Section top(root, "t.toml");
+  EXPECT_EQ(top.choice("c", Colour::green, {{"red", Colour::red}, {"green", Colour::green}}),
+            Colour::red);
+  EXPECT_EQ(top.required_choice<double>("u", {{"s", 1.0}, {"ms", 1e-3}}), 1e-3);
+  top.reject_unknown_keys();
+
+  const auto colour = [](Section& top) {
+    top.choice("c", Colour::red, {{"red", Colour::red}, {"green", Colour::green}});
+  };
+  EXPECT_STREQ(error_of("\nc = \"blue\"\n", colour).what(),
+               "t.toml:2: c: 'blue' is not one of: red, green");
+  EXPECT_STREQ(error_of("c = 3\n", colour).what(), "t.toml:1: c: must be a string");
+  EXPECT_STREQ(error_of("x = 1\n",
+                        [](Section& top) {
+                          top.required_choice<double>("u", {{"s", 1.0}, {"ms", 1e-3}});
+                        })
+                   .what(),
+               "t.toml: u: missing: one of s, ms");
+}
+
+TEST(TomlSection, KeysNeverReadAreUnknown) {
+  const ConfigError e = error_of("[a]\nx = 1\ny = 2\n", [](Section& top) {
+    Section a = top.child("a");
+    a.number("x", 0.0);
+    a.reject_unknown_keys();
+  });
+  EXPECT_STREQ(e.what(), "t.toml:3: a.y: unknown key");
+}
+
+TEST(TomlSection, SyntaxErrorsCarryTheirLine) {
+  try {
+    parse_toml("a = 1\nb = \n", "t.toml");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.file(), "t.toml");
+    EXPECT_EQ(e.line(), 2);
+    EXPECT_TRUE(e.field().empty());
+  }
+}
+
+}  // namespace
+}  // namespace furuta::config
