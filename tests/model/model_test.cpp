@@ -37,8 +37,9 @@ TEST(RigModel, PaperRun1IsTableIAcquisition1) {
   EXPECT_DOUBLE_EQ(p.fv2, 6.42e-4);
 }
 
-// The identification regresses y = D(q, dq, ddq) p with y = [tau, 0] (DESIGN.md); the simulator's
-// accelerations must satisfy exactly those rows, or identification would chase a different model.
+// The identification regresses y = D(q, dq, ddq) p with y = [tau, 0] (docs/model.md); the
+// simulator's accelerations must satisfy exactly those rows, or identification would chase a
+// different model.
 TEST(RigModel, ForwardDynamicsSatisfiesTheRegressorRows) {
   const model::Parameters<double> p = model::paper_run1();
   std::mt19937_64 rng(7);

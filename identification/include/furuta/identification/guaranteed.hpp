@@ -47,8 +47,8 @@ struct IntervalSample {
 std::vector<IntervalSample> interval_samples(const std::vector<const JointSeries*>& experiments,
                                              const DataErrorBounds& bounds, std::size_t trim);
 
-// The regressor D of DESIGN.md over data intervals: every D(q2, dq1, dq2, ddq1, ddq2) for data in
-// the intervals lies in these enclosures.
+// The regressor D (docs/model.md) over data intervals: every D(q2, dq1, dq2, ddq1, ddq2) for data
+// in the intervals lies in these enclosures.
 struct RegressorEnclosure {
   std::array<Interval, model::kParameterCount> row1, row2;
 };

@@ -1,6 +1,6 @@
 #pragma once
 // Least-squares identification of the model's seven parameters (paper section III.B): the regressor
-// of DESIGN.md stacked over samples and experiments, solved by a rank-revealing factorisation.
+// of docs/model.md stacked over samples and experiments, solved by a rank-revealing factorisation.
 
 #include <string>
 #include <vector>
