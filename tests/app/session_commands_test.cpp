@@ -28,15 +28,21 @@ fs::path only_log_in(const fs::path& dir) {
   return found;
 }
 
-fs::path run_simulated_session(const fs::path& logs, double duration_s) {
+// A `furuta run --sim --virtual-time` of `duration_s` with the configuration at `config`.
+RunOptions simulated_run(const fs::path& config, const fs::path& logs, double duration_s) {
   RunOptions options;
-  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  options.config_path = config;
   options.simulated = true;
   options.virtual_time = true;
   options.logs_dir = logs;
   options.lcm_url = "memq://";
   options.session.duration_s = duration_s;
   options.session.label = "cli";
+  return options;
+}
+
+fs::path run_simulated_session(const fs::path& logs, double duration_s) {
+  const RunOptions options = simulated_run(FURUTA_SOURCE_DIR "/config/rig.toml", logs, duration_s);
   std::ostringstream out, err;
   EXPECT_EQ(run_session_command(options, out, err), 0) << out.str() << err.str();
   EXPECT_NE(out.str().find("session ended: duration_reached"), std::string::npos) << out.str();
@@ -154,18 +160,6 @@ fs::path edited_config(const fs::path& dir,
   const fs::path path = dir / "rig.toml";
   std::ofstream(path) << toml;
   return path;
-}
-
-RunOptions simulated_run(const fs::path& config, const fs::path& logs, double duration_s) {
-  RunOptions options;
-  options.config_path = config;
-  options.simulated = true;
-  options.virtual_time = true;
-  options.logs_dir = logs;
-  options.lcm_url = "memq://";
-  options.session.duration_s = duration_s;
-  options.session.label = "cli";
-  return options;
 }
 
 // A 1047_2 (vendor class, firmware 2xx, 6 MHz ticks) runs a whole session like the HID board: its
