@@ -44,28 +44,10 @@ Identification identify(const std::vector<RawExperiment>& experiments,
                         const IdentifyOptions& options, const model::MotorData& motor,
                         const VoltageMotor& voltage_motor = {});
 
-// Table I as text: parameter, unit, one column per experiment, all, (CAD), (truth); with standard
-// deviations.
-std::string format_table_one(const Identification& id);
-
 struct InputFile {
   std::string path;
   std::string sha256;
 };
-// Every figure above as JSON, with the software version and the inputs' checksums.
-// `more` holds further members ("\"sivia\": {...}") appended to the top-level object.
-std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
-                         const std::string& software_version, const std::string& more = "");
-
-struct DataErrorBounds;  // guaranteed.hpp
-
-// SVG figures: measured signals with their uncertainty bands (Fig. 2/3), measured vs predicted
-// torque on the held-out session (Fig. 5). The bands are the data error bounds SIVIA uses when
-// given (every channel), else the pendulum encoder's quantisation.
-std::string svg_signals(const RawExperiment& raw, const JointSeries& processed,
-                        double angle_resolution_rad, const DataErrorBounds* bounds = nullptr);
-std::string svg_torque_validation(const ValidationResult& validation);
-
 // Hex SHA-256 of a file (inputs are identified by content in results.json).
 std::string sha256_file(const std::string& path);
 

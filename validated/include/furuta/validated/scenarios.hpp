@@ -1,13 +1,13 @@
 #pragma once
 // The paper's validation by guaranteed simulation (section IV.B, Fig. 6, Table III): four
 // scenarios run on the simulated rig as "measurements", tubes from interval (SIVIA) and point
-// (LSMI) parameters with the data's uncertainty on the initial state, coverage rates, Table III,
-// Fig. 6-style figures. See validated/README.md, "Scenarios and coverage".
+// (LSMI) parameters with the data's uncertainty on the initial state, coverage rates: the numbers
+// of Table III and Fig. 6 (their text and figures are report/'s). See validated/README.md,
+// "Scenarios and coverage".
 //
 //   const Scenario s = paper_scenario(1);
 //   const ScenarioMeasurement m = measure_scenario(s, model::paper_run1());
 //   const ScenarioResult r = evaluate_scenario(s, point_parameters("LSMI", estimate), m, {}, {});
-//   std::cout << format_table_three({r});
 
 #include <array>
 #include <cstddef>
@@ -29,9 +29,6 @@ struct Scenario {
   double q2_initial_rad = 0.0;
   double torque_nm = 0.0;
   double duration_s = 4.0;
-
-  std::string label() const;        // "(a)" for 1 ... "(d)" for 4, "#n" beyond
-  std::string description() const;  // "x0 = [0, 0, -100 deg, 0], u = 0 N m"
 };
 
 // The paper's four: [0,0,-100 deg,0] u = 0; [0,0,50 deg,0] u = 0; [0,0,-90 deg,0] u = 0.17 N m;
@@ -173,16 +170,5 @@ ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& p
                                  const StateUncertainty& uncertainty,
                                  const IntegratorOptions& options,
                                  const SplitOptions& split = single_tube());
-
-// Table III as text: per scenario and parameter set, time reached, steps, coverage of q2 (both
-// modes, over all samples and over those reached) and q1, the q2 tube's mean width, the status;
-// with the paper's figures for comparison.
-std::string format_table_three(const std::vector<ScenarioResult>& results);
-// The same rows as a JSON array (parameters as [lo, hi], coverage counts and rates).
-std::string scenarios_json(const std::vector<ScenarioResult>& results);
-// Fig. 6: the q2 tube (filled step boxes) with the measured q2 over it (samples outside the
-// paper's test in red), axes in s and deg, the scenario as the title, the coverage rates in the
-// legend. A self-contained SVG document.
-std::string svg_scenario(const ScenarioResult& result);
 
 }  // namespace furuta::validated

@@ -1,104 +1,17 @@
-// The guaranteed identification's outputs: JSON and the Fig. 4-style paving.
+// Fig. 4: the SIVIA paving projected on two parameters.
 #include <algorithm>
-#include <cmath>
 #include <iomanip>
 #include <sstream>
 
-#include "furuta/common/text_format.hpp"
-#include "furuta/identification/guaranteed.hpp"
+#include "furuta/report/svg.hpp"
 
-namespace furuta::identification {
+namespace furuta::report {
 
-namespace {
-
-std::string interval_json(const Interval& x) {
-  if (x.is_empty()) return "null";
-  return "[" + text::json_number(x.lo()) + ", " + text::json_number(x.hi()) + "]";
-}
-
-std::string box_json(const Box& b) {
-  std::string out = "[";
-  for (std::size_t k = 0; k < b.size(); ++k) out += (k ? ", " : "") + interval_json(b[k]);
-  return out + "]";
-}
-
-}  // namespace
-
-double unknowns_volume(const std::vector<Box>& boxes,
-                       const std::array<bool, model::kParameterCount>& unknown) {
-  double total = 0;
-  for (const Box& b : boxes) {
-    double v = 1;
-    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
-      if (unknown[k]) v *= b[k].width();
-    }
-    total += v;
-  }
-  return total;
-}
-
-std::string guaranteed_json(const GuaranteedResult& r, const SampleConstraints& constraints) {
-  std::ostringstream out;
-  const auto& p = r.paving;
-  out << "{\"unknowns\": [";
-  bool first = true;
-  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
-    if (!r.unknown[k]) continue;
-    out << (first ? "" : ", ") << "\"" << model::kParameterNames[k] << "\"";
-    first = false;
-  }
-  out << "], \"parameters\": [";
-  for (std::size_t k = 0; k < model::kParameterCount; ++k)
-    out << (k ? ", " : "") << "\"" << model::kParameterNames[k] << "\"";
-  out << "], \"samples\": " << r.samples << ", \"q\": " << r.q
-      << ", \"prior\": " << box_json(p.prior) << ", \"boxes_tested\": " << p.boxes_tested
-      << ", \"bisections\": " << p.bisections << ", \"inner_count\": " << p.inner.size()
-      << ", \"probed_inner_count\": " << p.probed_inner
-      << ", \"boundary_count\": " << p.boundary.size() << ", \"outer_count\": " << p.outer_count
-      << ", \"truncated\": " << (p.truncated ? "true" : "false")
-      << ", \"seconds\": " << text::json_number(p.seconds)
-      << ", \"empty\": " << (r.empty ? "true" : "false");
-  if (!r.empty) {
-    out << ", \"outer_hull\": " << box_json(p.outer_hull());
-    if (!p.inner.empty()) {
-      out << ", \"inner_hull\": " << box_json(p.inner_hull());
-      // The largest inner box: parameters every one of which is proven consistent with the data.
-      const auto largest =
-          std::max_element(p.inner.begin(), p.inner.end(), [&](const Box& a, const Box& b) {
-            return unknowns_volume({a}, r.unknown) < unknowns_volume({b}, r.unknown);
-          });
-      out << ", \"central_feasible_box\": " << box_json(*largest);
-    }
-  }
-  out << ", \"inner_measure\": " << text::json_number(unknowns_volume(p.inner, r.unknown))
-      << ", \"boundary_measure\": " << text::json_number(unknowns_volume(p.boundary, r.unknown));
-  out << ", \"finding\": \"" << text::json_escape(r.finding) << "\"";
-  const auto samples = [&](const char* key, const std::vector<std::size_t>& list) {
-    out << ", \"" << key << "\": [";
-    for (std::size_t k = 0; k < list.size(); ++k) {
-      const IntervalSample& s = constraints.sample(list[k]);
-      out << (k ? ", " : "") << "{\"experiment\": \"" << text::json_escape(s.experiment)
-          << "\", \"index\": " << s.index << ", \"t_s\": " << text::json_number(s.t_s) << "}";
-    }
-    out << "]";
-  };
-  samples("inconsistent_samples", r.inconsistent_samples);
-  samples("excluding_samples", r.excluding_samples);
-  out << ", \"inner\": [";
-  for (std::size_t k = 0; k < p.inner.size(); ++k) out << (k ? ", " : "") << box_json(p.inner[k]);
-  out << "], \"boundary\": [";
-  for (std::size_t k = 0; k < p.boundary.size(); ++k) {
-    out << (k ? ", " : "") << box_json(p.boundary[k]);
-  }
-  out << "]}";
-  return out.str();
-}
-
-std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
+std::string svg_paving(const identification::GuaranteedResult& r, int xp, int yp,
                        const std::vector<double>* reference) {
   const auto& p = r.paving;
   // The view: the outer hull with a margin (the prior if the set is empty).
-  Box view = r.empty ? p.prior : p.outer_hull();
+  interval::Box view = r.empty ? p.prior : p.outer_hull();
   const double W = 640, H = 480, left = 90, top = 40, pw = W - left - 30, ph = H - top - 70;
   auto range = [&](int k) {
     double lo = view[static_cast<std::size_t>(k)].lo(), hi = view[static_cast<std::size_t>(k)].hi();
@@ -122,10 +35,11 @@ std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
     << std::setprecision(6);
   s << "<clipPath id=\"plot\"><rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << pw
     << "\" height=\"" << ph << "\"/></clipPath>\n<g clip-path=\"url(#plot)\">\n";
-  const auto draw = [&](const std::vector<Box>& boxes, const char* fill, const char* cls) {
-    for (const Box& b : boxes) {
-      const Interval& bx = b[static_cast<std::size_t>(xp)];
-      const Interval& by = b[static_cast<std::size_t>(yp)];
+  const auto draw = [&](const std::vector<interval::Box>& boxes, const char* fill,
+                        const char* cls) {
+    for (const interval::Box& b : boxes) {
+      const interval::Interval& bx = b[static_cast<std::size_t>(xp)];
+      const interval::Interval& by = b[static_cast<std::size_t>(yp)];
       const double x0 = std::max(X(bx.lo()), left - 1), x1 = std::min(X(bx.hi()), left + pw + 1);
       const double y0 = std::max(Y(by.hi()), top - 1), y1 = std::min(Y(by.lo()), top + ph + 1);
       if (x1 < x0 || y1 < y0) continue;
@@ -169,4 +83,4 @@ std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
   return s.str();
 }
 
-}  // namespace furuta::identification
+}  // namespace furuta::report
