@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "furuta/model/model.hpp"
+#include "furuta/report/json.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::app {
@@ -123,7 +124,7 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
                          std::ostream& err);
 
 struct SimulationReport {
-  std::string json;   // {"truth", "measurement", "integrator", "figures", "results": [...]}
+  report::Json json;  // {"truth", "measurement", "integrator", "figures", "results": [...]}
   std::string table;  // Table III
   std::vector<std::string> figures;  // file names written
   std::vector<validated::ScenarioResult> results;

@@ -16,6 +16,7 @@
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/report/json.hpp"
 #include "furuta/report/report.hpp"
 #include "furuta/session_log/session_log.hpp"
 
@@ -50,7 +51,8 @@ struct FitInputs {
 };
 
 struct GuaranteedRun {
-  std::string json, svg, summary;
+  report::Json json;
+  std::string svg, summary;
   std::optional<interval::Box> outer_hull;  // absent when the set is empty
   identification::GuaranteedResult result;
 };
@@ -132,12 +134,13 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
   const std::size_t trim = identify_options.lsmi.trim_samples != 0
                                ? identify_options.lsmi.trim_samples
                                : edge_samples(identify_options.preprocess);
-  const SampleConstraints constraints(interval_samples(series, bounds, trim), g.prior, g.unknown);
+  const std::vector<IntervalSample> samples = interval_samples(series, bounds, trim);
+  const SampleConstraints constraints(samples, g.prior, g.unknown);
   const GuaranteedResult r = guaranteed_identification(constraints, g);
   if (tty) std::fprintf(stderr, "\n");
 
   GuaranteedRun run;
-  run.json = guaranteed_json(r, constraints);
+  run.json = report::sivia_json(r, samples);
   std::vector<double> reference;
   if (truth) {
     const auto t = truth->to_array();
@@ -175,7 +178,8 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
 }
 
 struct SimulationRun {
-  std::string json, summary;
+  report::Json json;
+  std::string summary;
   std::string source;  // of the measurements
   std::vector<validated::ScenarioResult> results;
 };
@@ -416,29 +420,28 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   if (csv_input) add_input(options.import_spec);
   const std::string table = identification::format_table_one(id);
   write_file(options.output_dir / "table.txt", table);
-  std::string sivia_json;
+  report::Json more = report::Json::object();
   std::string sivia_summary;
   std::optional<interval::Box> guaranteed_hull;
   std::optional<GuaranteedRun> guaranteed;
   if (options.sivia) {
     guaranteed = run_guaranteed(fit->settings.sivia, id, identify_options, options, fit->truth);
     const GuaranteedRun& run = *guaranteed;
-    sivia_json = "\"sivia\": " + run.json;
+    more["sivia"] = run.json;
     sivia_summary = run.summary;
     guaranteed_hull = run.outer_hull;
-    write_file(options.output_dir / "sivia.json", run.json + "\n");
+    write_file(options.output_dir / "sivia.json", report::json_text(run.json));
     write_file(options.output_dir / "sivia.svg", run.svg);
   }
-  std::string more = sivia_json;
   std::string simulation_summary;
   std::optional<SimulationRun> simulation;
   if (options.simulate) {
     simulation = run_simulation(id, guaranteed_hull, options, *fit);
-    more += (more.empty() ? "" : ",\n  ") + ("\"simulation\": " + simulation->json);
+    more["simulation"] = simulation->json;
     simulation_summary = simulation->summary;
   }
   write_file(options.output_dir / "results.json",
-             identification::results_json(id, inputs, daemon::kSoftwareVersion, more));
+             report::json_text(report::results_json(id, inputs, daemon::kSoftwareVersion, more)));
   const identification::DataErrorBounds bounds = data_error_bounds(fit->settings.sivia);
   const bool bounds_configured = has_bounds(fit->settings.sivia);
   std::vector<std::string> signals;

@@ -14,12 +14,9 @@
 #include <sstream>
 
 #include "commands.hpp"
-#include "furuta/common/text_format.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 
 namespace furuta::app {
-
-using text::json_number;
 
 namespace {
 
@@ -49,13 +46,6 @@ std::string slug(const std::string& name) {
     }
   }
   return out.empty() ? "parameters" : out;
-}
-
-std::string parameters_json(const model::Parameters<double>& p) {
-  return "{\"mu1\": " + json_number(p.mu1) + ", \"mu2\": " + json_number(p.mu2) +
-         ", \"mu3\": " + json_number(p.mu3) + ", \"mu4\": " + json_number(p.mu4) +
-         ", \"mug\": " + json_number(p.mug) + ", \"fv1\": " + json_number(p.fv1) +
-         ", \"fv2\": " + json_number(p.fv2) + "}";
 }
 
 std::string percent_text(double pct) {
@@ -210,21 +200,16 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
   report.table = validated::format_table_three(results);
   const validated::ScenarioMeasurement& m0 =
       results.empty() ? validated::ScenarioMeasurement{} : results.front().measurement;
-  std::ostringstream json;
-  json << "{\"truth\": " << parameters_json(truth)
-       << ", \"truth_source\": " << nlohmann::json(truth_source).dump()
-       << ", \"measurement\": {\"step_s\": " << json_number(measurement_options.step_s)
-       << ", \"sample_period_s\": " << json_number(measurement_options.sample_period_s)
-       << ", \"arm_resolution_rad\": " << json_number(m0.arm_resolution_rad)
-       << ", \"pendulum_resolution_rad\": " << json_number(m0.pendulum_resolution_rad) << "}"
-       << ", \"integrator\": {\"order\": " << integrator.order
-       << ", \"tolerance\": " << json_number(integrator.tolerance)
-       << ", \"h_min\": " << json_number(integrator.h_min)
-       << ", \"max_width\": " << json_number(integrator.max_width) << ", \"pieces\": " << pieces
-       << "}"
-       << ", \"figures\": " << nlohmann::json(report.figures).dump()
-       << ",\n  \"results\": " << validated::scenarios_json(results) << "}";
-  report.json = json.str();
+  report::SimulationSetup setup;
+  setup.truth = truth;
+  setup.truth_source = truth_source;
+  setup.measurement = measurement_options;
+  setup.arm_resolution_rad = m0.arm_resolution_rad;
+  setup.pendulum_resolution_rad = m0.pendulum_resolution_rad;
+  setup.integrator = integrator;
+  setup.pieces = pieces;
+  setup.figures = report.figures;
+  report.json = report::simulation_json(setup, results);
   report.results = std::move(results);
   return report;
 }
@@ -300,12 +285,11 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
   std::filesystem::create_directories(options.output_dir);
   const SimulationReport report = run_scenario_simulations(
       scenarios, sets, truth, options.output_dir, truth_source, options.pieces);
-  std::string json = "{\"software_version\": \"" + std::string(daemon::kSoftwareVersion) + "\"";
-  if (!options.results.empty()) {
-    json += ", \"parameters_from\": " + nlohmann::json(options.results.string()).dump();
-  }
-  json += ", \"simulation\": " + report.json + "}\n";
-  write_text(options.output_dir / "simulate.json", json);
+  report::Json json;
+  json["software_version"] = daemon::kSoftwareVersion;
+  if (!options.results.empty()) json["parameters_from"] = options.results.string();
+  json["simulation"] = report.json;
+  write_text(options.output_dir / "simulate.json", report::json_text(json));
   write_text(options.output_dir / "table3.txt", report.table);
   out << note << report.table;
   out << "wrote " << (options.output_dir / "simulate.json").string() << ", table3.txt and "

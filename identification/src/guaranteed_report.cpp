@@ -9,21 +9,6 @@
 
 namespace furuta::identification {
 
-namespace {
-
-std::string interval_json(const Interval& x) {
-  if (x.is_empty()) return "null";
-  return "[" + text::json_number(x.lo()) + ", " + text::json_number(x.hi()) + "]";
-}
-
-std::string box_json(const Box& b) {
-  std::string out = "[";
-  for (std::size_t k = 0; k < b.size(); ++k) out += (k ? ", " : "") + interval_json(b[k]);
-  return out + "]";
-}
-
-}  // namespace
-
 double unknowns_volume(const std::vector<Box>& boxes,
                        const std::array<bool, model::kParameterCount>& unknown) {
   double total = 0;
@@ -35,63 +20,6 @@ double unknowns_volume(const std::vector<Box>& boxes,
     total += v;
   }
   return total;
-}
-
-std::string guaranteed_json(const GuaranteedResult& r, const SampleConstraints& constraints) {
-  std::ostringstream out;
-  const auto& p = r.paving;
-  out << "{\"unknowns\": [";
-  bool first = true;
-  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
-    if (!r.unknown[k]) continue;
-    out << (first ? "" : ", ") << "\"" << model::kParameterNames[k] << "\"";
-    first = false;
-  }
-  out << "], \"parameters\": [";
-  for (std::size_t k = 0; k < model::kParameterCount; ++k)
-    out << (k ? ", " : "") << "\"" << model::kParameterNames[k] << "\"";
-  out << "], \"samples\": " << r.samples << ", \"q\": " << r.q
-      << ", \"prior\": " << box_json(p.prior) << ", \"boxes_tested\": " << p.boxes_tested
-      << ", \"bisections\": " << p.bisections << ", \"inner_count\": " << p.inner.size()
-      << ", \"probed_inner_count\": " << p.probed_inner
-      << ", \"boundary_count\": " << p.boundary.size() << ", \"outer_count\": " << p.outer_count
-      << ", \"truncated\": " << (p.truncated ? "true" : "false")
-      << ", \"seconds\": " << text::json_number(p.seconds)
-      << ", \"empty\": " << (r.empty ? "true" : "false");
-  if (!r.empty) {
-    out << ", \"outer_hull\": " << box_json(p.outer_hull());
-    if (!p.inner.empty()) {
-      out << ", \"inner_hull\": " << box_json(p.inner_hull());
-      // The largest inner box: parameters every one of which is proven consistent with the data.
-      const auto largest =
-          std::max_element(p.inner.begin(), p.inner.end(), [&](const Box& a, const Box& b) {
-            return unknowns_volume({a}, r.unknown) < unknowns_volume({b}, r.unknown);
-          });
-      out << ", \"central_feasible_box\": " << box_json(*largest);
-    }
-  }
-  out << ", \"inner_measure\": " << text::json_number(unknowns_volume(p.inner, r.unknown))
-      << ", \"boundary_measure\": " << text::json_number(unknowns_volume(p.boundary, r.unknown));
-  out << ", \"finding\": \"" << text::json_escape(r.finding) << "\"";
-  const auto samples = [&](const char* key, const std::vector<std::size_t>& list) {
-    out << ", \"" << key << "\": [";
-    for (std::size_t k = 0; k < list.size(); ++k) {
-      const IntervalSample& s = constraints.sample(list[k]);
-      out << (k ? ", " : "") << "{\"experiment\": \"" << text::json_escape(s.experiment)
-          << "\", \"index\": " << s.index << ", \"t_s\": " << text::json_number(s.t_s) << "}";
-    }
-    out << "]";
-  };
-  samples("inconsistent_samples", r.inconsistent_samples);
-  samples("excluding_samples", r.excluding_samples);
-  out << ", \"inner\": [";
-  for (std::size_t k = 0; k < p.inner.size(); ++k) out << (k ? ", " : "") << box_json(p.inner[k]);
-  out << "], \"boundary\": [";
-  for (std::size_t k = 0; k < p.boundary.size(); ++k) {
-    out << (k ? ", " : "") << box_json(p.boundary[k]);
-  }
-  out << "]}";
-  return out.str();
 }
 
 std::string svg_paving(const GuaranteedResult& r, int xp, int yp,

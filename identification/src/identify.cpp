@@ -15,9 +15,6 @@
 
 namespace furuta::identification {
 
-using text::json_number;
-using text::json_string;
-
 Identification identify(const std::vector<RawExperiment>& experiments,
                         const std::optional<RawExperiment>& validation,
                         const IdentifyOptions& options, const model::MotorData& motor,
@@ -99,28 +96,6 @@ std::string sci(double v, int precision = 5) {
   return s.str();
 }
 
-std::string json_vector(const model::Parameters<double>& v) {
-  std::string out = "{";
-  for (std::size_t k = 0; k < v.size(); ++k) {
-    out += (k ? ", " : "") + json_string(model::kParameterNames[k]) + ": " + json_number(v[k]);
-  }
-  return out + "}";
-}
-
-std::string json_lsmi(const LsmiResult& r) {
-  std::string warnings = "[";
-  for (std::size_t i = 0; i < r.warnings.size(); ++i) {
-    warnings += (i ? ", " : "") + json_string(r.warnings[i]);
-  }
-  warnings += "]";
-  return "{\"estimate\": " + json_vector(r.estimate) + ", \"std_dev\": " + json_vector(r.std_dev) +
-         ", \"relative_sd\": " + json_vector(r.relative_sd) +
-         ", \"sigma_nm\": " + json_number(r.sigma) +
-         ", \"condition_number\": " + json_number(r.condition_number) +
-         ", \"rank\": " + std::to_string(r.rank) + ", \"rows\": " + std::to_string(r.rows) +
-         ", \"warnings\": " + warnings + "}";
-}
-
 }  // namespace
 
 std::string format_table_one(const Identification& id) {
@@ -163,40 +138,6 @@ std::string format_table_one(const Identification& id) {
         << " % of the torque range (the paper: 6.4 % with LSMI)\n";
   }
   for (const auto& warning : id.warnings) out << "warning: " << warning << "\n";
-  return out.str();
-}
-
-std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
-                         const std::string& software_version, const std::string& more) {
-  std::ostringstream out;
-  out << "{\n  \"software_version\": " << json_string(software_version) << ",\n  \"inputs\": [";
-  for (std::size_t i = 0; i < inputs.size(); ++i) {
-    out << (i ? ", " : "") << "{\"path\": " << json_string(inputs[i].path)
-        << ", \"sha256\": " << json_string(inputs[i].sha256) << "}";
-  }
-  out << "],\n  \"experiments\": [";
-  for (std::size_t i = 0; i < id.processed.size(); ++i) {
-    out << (i ? ",\n    " : "\n    ") << "{\"name\": " << json_string(id.processed[i].name)
-        << ", \"samples\": " << id.processed[i].size()
-        << ", \"sample_period_s\": " << json_number(id.processed[i].sample_period_s)
-        << ", \"lsmi\": " << json_lsmi(id.per_experiment[i]) << "}";
-  }
-  out << "],\n  \"combined\": " << json_lsmi(id.combined);
-  out << ",\n  \"input_lag_s\": " << json_number(id.input_lag_s);
-  if (id.nominal) out << ",\n  \"nominal\": " << json_vector(*id.nominal);
-  if (id.truth) out << ",\n  \"truth\": " << json_vector(*id.truth);
-  if (id.validation) {
-    out << ",\n  \"validation\": {\"name\": " << json_string(id.validation->name)
-        << ", \"rmse_nm\": " << json_number(id.validation->fit.rmse_nm)
-        << ", \"rmse_percent_of_range\": " << json_number(id.validation->fit.rmse_percent_of_range)
-        << "}";
-  }
-  if (!more.empty()) out << ",\n  " << more;
-  out << ",\n  \"warnings\": [";
-  for (std::size_t i = 0; i < id.warnings.size(); ++i) {
-    out << (i ? ", " : "") << json_string(id.warnings[i]);
-  }
-  out << "]\n}\n";
   return out.str();
 }
 

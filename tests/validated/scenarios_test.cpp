@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
-#include <nlohmann/json.hpp>
 #include <numbers>
 #include <regex>
 #include <sstream>
@@ -222,17 +221,6 @@ TEST_F(ShortRun, ResultTableJsonAndFigure) {
   EXPECT_NE(table.find("(a)"), std::string::npos);
   EXPECT_NE(table.find("LSMI"), std::string::npos);
   EXPECT_NE(table.find("0.200 / 0.2"), std::string::npos);
-
-  const nlohmann::json j = nlohmann::json::parse(scenarios_json({r}));
-  ASSERT_TRUE(j.is_array());
-  ASSERT_EQ(j.size(), 1u);
-  EXPECT_EQ(j[0]["scenario"], 1);
-  EXPECT_EQ(j[0]["parameter_set"], "LSMI");
-  EXPECT_EQ(j[0]["status"], "ok");
-  EXPECT_EQ(j[0]["coverage"]["q2_step"]["covered"], r.q2_step.covered);
-  EXPECT_DOUBLE_EQ(j[0]["coverage"]["q2_interpolated"]["rate"].get<double>(),
-                   r.q2_interpolated.rate());
-  EXPECT_DOUBLE_EQ(j[0]["parameters"]["fv1"][0].get<double>(), set.parameters.fv1.lo());
 
   const std::string svg = svg_scenario(r);
   EXPECT_EQ(svg.rfind("<svg", 0), 0u);

@@ -14,20 +14,12 @@
 
 namespace furuta::validated {
 
-using text::json_number;
-using text::json_string;
-
 namespace {
 
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 double deg_to_rad(double deg) {
   return deg / kDegPerRad;
-}
-
-std::string json_interval(const interval::Interval& x) {
-  if (x.is_empty()) return "null";
-  return "[" + json_number(x.lo()) + ", " + json_number(x.hi()) + "]";
 }
 
 std::string fixed(double v, int digits) {
@@ -45,15 +37,6 @@ std::string short_number(double v) {
 
 std::string percent(double rate) {
   return fixed(100.0 * rate, 1) + " %";
-}
-
-std::string coverage_json(const Coverage& c) {
-  return "{\"measurements\": " + std::to_string(c.measurements) +
-         ", \"in_time\": " + std::to_string(c.in_time) +
-         ", \"covered\": " + std::to_string(c.covered) +
-         ", \"outside_time\": " + std::to_string(c.outside_time) +
-         ", \"rate\": " + json_number(c.rate()) +
-         ", \"rate_in_time\": " + json_number(c.rate_in_time()) + "}";
 }
 
 }  // namespace
@@ -319,42 +302,6 @@ std::string format_table_three(const std::vector<ScenarioResult>& results) {
     if (!r.reason.empty()) out << ": " << r.reason;
     out << "\n";
   }
-  return out.str();
-}
-
-std::string scenarios_json(const std::vector<ScenarioResult>& results) {
-  std::ostringstream out;
-  out << "[";
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const ScenarioResult& r = results[i];
-    const model::Parameters<Interval>& p = r.parameters.parameters;
-    out << (i ? ",\n    " : "\n    ") << "{\"scenario\": " << r.scenario.number
-        << ", \"label\": " << json_string(r.scenario.label())
-        << ", \"description\": " << json_string(r.scenario.description())
-        << ", \"q2_initial_rad\": " << json_number(r.scenario.q2_initial_rad)
-        << ", \"torque_nm\": " << json_number(r.scenario.torque_nm)
-        << ", \"duration_s\": " << json_number(r.scenario.duration_s)
-        << ", \"parameter_set\": " << json_string(r.parameters.name) << ", \"parameters\": {"
-        << "\"mu1\": " << json_interval(p.mu1) << ", \"mu2\": " << json_interval(p.mu2)
-        << ", \"mu3\": " << json_interval(p.mu3) << ", \"mu4\": " << json_interval(p.mu4)
-        << ", \"mug\": " << json_interval(p.mug) << ", \"fv1\": " << json_interval(p.fv1)
-        << ", \"fv2\": " << json_interval(p.fv2) << "}"
-        << ", \"initial_uncertainty\": {\"q1_rad\": " << json_number(r.uncertainty.q1_rad)
-        << ", \"dq1_rad_s\": " << json_number(r.uncertainty.dq1_rad_s)
-        << ", \"q2_rad\": " << json_number(r.uncertainty.q2_rad)
-        << ", \"dq2_rad_s\": " << json_number(r.uncertainty.dq2_rad_s) << "}"
-        << ", \"status\": " << json_string(to_string(r.status))
-        << ", \"reason\": " << json_string(r.reason)
-        << ", \"t_reached_s\": " << json_number(r.t_reached_s) << ", \"steps\": " << r.steps
-        << ", \"pieces\": " << r.pieces << ", \"seconds\": " << json_number(r.seconds)
-        << ", \"coverage\": {\"q2_step\": " << coverage_json(r.q2_step)
-        << ", \"q2_interpolated\": " << coverage_json(r.q2_interpolated)
-        << ", \"q1_step\": " << coverage_json(r.q1_step)
-        << ", \"q1_interpolated\": " << coverage_json(r.q1_interpolated) << "}"
-        << ", \"q2_mean_width_rad\": " << json_number(r.q2_mean_width_rad)
-        << ", \"q2_max_width_rad\": " << json_number(r.q2_max_width_rad) << "}";
-  }
-  out << "]";
   return out.str();
 }
 

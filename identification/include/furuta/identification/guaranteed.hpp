@@ -161,9 +161,6 @@ struct GuaranteedResult {
 GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
                                            const GuaranteedOptions& options);
 
-// The paving as JSON: prior, unknowns, counts, time, hulls, the unknowns' area (2 unknowns) and
-// every inner / boundary box (outer boxes counted only), inconsistent samples, the finding.
-std::string guaranteed_json(const GuaranteedResult& result, const SampleConstraints& constraints);
 // Fig. 4: the paving projected on two parameters (default fv1, fv2): inner, boundary and outer
 // boxes in three colours, axes with units, the truth or a reference point if given.
 std::string svg_paving(const GuaranteedResult& result, int x_parameter = 5, int y_parameter = 6,

@@ -52,11 +52,6 @@ struct InputFile {
   std::string path;
   std::string sha256;
 };
-// Every figure above as JSON, with the software version and the inputs' checksums.
-// `more` holds further members ("\"sivia\": {...}") appended to the top-level object.
-std::string results_json(const Identification& id, const std::vector<InputFile>& inputs,
-                         const std::string& software_version, const std::string& more = "");
-
 struct DataErrorBounds;  // guaranteed.hpp
 
 // SVG figures: measured signals with their uncertainty bands (Fig. 2/3), measured vs predicted

@@ -178,8 +178,6 @@ ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& p
 // modes, over all samples and over those reached) and q1, the q2 tube's mean width, the status;
 // with the paper's figures for comparison.
 std::string format_table_three(const std::vector<ScenarioResult>& results);
-// The same rows as a JSON array (parameters as [lo, hi], coverage counts and rates).
-std::string scenarios_json(const std::vector<ScenarioResult>& results);
 // Fig. 6: the q2 tube (filled step boxes) with the measured q2 over it (samples outside the
 // paper's test in red), axes in s and deg, the scenario as the title, the coverage rates in the
 // legend. A self-contained SVG document.

@@ -1,0 +1,67 @@
+#pragma once
+// The machine-readable outputs as JSON values (nlohmann::ordered_json: the keys stay in the order
+// they are written) and their text. results.json, sivia.json and simulate.json keep the layout
+// they always had; report/README.md lists the files.
+//
+//   Json doc = results_json(id, inputs, "furuta 0.1.0");
+//   write(dir / "results.json", json_text(doc));
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "furuta/identification/guaranteed.hpp"
+#include "furuta/identification/identify.hpp"
+#include "furuta/model/model.hpp"
+#include "furuta/validated/scenarios.hpp"
+
+namespace furuta::report {
+
+using Json = nlohmann::ordered_json;
+
+// A document's text: an object's members one per line, every value on one line ({"a": 1, "b":
+// [1, 2]}), numbers in the shortest form that reads back as the same double, NaN and infinities as
+// null (JSON has neither), strings UTF-8 (invalid bytes replaced). Ends with a newline.
+std::string json_text(const Json& document);
+// One value on one line, as inside json_text.
+std::string json_line(const Json& value);
+
+// {"mu1": ..., ..., "fv2": ...}
+Json parameters_json(const model::Parameters<double>& p);
+// [lo, hi], or null for an empty interval.
+Json interval_json(const interval::Interval& x);
+// [[lo, hi], ...] per component.
+Json box_json(const interval::Box& box);
+
+// One LSMI fit: estimate, std_dev, relative_sd, sigma_nm, condition_number, rank, rows, warnings.
+Json lsmi_json(const identification::LsmiResult& r);
+
+// results.json: software version, inputs (path, sha256), experiments, combined, input lag, CAD,
+// truth, validation; `more`'s members ("sivia", "simulation") next; the warnings last.
+Json results_json(const identification::Identification& id,
+                  const std::vector<identification::InputFile>& inputs,
+                  const std::string& software_version, const Json& more = Json::object());
+
+// The paving (sivia.json and results.json's "sivia"): prior, unknowns, counts, time, hulls, the
+// unknowns' area and every inner / boundary box (outer boxes counted only), the samples found
+// inconsistent or excluding (`samples` are the data boxes SIVIA was given, by index), the finding.
+Json sivia_json(const identification::GuaranteedResult& result,
+                const std::vector<identification::IntervalSample>& samples);
+
+// Table III's rows: scenario, parameters as [lo, hi], initial uncertainty, status, coverage.
+Json scenarios_json(const std::vector<validated::ScenarioResult>& results);
+
+// What the scenarios were measured and integrated with, beside their rows ("simulation").
+struct SimulationSetup {
+  model::Parameters<double> truth;
+  std::string truth_source;
+  validated::MeasurementOptions measurement;
+  double arm_resolution_rad = 0, pendulum_resolution_rad = 0;  // as measured
+  validated::IntegratorOptions integrator;
+  std::size_t pieces = 1;
+  std::vector<std::string> figures;  // file names
+};
+Json simulation_json(const SimulationSetup& setup,
+                     const std::vector<validated::ScenarioResult>& results);
+
+}  // namespace furuta::report

@@ -1,0 +1,184 @@
+// results.json and its parts: LSMI, the SIVIA paving, the scenarios.
+#include <algorithm>
+
+#include "furuta/report/json.hpp"
+
+namespace furuta::report {
+
+Json parameters_json(const model::Parameters<double>& p) {
+  Json j = Json::object();
+  for (std::size_t k = 0; k < p.size(); ++k) j[model::kParameterNames[k]] = p[k];
+  return j;
+}
+
+Json interval_json(const interval::Interval& x) {
+  if (x.is_empty()) return nullptr;
+  return Json::array({x.lo(), x.hi()});
+}
+
+Json box_json(const interval::Box& box) {
+  Json j = Json::array();
+  for (std::size_t k = 0; k < box.size(); ++k) j.push_back(interval_json(box[k]));
+  return j;
+}
+
+Json lsmi_json(const identification::LsmiResult& r) {
+  return Json{{"estimate", parameters_json(r.estimate)},
+              {"std_dev", parameters_json(r.std_dev)},
+              {"relative_sd", parameters_json(r.relative_sd)},
+              {"sigma_nm", r.sigma},
+              {"condition_number", r.condition_number},
+              {"rank", r.rank},
+              {"rows", r.rows},
+              {"warnings", r.warnings}};
+}
+
+Json results_json(const identification::Identification& id,
+                  const std::vector<identification::InputFile>& inputs,
+                  const std::string& software_version, const Json& more) {
+  Json j;
+  j["software_version"] = software_version;
+  j["inputs"] = Json::array();
+  for (const auto& input : inputs) {
+    j["inputs"].push_back(Json{{"path", input.path}, {"sha256", input.sha256}});
+  }
+  j["experiments"] = Json::array();
+  for (std::size_t i = 0; i < id.processed.size(); ++i) {
+    j["experiments"].push_back(Json{{"name", id.processed[i].name},
+                                    {"samples", id.processed[i].size()},
+                                    {"sample_period_s", id.processed[i].sample_period_s},
+                                    {"lsmi", lsmi_json(id.per_experiment[i])}});
+  }
+  j["combined"] = lsmi_json(id.combined);
+  j["input_lag_s"] = id.input_lag_s;
+  if (id.nominal) j["nominal"] = parameters_json(*id.nominal);
+  if (id.truth) j["truth"] = parameters_json(*id.truth);
+  if (id.validation) {
+    j["validation"] = Json{{"name", id.validation->name},
+                           {"rmse_nm", id.validation->fit.rmse_nm},
+                           {"rmse_percent_of_range", id.validation->fit.rmse_percent_of_range}};
+  }
+  for (const auto& [key, value] : more.items()) j[key] = value;
+  j["warnings"] = id.warnings;
+  return j;
+}
+
+Json sivia_json(const identification::GuaranteedResult& r,
+                const std::vector<identification::IntervalSample>& samples) {
+  const interval::SubPaving& p = r.paving;
+  Json j;
+  j["unknowns"] = Json::array();
+  j["parameters"] = Json::array();
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    if (r.unknown[k]) j["unknowns"].push_back(model::kParameterNames[k]);
+    j["parameters"].push_back(model::kParameterNames[k]);
+  }
+  j["samples"] = r.samples;
+  j["q"] = r.q;
+  j["prior"] = box_json(p.prior);
+  j["boxes_tested"] = p.boxes_tested;
+  j["bisections"] = p.bisections;
+  j["inner_count"] = p.inner.size();
+  j["probed_inner_count"] = p.probed_inner;
+  j["boundary_count"] = p.boundary.size();
+  j["outer_count"] = p.outer_count;
+  j["truncated"] = p.truncated;
+  j["seconds"] = p.seconds;
+  j["empty"] = r.empty;
+  if (!r.empty) {
+    j["outer_hull"] = box_json(p.outer_hull());
+    if (!p.inner.empty()) {
+      j["inner_hull"] = box_json(p.inner_hull());
+      // The largest inner box: parameters every one of which is proven consistent with the data.
+      const auto largest = std::max_element(
+          p.inner.begin(), p.inner.end(), [&](const interval::Box& a, const interval::Box& b) {
+            return identification::unknowns_volume({a}, r.unknown) <
+                   identification::unknowns_volume({b}, r.unknown);
+          });
+      j["central_feasible_box"] = box_json(*largest);
+    }
+  }
+  j["inner_measure"] = identification::unknowns_volume(p.inner, r.unknown);
+  j["boundary_measure"] = identification::unknowns_volume(p.boundary, r.unknown);
+  j["finding"] = r.finding;
+  const auto sample_list = [&](const std::vector<std::size_t>& list) {
+    Json out = Json::array();
+    for (const std::size_t i : list) {
+      const identification::IntervalSample& s = samples.at(i);
+      out.push_back(Json{{"experiment", s.experiment}, {"index", s.index}, {"t_s", s.t_s}});
+    }
+    return out;
+  };
+  j["inconsistent_samples"] = sample_list(r.inconsistent_samples);
+  j["excluding_samples"] = sample_list(r.excluding_samples);
+  j["inner"] = Json::array();
+  for (const interval::Box& b : p.inner) j["inner"].push_back(box_json(b));
+  j["boundary"] = Json::array();
+  for (const interval::Box& b : p.boundary) j["boundary"].push_back(box_json(b));
+  return j;
+}
+
+namespace {
+
+Json coverage_json(const validated::Coverage& c) {
+  return Json{
+      {"measurements", c.measurements}, {"in_time", c.in_time}, {"covered", c.covered},
+      {"outside_time", c.outside_time}, {"rate", c.rate()},     {"rate_in_time", c.rate_in_time()}};
+}
+
+}  // namespace
+
+Json scenarios_json(const std::vector<validated::ScenarioResult>& results) {
+  Json rows = Json::array();
+  for (const validated::ScenarioResult& r : results) {
+    const model::Parameters<interval::Interval>& p = r.parameters.parameters;
+    Json parameters = Json::object();
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      parameters[model::kParameterNames[k]] = interval_json(p[k]);
+    }
+    rows.push_back(Json{{"scenario", r.scenario.number},
+                        {"label", r.scenario.label()},
+                        {"description", r.scenario.description()},
+                        {"q2_initial_rad", r.scenario.q2_initial_rad},
+                        {"torque_nm", r.scenario.torque_nm},
+                        {"duration_s", r.scenario.duration_s},
+                        {"parameter_set", r.parameters.name},
+                        {"parameters", parameters},
+                        {"initial_uncertainty", Json{{"q1_rad", r.uncertainty.q1_rad},
+                                                     {"dq1_rad_s", r.uncertainty.dq1_rad_s},
+                                                     {"q2_rad", r.uncertainty.q2_rad},
+                                                     {"dq2_rad_s", r.uncertainty.dq2_rad_s}}},
+                        {"status", validated::to_string(r.status)},
+                        {"reason", r.reason},
+                        {"t_reached_s", r.t_reached_s},
+                        {"steps", r.steps},
+                        {"pieces", r.pieces},
+                        {"seconds", r.seconds},
+                        {"coverage", Json{{"q2_step", coverage_json(r.q2_step)},
+                                          {"q2_interpolated", coverage_json(r.q2_interpolated)},
+                                          {"q1_step", coverage_json(r.q1_step)},
+                                          {"q1_interpolated", coverage_json(r.q1_interpolated)}}},
+                        {"q2_mean_width_rad", r.q2_mean_width_rad},
+                        {"q2_max_width_rad", r.q2_max_width_rad}});
+  }
+  return rows;
+}
+
+Json simulation_json(const SimulationSetup& s,
+                     const std::vector<validated::ScenarioResult>& results) {
+  return Json{{"truth", parameters_json(s.truth)},
+              {"truth_source", s.truth_source},
+              {"measurement", Json{{"step_s", s.measurement.step_s},
+                                   {"sample_period_s", s.measurement.sample_period_s},
+                                   {"arm_resolution_rad", s.arm_resolution_rad},
+                                   {"pendulum_resolution_rad", s.pendulum_resolution_rad}}},
+              {"integrator", Json{{"order", s.integrator.order},
+                                  {"tolerance", s.integrator.tolerance},
+                                  {"h_min", s.integrator.h_min},
+                                  {"max_width", s.integrator.max_width},
+                                  {"pieces", s.pieces}}},
+              {"figures", s.figures},
+              {"results", scenarios_json(results)}};
+}
+
+}  // namespace furuta::report
