@@ -18,6 +18,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/report.hpp"
+#include "furuta/report/tables.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::app {
@@ -148,31 +149,7 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
   }
   run.svg = svg_paving(r, 5, 6, truth ? &reference : nullptr);
   if (!r.empty) run.outer_hull = r.paving.outer_hull();
-  std::ostringstream s;
-  s << "\nSIVIA (" << r.samples << " samples, q = " << r.q << "): " << r.paving.inner.size()
-    << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
-    << " outer boxes; " << r.paving.boxes_tested << " tested in " << r.paving.seconds << " s"
-    << (r.paving.truncated ? " (truncated)" : "") << "\n";
-  if (r.empty) {
-    s << r.finding << "\n";
-  } else {
-    const interval::Box hull = r.paving.outer_hull();
-    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
-      if (!g.unknown[k]) continue;
-      s << "  " << model::kParameterNames[k] << " in " << hull[static_cast<std::size_t>(k)] << " "
-        << model::kParameterUnits[k];
-      if (truth) {
-        const model::Parameters<double> t = *truth;
-        s << (hull[static_cast<std::size_t>(k)].contains(t[k]) ? "  (contains the truth)"
-                                                               : "  (misses the truth)");
-      }
-      s << "\n";
-    }
-    if (!r.inconsistent_samples.empty()) {
-      s << "  " << r.inconsistent_samples.size() << " samples inconsistent (tolerated by q)\n";
-    }
-  }
-  run.summary = s.str();
+  run.summary = report::sivia_summary_text(r, truth);
   run.result = r;
   return run;
 }
@@ -213,10 +190,7 @@ SimulationRun run_simulation(const identification::Identification& id,
   run.json = report.json;
   run.source = source;
   run.results = report.results;
-  std::string sivia_note;
-  if (options.sivia && !sivia_hull) sivia_note = "(SIVIA's set is empty: no SIVIA tubes)\n";
-  run.summary = "\nValidation by guaranteed simulation, measurements from " + source + ":\n" +
-                sivia_note + report.table;
+  run.summary = report::simulation_summary_text(source, options.sivia && !sivia_hull, run.results);
   return run;
 }
 
@@ -418,7 +392,7 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   for (const auto& path : options.csvs) add_input(path);
   if (!options.validate.empty()) add_input(options.validate);
   if (csv_input) add_input(options.import_spec);
-  const std::string table = identification::format_table_one(id);
+  const std::string table = report::format_table_one(id);
   write_file(options.output_dir / "table.txt", table);
   report::Json more = report::Json::object();
   std::string sivia_summary;

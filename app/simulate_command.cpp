@@ -15,6 +15,7 @@
 
 #include "commands.hpp"
 #include "furuta/daemon/rig_connection.hpp"
+#include "furuta/report/tables.hpp"
 
 namespace furuta::app {
 
@@ -197,7 +198,7 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
   }
   if (tty) std::fprintf(stderr, "\r%60s\r", "");
 
-  report.table = validated::format_table_three(results);
+  report.table = report::format_table_three(results);
   const validated::ScenarioMeasurement& m0 =
       results.empty() ? validated::ScenarioMeasurement{} : results.front().measurement;
   report::SimulationSetup setup;

@@ -90,59 +90,6 @@ Identification identify(const std::vector<RawExperiment>& experiments,
 
 namespace {
 
-std::string sci(double v, int precision = 5) {
-  std::ostringstream s;
-  s << std::scientific << std::setprecision(precision) << v;
-  return s.str();
-}
-
-}  // namespace
-
-std::string format_table_one(const Identification& id) {
-  std::ostringstream out;
-  const int w = 26;
-  out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
-  for (const JointSeries& s : id.processed) {
-    std::string name = s.name.size() > 24 ? s.name.substr(s.name.size() - 24) : s.name;
-    out << std::setw(w) << name;
-  }
-  out << std::setw(w) << "all experiments";
-  if (id.nominal) out << std::setw(13) << "CAD";
-  if (id.truth) out << std::setw(13) << "truth";
-  out << "\n";
-  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
-    out << std::left << std::setw(6) << model::kParameterNames[k] << std::setw(13)
-        << model::kParameterUnits[k];
-    auto cell = [&](const LsmiResult& r) {
-      return sci(r.estimate[k], 4) + " +-" + sci(r.std_dev[k], 1);
-    };
-    for (const LsmiResult& r : id.per_experiment) out << std::setw(w) << cell(r);
-    out << std::setw(w) << cell(id.combined);
-    if (id.nominal)
-      out << std::setw(13) << ((*id.nominal)[k] != 0 ? sci((*id.nominal)[k], 4) : "-");
-    if (id.truth) out << std::setw(13) << sci((*id.truth)[k], 4);
-    out << "\n";
-  }
-  out << std::left << std::setw(19) << "condition number";
-  for (const LsmiResult& r : id.per_experiment) out << std::setw(w) << sci(r.condition_number, 2);
-  out << std::setw(w) << sci(id.combined.condition_number, 2) << "\n";
-  out << std::left << std::setw(19) << "residual sigma N m";
-  for (const LsmiResult& r : id.per_experiment) out << std::setw(w) << sci(r.sigma, 2);
-  out << std::setw(w) << sci(id.combined.sigma, 2) << "\n";
-  out << "input lag (torque formed from the input this much earlier): " << std::fixed
-      << std::setprecision(3) << id.input_lag_s * 1e3 << " ms\n";
-  if (id.validation) {
-    out << "\nheld-out torque on " << id.validation->name << ": RMSE "
-        << sci(id.validation->fit.rmse_nm, 3) << " N m = " << std::fixed << std::setprecision(2)
-        << id.validation->fit.rmse_percent_of_range
-        << " % of the torque range (the paper: 6.4 % with LSMI)\n";
-  }
-  for (const auto& warning : id.warnings) out << "warning: " << warning << "\n";
-  return out.str();
-}
-
-namespace {
-
 // A small line plot: each series a polyline, each band (lower, upper) filled under them.
 struct Trace {
   const std::vector<double>* y;

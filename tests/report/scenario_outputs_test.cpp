@@ -1,11 +1,12 @@
 // What a person or a program reads of the paper's scenarios (moved here from
-// tests/validated/scenarios_test.cpp with the code): Table III's rows as JSON.
+// tests/validated/scenarios_test.cpp with the code): Table III as text and as JSON.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "furuta/report/json.hpp"
+#include "furuta/report/tables.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::report {
@@ -31,6 +32,16 @@ class ScenarioOutputs : public ::testing::Test {
     return t;
   }
 };
+
+TEST_F(ScenarioOutputs, TableThree) {
+  const ScenarioMeasurement m = measure_scenario(scenario(), model::paper_run1());
+  const ScenarioResult r =
+      evaluate_tubes(scenario(), point_parameters("LSMI", model::paper_run1()), {}, m, tubes());
+  const std::string table = format_table_three({r});
+  EXPECT_NE(table.find("(a)"), std::string::npos);
+  EXPECT_NE(table.find("LSMI"), std::string::npos);
+  EXPECT_NE(table.find("0.200 / 0.2"), std::string::npos);
+}
 
 TEST_F(ScenarioOutputs, ResultsAsJson) {
   const ScenarioMeasurement m = measure_scenario(scenario(), model::paper_run1());

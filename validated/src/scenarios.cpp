@@ -272,39 +272,6 @@ ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& p
   return evaluate_tubes(scenario, parameters, uncertainty, measurement, tubes);
 }
 
-std::string format_table_three(const std::vector<ScenarioResult>& results) {
-  std::ostringstream out;
-  out << "Table III: coverage of the measurements by the tubes, over all samples (and over the "
-         "samples reached)\n"
-         "  step: the paper's test (sample time in a step, value in the step's box); interp.: "
-         "the enclosure at the sample time\n"
-         "  paper, q2 step: 46/61/38/25 % with IA (SIVIA) parameters, 41/34/20/21 % with LSMI\n";
-  out << std::left << std::setw(5) << "scen" << std::setw(12) << "parameters" << std::right
-      << std::setw(14) << "reached [s]" << std::setw(7) << "steps" << std::setw(20) << "q2 step %"
-      << std::setw(20) << "q2 interp. %" << std::setw(9) << "q1 step" << std::setw(9) << "q1 int."
-      << std::setw(13) << "q2 width"
-      << "  status\n";
-  out << std::left << std::setw(5) << "" << std::setw(12) << "" << std::right << std::setw(14) << ""
-      << std::setw(7) << "" << std::setw(20) << "all (reached)" << std::setw(20) << "all (reached)"
-      << std::setw(9) << "%" << std::setw(9) << "%" << std::setw(13) << "mean [deg]"
-      << "\n";
-  for (const ScenarioResult& r : results) {
-    const auto both = [](const Coverage& c) {
-      return fixed(100 * c.rate(), 1) + " (" + fixed(100 * c.rate_in_time(), 1) + ")";
-    };
-    out << std::left << std::setw(5) << r.scenario.label() << std::setw(12) << r.parameters.name
-        << std::right << std::setw(14)
-        << (fixed(r.t_reached_s, 3) + " / " + fixed(r.scenario.duration_s, 1)) << std::setw(7)
-        << r.steps << std::setw(20) << both(r.q2_step) << std::setw(20) << both(r.q2_interpolated)
-        << std::setw(9) << fixed(100 * r.q1_step.rate(), 1) << std::setw(9)
-        << fixed(100 * r.q1_interpolated.rate(), 1) << std::setw(13)
-        << fixed(r.q2_mean_width_rad * kDegPerRad, 3) << "  " << to_string(r.status);
-    if (!r.reason.empty()) out << ": " << r.reason;
-    out << "\n";
-  }
-  return out.str();
-}
-
 std::string svg_scenario(const ScenarioResult& r) {
   const double width = 860, height = 440;
   const double left = 70, right = 20, top = 50, bottom = 120;

@@ -44,10 +44,6 @@ Identification identify(const std::vector<RawExperiment>& experiments,
                         const IdentifyOptions& options, const model::MotorData& motor,
                         const VoltageMotor& voltage_motor = {});
 
-// Table I as text: parameter, unit, one column per experiment, all, (CAD), (truth); with standard
-// deviations.
-std::string format_table_one(const Identification& id);
-
 struct InputFile {
   std::string path;
   std::string sha256;

@@ -7,7 +7,6 @@
 //   const Scenario s = paper_scenario(1);
 //   const ScenarioMeasurement m = measure_scenario(s, model::paper_run1());
 //   const ScenarioResult r = evaluate_scenario(s, point_parameters("LSMI", estimate), m, {}, {});
-//   std::cout << format_table_three({r});
 
 #include <array>
 #include <cstddef>
@@ -174,10 +173,6 @@ ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& p
                                  const IntegratorOptions& options,
                                  const SplitOptions& split = single_tube());
 
-// Table III as text: per scenario and parameter set, time reached, steps, coverage of q2 (both
-// modes, over all samples and over those reached) and q1, the q2 tube's mean width, the status;
-// with the paper's figures for comparison.
-std::string format_table_three(const std::vector<ScenarioResult>& results);
 // Fig. 6: the q2 tube (filled step boxes) with the measured q2 over it (samples outside the
 // paper's test in red), axes in s and deg, the scenario as the title, the coverage rates in the
 // legend. A self-contained SVG document.

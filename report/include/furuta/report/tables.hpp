@@ -1,0 +1,35 @@
+#pragma once
+// The text tables a terminal and table.txt / table3.txt show: Table I (LSMI), the SIVIA summary,
+// Table III (coverage of the scenarios' measurements by the tubes).
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "furuta/identification/guaranteed.hpp"
+#include "furuta/identification/identify.hpp"
+#include "furuta/model/model.hpp"
+#include "furuta/validated/scenarios.hpp"
+
+namespace furuta::report {
+
+// Table I: parameter, unit, one column per experiment, all, (CAD), (truth), each +- its standard
+// deviation; condition numbers, residuals, the input lag, the held-out RMSE and the warnings.
+std::string format_table_one(const identification::Identification& id);
+
+// "\nSIVIA (n samples, q = ..): counts ..." and each unknown's hull (with whether it holds the
+// truth, when there is one), or the finding when the set is empty.
+std::string sivia_summary_text(const identification::GuaranteedResult& result,
+                               const std::optional<model::Parameters<double>>& truth);
+
+// Table III: per scenario and parameter set, time reached, steps, coverage of q2 (both modes,
+// over all samples and over those reached) and q1, the q2 tube's mean width, the status; with
+// the paper's figures for comparison.
+std::string format_table_three(const std::vector<validated::ScenarioResult>& results);
+
+// "\nValidation by guaranteed simulation, measurements from <source>:" and Table III; a note
+// first when SIVIA's set was empty (no SIVIA tubes).
+std::string simulation_summary_text(const std::string& measurement_source, bool sivia_set_empty,
+                                    const std::vector<validated::ScenarioResult>& results);
+
+}  // namespace furuta::report

@@ -1,0 +1,127 @@
+// Table I, the SIVIA summary and Table III as text.
+#include "furuta/report/tables.hpp"
+
+#include <iomanip>
+#include <numbers>
+#include <sstream>
+
+#include "format.hpp"
+
+namespace furuta::report {
+
+namespace {
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+}  // namespace
+
+std::string format_table_one(const identification::Identification& id) {
+  std::ostringstream out;
+  const int w = 26;
+  out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
+  for (const identification::JointSeries& s : id.processed) {
+    std::string name = s.name.size() > 24 ? s.name.substr(s.name.size() - 24) : s.name;
+    out << std::setw(w) << name;
+  }
+  out << std::setw(w) << "all experiments";
+  if (id.nominal) out << std::setw(13) << "CAD";
+  if (id.truth) out << std::setw(13) << "truth";
+  out << "\n";
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    out << std::left << std::setw(6) << model::kParameterNames[k] << std::setw(13)
+        << model::kParameterUnits[k];
+    auto cell = [&](const identification::LsmiResult& r) {
+      return sci(r.estimate[k], 4) + " +-" + sci(r.std_dev[k], 1);
+    };
+    for (const identification::LsmiResult& r : id.per_experiment) out << std::setw(w) << cell(r);
+    out << std::setw(w) << cell(id.combined);
+    if (id.nominal)
+      out << std::setw(13) << ((*id.nominal)[k] != 0 ? sci((*id.nominal)[k], 4) : "-");
+    if (id.truth) out << std::setw(13) << sci((*id.truth)[k], 4);
+    out << "\n";
+  }
+  out << std::left << std::setw(19) << "condition number";
+  for (const identification::LsmiResult& r : id.per_experiment)
+    out << std::setw(w) << sci(r.condition_number, 2);
+  out << std::setw(w) << sci(id.combined.condition_number, 2) << "\n";
+  out << std::left << std::setw(19) << "residual sigma N m";
+  for (const identification::LsmiResult& r : id.per_experiment)
+    out << std::setw(w) << sci(r.sigma, 2);
+  out << std::setw(w) << sci(id.combined.sigma, 2) << "\n";
+  out << "input lag (torque formed from the input this much earlier): " << std::fixed
+      << std::setprecision(3) << id.input_lag_s * 1e3 << " ms\n";
+  if (id.validation) {
+    out << "\nheld-out torque on " << id.validation->name << ": RMSE "
+        << sci(id.validation->fit.rmse_nm, 3) << " N m = " << std::fixed << std::setprecision(2)
+        << id.validation->fit.rmse_percent_of_range
+        << " % of the torque range (the paper: 6.4 % with LSMI)\n";
+  }
+  for (const auto& warning : id.warnings) out << "warning: " << warning << "\n";
+  return out.str();
+}
+
+std::string sivia_summary_text(const identification::GuaranteedResult& r,
+                               const std::optional<model::Parameters<double>>& truth) {
+  std::ostringstream s;
+  s << "\nSIVIA (" << r.samples << " samples, q = " << r.q << "): " << r.paving.inner.size()
+    << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
+    << " outer boxes; " << r.paving.boxes_tested << " tested in " << r.paving.seconds << " s"
+    << (r.paving.truncated ? " (truncated)" : "") << "\n";
+  if (r.empty) {
+    s << r.finding << "\n";
+    return s.str();
+  }
+  const interval::Box hull = r.paving.outer_hull();
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    if (!r.unknown[k]) continue;
+    s << "  " << model::kParameterNames[k] << " in " << hull[k] << " " << model::kParameterUnits[k];
+    if (truth) {
+      s << (hull[k].contains((*truth)[k]) ? "  (contains the truth)" : "  (misses the truth)");
+    }
+    s << "\n";
+  }
+  if (!r.inconsistent_samples.empty()) {
+    s << "  " << r.inconsistent_samples.size() << " samples inconsistent (tolerated by q)\n";
+  }
+  return s.str();
+}
+
+std::string format_table_three(const std::vector<validated::ScenarioResult>& results) {
+  std::ostringstream out;
+  out << "Table III: coverage of the measurements by the tubes, over all samples (and over the "
+         "samples reached)\n"
+         "  step: the paper's test (sample time in a step, value in the step's box); interp.: "
+         "the enclosure at the sample time\n"
+         "  paper, q2 step: 46/61/38/25 % with IA (SIVIA) parameters, 41/34/20/21 % with LSMI\n";
+  out << std::left << std::setw(5) << "scen" << std::setw(12) << "parameters" << std::right
+      << std::setw(14) << "reached [s]" << std::setw(7) << "steps" << std::setw(20) << "q2 step %"
+      << std::setw(20) << "q2 interp. %" << std::setw(9) << "q1 step" << std::setw(9) << "q1 int."
+      << std::setw(13) << "q2 width"
+      << "  status\n";
+  out << std::left << std::setw(5) << "" << std::setw(12) << "" << std::right << std::setw(14) << ""
+      << std::setw(7) << "" << std::setw(20) << "all (reached)" << std::setw(20) << "all (reached)"
+      << std::setw(9) << "%" << std::setw(9) << "%" << std::setw(13) << "mean [deg]"
+      << "\n";
+  for (const validated::ScenarioResult& r : results) {
+    const auto both = [](const validated::Coverage& c) {
+      return fixed(100 * c.rate(), 1) + " (" + fixed(100 * c.rate_in_time(), 1) + ")";
+    };
+    out << std::left << std::setw(5) << r.scenario.label() << std::setw(12) << r.parameters.name
+        << std::right << std::setw(14)
+        << (fixed(r.t_reached_s, 3) + " / " + fixed(r.scenario.duration_s, 1)) << std::setw(7)
+        << r.steps << std::setw(20) << both(r.q2_step) << std::setw(20) << both(r.q2_interpolated)
+        << std::setw(9) << fixed(100 * r.q1_step.rate(), 1) << std::setw(9)
+        << fixed(100 * r.q1_interpolated.rate(), 1) << std::setw(13)
+        << fixed(r.q2_mean_width_rad * kDegPerRad, 3) << "  " << validated::to_string(r.status);
+    if (!r.reason.empty()) out << ": " << r.reason;
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::string simulation_summary_text(const std::string& measurement_source, bool sivia_set_empty,
+                                    const std::vector<validated::ScenarioResult>& results) {
+  return "\nValidation by guaranteed simulation, measurements from " + measurement_source + ":\n" +
+         (sivia_set_empty ? "(SIVIA's set is empty: no SIVIA tubes)\n" : "") +
+         format_table_three(results);
+}
+
+}  // namespace furuta::report
