@@ -18,6 +18,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/report.hpp"
+#include "furuta/report/svg.hpp"
 #include "furuta/report/tables.hpp"
 #include "furuta/session_log/session_log.hpp"
 
@@ -147,7 +148,7 @@ GuaranteedRun run_guaranteed(const config::SiviaConfig& cfg,
     const auto t = truth->to_array();
     reference.assign(t.begin(), t.end());
   }
-  run.svg = svg_paving(r, 5, 6, truth ? &reference : nullptr);
+  run.svg = report::svg_paving(r, 5, 6, truth ? &reference : nullptr);
   if (!r.empty) run.outer_hull = r.paving.outer_hull();
   run.summary = report::sivia_summary_text(r, truth);
   run.result = r;
@@ -420,14 +421,13 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   const bool bounds_configured = has_bounds(fit->settings.sivia);
   std::vector<std::string> signals;
   for (std::size_t i = 0; i < id.processed.size(); ++i) {
-    signals.push_back(identification::svg_signals(id.raw[i], id.processed[i],
-                                                  fit->angle_resolution_rad,
-                                                  bounds_configured ? &bounds : nullptr));
+    signals.push_back(report::svg_signals(id.raw[i], id.processed[i], fit->angle_resolution_rad,
+                                          bounds_configured ? &bounds : nullptr));
     write_file(options.output_dir / ("signals_" + std::to_string(i + 1) + ".svg"), signals.back());
   }
   if (id.validation) {
     write_file(options.output_dir / "torque_validation.svg",
-               identification::svg_torque_validation(*id.validation));
+               report::svg_torque_validation(*id.validation));
   }
   const report::ReportInput page =
       report_page(id, *fit, identify_options, inputs, signals, bounds_configured,

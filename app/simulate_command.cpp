@@ -15,6 +15,7 @@
 
 #include "commands.hpp"
 #include "furuta/daemon/rig_connection.hpp"
+#include "furuta/report/svg.hpp"
 #include "furuta/report/tables.hpp"
 
 namespace furuta::app {
@@ -184,7 +185,8 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
       // Progress only on a terminal: logs and CI stay quiet.
       if (tty) {
         std::fprintf(stderr, "\rscenario %s, %s parameters: integrating %.1f s ...        ",
-                     scenario.label().c_str(), set.name.c_str(), scenario.duration_s);
+                     report::scenario_label(scenario).c_str(), set.name.c_str(),
+                     scenario.duration_s);
         std::fflush(stderr);
       }
       results.push_back(validated::evaluate_scenario(
@@ -192,7 +194,7 @@ SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>
           validated::scenario_split_options(pieces, scenario.duration_s)));
       const std::string file =
           "scenario_" + std::to_string(scenario.number) + "_" + slug(set.name) + ".svg";
-      write_text(figures_dir / file, validated::svg_scenario(results.back()));
+      write_text(figures_dir / file, report::svg_scenario(results.back()));
       report.figures.push_back(file);
     }
   }

@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
@@ -81,21 +82,9 @@ long long steal_ticks() {
   return name == "cpu" ? value : -1;
 }
 
-std::string json_string(const std::string& text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char escaped[8];
-      std::snprintf(escaped, sizeof(escaped), "\\u%04x", static_cast<unsigned>(c));
-      out += escaped;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
+// A JSON string literal (quotes, backslashes and control characters escaped).
+std::string quoted(const std::string& text) {
+  return nlohmann::json(text).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string number(double value) {
@@ -127,7 +116,7 @@ LoopFigures measure_bare_loop(std::int64_t period_ns, std::int64_t duration_ns,
 std::string to_json(const LoopFigures& f) {
   std::string refused = "[";
   for (std::size_t i = 0; i < f.realtime.refused.size(); ++i)
-    refused += (i ? ", " : "") + json_string(f.realtime.refused[i]);
+    refused += (i ? ", " : "") + quoted(f.realtime.refused[i]);
   refused += "]";
   const auto& h = f.latency;
   std::string out = "{";
@@ -152,7 +141,7 @@ std::string to_json(const LoopFigures& f) {
          std::string(f.memory_lock_asked && f.memory_lock_refused.empty() ? "true" : "false");
   out += ", \"refused\": " + refused;
   if (!f.memory_lock_refused.empty())
-    out += ", \"memory_lock_refused\": " + json_string(f.memory_lock_refused);
+    out += ", \"memory_lock_refused\": " + quoted(f.memory_lock_refused);
   out += "}";
   return out;
 }

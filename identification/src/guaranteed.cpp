@@ -573,4 +573,17 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
   return result;
 }
 
+double unknowns_volume(const std::vector<Box>& boxes,
+                       const std::array<bool, model::kParameterCount>& unknown) {
+  double total = 0;
+  for (const Box& b : boxes) {
+    double v = 1;
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      if (unknown[k]) v *= b[k].width();
+    }
+    total += v;
+  }
+  return total;
+}
+
 }  // namespace furuta::identification

@@ -6,7 +6,10 @@
 #include <set>
 #include <sstream>
 
+#include "format.hpp"
 #include "furuta/common/text_format.hpp"
+#include "furuta/report/svg.hpp"
+#include "furuta/report/tables.hpp"
 
 namespace furuta::report {
 
@@ -16,24 +19,12 @@ using model::kParameterCount;
 using model::kParameterNames;
 using model::kParameterUnits;
 
-std::string sci(double v, int digits) {
-  if (!std::isfinite(v)) return "-";
-  std::ostringstream s;
-  s << std::scientific << std::setprecision(digits) << v;
-  return s.str();
+// The page's numbers: "-" where one is NaN or infinite.
+std::string dash_sci(double v, int digits) {
+  return or_dash(v, sci(v, digits));
 }
-
-std::string short_number(double v) {
-  std::ostringstream s;
-  s << std::setprecision(3) << v;
-  return s.str();
-}
-
-std::string fixed(double v, int digits) {
-  if (!std::isfinite(v)) return "-";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
+std::string dash_fixed(double v, int digits) {
+  return or_dash(v, fixed(v, digits));
 }
 
 // The units as a reader writes them, not as a terminal must.
@@ -141,7 +132,7 @@ figcaption { font-size: 0.9em; color: #444; }
 )";
 
 std::string table_three_cell(const validated::Coverage& c) {
-  return fixed(100 * c.rate(), 1) + " (" + fixed(100 * c.rate_in_time(), 1) + ")";
+  return dash_fixed(100 * c.rate(), 1) + " (" + dash_fixed(100 * c.rate_in_time(), 1) + ")";
 }
 
 // "seed1.lcmlog" -> "fig-signals-1": ids stay ASCII whatever the names are.
@@ -197,7 +188,7 @@ ReportInput report_input(const identification::Identification& id) {
   if (id.validation) {
     r.validation = ValidationSummary{id.validation->name, id.validation->fit.rmse_nm,
                                      id.validation->fit.rmse_percent_of_range,
-                                     identification::svg_torque_validation(*id.validation)};
+                                     svg_torque_validation(*id.validation)};
   }
   // identify() prefixes LSMI's warnings as below; what else it warns about comes from the data
   // (lost reports, missing samples, a cut-short session, irregular CSV time stamps).
@@ -302,9 +293,10 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
           r.status == validated::IntegrationResult::Status::ok) {
         continue;
       }
-      out.push_back({"simulation", "scenario " + r.scenario.label() + ", " + r.parameters.name +
-                                       ": the tube ended early, at " + fixed(r.t_reached_s, 3) +
-                                       " s of " + fixed(r.scenario.duration_s, 1) + " s (" +
+      out.push_back({"simulation", "scenario " + scenario_label(r.scenario) + ", " +
+                                       r.parameters.name + ": the tube ended early, at " +
+                                       dash_fixed(r.t_reached_s, 3) + " s of " +
+                                       dash_fixed(r.scenario.duration_s, 1) + " s (" +
                                        validated::to_string(r.status) +
                                        (r.reason.empty() ? "" : ": " + r.reason) + ")"});
     }
@@ -347,15 +339,15 @@ std::string render_html(const ReportInput& in) {
   h.element("h2", "Rig and sessions");
   std::vector<std::vector<std::string>> rig_rows;
   for (const auto& [key, value] : in.rig) rig_rows.push_back({key, value});
-  rig_rows.push_back({"input lag", fixed(in.input_lag_s * 1e3, 3) + " ms"});
+  rig_rows.push_back({"input lag", dash_fixed(in.input_lag_s * 1e3, 3) + " ms"});
   h.table("rig", "The rig and the identification settings", {"", "value"}, rig_rows);
   if (!in.sessions.empty()) {
     std::vector<std::vector<std::string>> rows;
     for (const SessionSummary& s : in.sessions) {
       rows.push_back(
-          {s.file, s.role, s.label, s.profile, fixed(s.amplitude_duty, 2), fixed(s.duration_s, 1),
-           fixed(s.period_s * 1e3, 1), std::to_string(s.seed), std::to_string(s.samples),
-           std::to_string(s.missing_samples),
+          {s.file, s.role, s.label, s.profile, dash_fixed(s.amplitude_duty, 2),
+           dash_fixed(s.duration_s, 1), dash_fixed(s.period_s * 1e3, 1), std::to_string(s.seed),
+           std::to_string(s.samples), std::to_string(s.missing_samples),
            std::to_string(s.motor_lost_reports) + " / " + std::to_string(s.encoder_lost_reports),
            std::to_string(s.overruns), std::to_string(s.faults),
            s.complete ? "yes" : "no (cut short)"});
@@ -418,12 +410,12 @@ std::string render_html(const ReportInput& in) {
       std::vector<std::string> row = {std::string(model::kParameterNames[i]),
                                       pretty_unit(std::string(model::kParameterUnits[i]))};
       const auto cell = [i](const identification::LsmiResult& r) {
-        return plus_minus(sci(r.estimate[i], 4), sci(r.std_dev[i], 1));
+        return plus_minus(dash_sci(r.estimate[i], 4), dash_sci(r.std_dev[i], 1));
       };
       for (const auto& r : in.per_experiment) row.push_back(cell(r));
       row.push_back(cell(in.combined));
-      if (in.nominal) row.push_back((*in.nominal)[i] != 0 ? sci((*in.nominal)[i], 4) : "-");
-      if (in.truth) row.push_back(sci((*in.truth)[i], 4));
+      if (in.nominal) row.push_back((*in.nominal)[i] != 0 ? dash_sci((*in.nominal)[i], 4) : "-");
+      if (in.truth) row.push_back(dash_sci((*in.truth)[i], 4));
       rows.push_back(std::move(row));
     }
     h.table("table-1", "Table I: LSMI estimates \u00b1 one standard deviation", header, rows);
@@ -435,9 +427,9 @@ std::string render_html(const ReportInput& in) {
       }
       return std::vector<std::string>{name,
                                       std::to_string(r.rows / 2),
-                                      sci(r.condition_number, 2),
+                                      dash_sci(r.condition_number, 2),
                                       std::to_string(r.rank),
-                                      sci(r.sigma, 2),
+                                      dash_sci(r.sigma, 2),
                                       poorly_excited.empty() ? "-" : poorly_excited};
     };
     for (std::size_t e = 0; e < in.per_experiment.size() && e < in.experiment_names.size(); ++e) {
@@ -480,12 +472,12 @@ std::string render_html(const ReportInput& in) {
     h.paragraph("On the held-out session " + v.name +
                 ", the torque predicted by the combined LSMI "
                 "estimate misses the measured one by RMSE " +
-                sci(v.rmse_nm, 3) + " N m, " + fixed(v.rmse_percent_of_range, 2) +
+                dash_sci(v.rmse_nm, 3) + " N m, " + dash_fixed(v.rmse_percent_of_range, 2) +
                 " % of the torque range (eq. 12; the paper: 6.4 % with LSMI).");
     h.figure("fig-5", v.svg,
              "Fig. 5: measured (black) and LSMI-predicted (red) motor torque [N m] over time [s] "
              "on a session not used for the fit; RMSE " +
-                 fixed(v.rmse_percent_of_range, 2) + " % of the range.");
+                 dash_fixed(v.rmse_percent_of_range, 2) + " % of the range.");
   } else {
     h.paragraph(
         "No held-out session was given (furuta identify --validate LOG): no torque "
@@ -500,11 +492,11 @@ std::string render_html(const ReportInput& in) {
   {
     std::vector<std::vector<std::string>> rows;
     for (const IntervalRow& r : in.table_two) {
-      rows.push_back(
-          {r.parameter, pretty_unit(r.unit), "[" + sci(r.lo, 4) + ", " + sci(r.hi, 4) + "]",
-           r.origin,
-           r.outer_hull ? "[" + sci((*r.outer_hull)[0], 4) + ", " + sci((*r.outer_hull)[1], 4) + "]"
-                        : "-"});
+      rows.push_back({r.parameter, pretty_unit(r.unit),
+                      "[" + dash_sci(r.lo, 4) + ", " + dash_sci(r.hi, 4) + "]", r.origin,
+                      r.outer_hull ? "[" + dash_sci((*r.outer_hull)[0], 4) + ", " +
+                                         dash_sci((*r.outer_hull)[1], 4) + "]"
+                                   : "-"});
     }
     if (!rows.empty()) {
       h.table("table-2",
@@ -517,7 +509,7 @@ std::string render_html(const ReportInput& in) {
     h.paragraph("SIVIA over " + std::to_string(s.samples) + " samples (q = " + std::to_string(s.q) +
                 "): " + std::to_string(s.inner) + " inner, " + std::to_string(s.boundary) +
                 " boundary and " + std::to_string(s.outer) + " outer boxes; " +
-                std::to_string(s.tested) + " tested in " + short_number(s.seconds) + " s" +
+                std::to_string(s.tested) + " tested in " + short_number(s.seconds, 3) + " s" +
                 (s.truncated ? " (truncated)" : "") + ".");
     if (s.empty) h.paragraph("The feasible set is empty. " + s.finding);
     h.figure("fig-4", s.svg,
@@ -546,12 +538,13 @@ std::string render_html(const ReportInput& in) {
                 "46/61/38/25 % with interval parameters, 41/34/20/21 % with LSMI.");
     std::vector<std::vector<std::string>> rows;
     for (const auto& r : sim.results) {
-      rows.push_back({r.scenario.label() + " " + r.scenario.description(), r.parameters.name,
-                      fixed(r.t_reached_s, 3) + " / " + fixed(r.scenario.duration_s, 1),
+      rows.push_back({scenario_label(r.scenario) + " " + scenario_description(r.scenario),
+                      r.parameters.name,
+                      dash_fixed(r.t_reached_s, 3) + " / " + dash_fixed(r.scenario.duration_s, 1),
                       std::to_string(r.steps), table_three_cell(r.q2_step),
-                      table_three_cell(r.q2_interpolated), fixed(100 * r.q1_step.rate(), 1),
-                      fixed(100 * r.q1_interpolated.rate(), 1),
-                      fixed(r.q2_mean_width_rad * 180 / 3.14159265358979323846, 3),
+                      table_three_cell(r.q2_interpolated), dash_fixed(100 * r.q1_step.rate(), 1),
+                      dash_fixed(100 * r.q1_interpolated.rate(), 1),
+                      dash_fixed(r.q2_mean_width_rad * 180 / 3.14159265358979323846, 3),
                       std::string(validated::to_string(r.status)) +
                           (r.reason.empty() ? "" : ": " + r.reason)});
     }
@@ -562,12 +555,13 @@ std::string render_html(const ReportInput& in) {
     std::size_t n = 0;
     for (const auto& r : sim.results) {
       const bool early = r.t_reached_s + 1e-9 < r.scenario.duration_s;
-      h.figure(figure_id("fig-6", ++n), validated::svg_scenario(r),
-               "Fig. 6 " + r.scenario.label() + ", " + r.parameters.name +
+      h.figure(figure_id("fig-6", ++n), svg_scenario(r),
+               "Fig. 6 " + scenario_label(r.scenario) + ", " + r.parameters.name +
                    " parameters: the tube of the pendulum angle q2 [deg] over time [s] (shaded) "
                    "and the measured q2 (points; red where outside the tube); q2 step coverage " +
-                   fixed(100 * r.q2_step.rate(), 1) + " %" +
-                   (early ? ", the tube ended at " + fixed(r.t_reached_s, 3) + " s" : "") + ".");
+                   dash_fixed(100 * r.q2_step.rate(), 1) + " %" +
+                   (early ? ", the tube ended at " + dash_fixed(r.t_reached_s, 3) + " s" : "") +
+                   ".");
     }
   } else {
     h.paragraph(

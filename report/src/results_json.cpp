@@ -2,6 +2,7 @@
 #include <algorithm>
 
 #include "furuta/report/json.hpp"
+#include "furuta/report/tables.hpp"
 
 namespace furuta::report {
 
@@ -137,8 +138,8 @@ Json scenarios_json(const std::vector<validated::ScenarioResult>& results) {
       parameters[model::kParameterNames[k]] = interval_json(p[k]);
     }
     rows.push_back(Json{{"scenario", r.scenario.number},
-                        {"label", r.scenario.label()},
-                        {"description", r.scenario.description()},
+                        {"label", scenario_label(r.scenario)},
+                        {"description", scenario_description(r.scenario)},
                         {"q2_initial_rad", r.scenario.q2_initial_rad},
                         {"torque_nm", r.scenario.torque_nm},
                         {"duration_s", r.scenario.duration_s},

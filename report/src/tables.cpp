@@ -1,6 +1,7 @@
 // Table I, the SIVIA summary and Table III as text.
 #include "furuta/report/tables.hpp"
 
+#include <cmath>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
@@ -12,6 +13,18 @@ namespace furuta::report {
 namespace {
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 }  // namespace
+
+std::string scenario_label(const validated::Scenario& s) {
+  if (s.number >= 1 && s.number <= 26) {
+    return std::string("(") + static_cast<char>('a' + s.number - 1) + ")";
+  }
+  return "#" + std::to_string(s.number);
+}
+
+std::string scenario_description(const validated::Scenario& s) {
+  return "x0 = [0, 0, " + short_number(std::round(s.q2_initial_rad * kDegPerRad * 1e6) / 1e6) +
+         " deg, 0], u = " + short_number(s.torque_nm) + " N m";
+}
 
 std::string format_table_one(const identification::Identification& id) {
   std::ostringstream out;
@@ -104,8 +117,8 @@ std::string format_table_three(const std::vector<validated::ScenarioResult>& res
     const auto both = [](const validated::Coverage& c) {
       return fixed(100 * c.rate(), 1) + " (" + fixed(100 * c.rate_in_time(), 1) + ")";
     };
-    out << std::left << std::setw(5) << r.scenario.label() << std::setw(12) << r.parameters.name
-        << std::right << std::setw(14)
+    out << std::left << std::setw(5) << scenario_label(r.scenario) << std::setw(12)
+        << r.parameters.name << std::right << std::setw(14)
         << (fixed(r.t_reached_s, 3) + " / " + fixed(r.scenario.duration_s, 1)) << std::setw(7)
         << r.steps << std::setw(20) << both(r.q2_step) << std::setw(20) << both(r.q2_interpolated)
         << std::setw(9) << fixed(100 * r.q1_step.rate(), 1) << std::setw(9)

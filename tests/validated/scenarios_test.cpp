@@ -1,15 +1,13 @@
 // The paper's scenarios: the "measurement" against the physics, a short real integration whose
-// tube must hold the true model's samples (soundness), Table III, JSON and the Fig. 6 figure.
+// tube must hold the true model's samples (soundness), coverage; their text, JSON and figures are
+// tested in tests/report/scenario_outputs_test.cpp.
 #include "furuta/validated/scenarios.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <numbers>
-#include <regex>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -30,10 +28,6 @@ TEST(Scenarios, ThePapersFour) {
     EXPECT_EQ(s[i].torque_nm, u_nm[i]);
     EXPECT_EQ(s[i].duration_s, 4.0);
   }
-  EXPECT_EQ(s[0].label(), "(a)");
-  EXPECT_EQ(s[3].label(), "(d)");
-  EXPECT_EQ(s[0].description(), "x0 = [0, 0, -100 deg, 0], u = 0 N m");
-  EXPECT_EQ(s[2].description(), "x0 = [0, 0, -90 deg, 0], u = 0.17 N m");
   EXPECT_EQ(paper_scenario(2).q2_initial_rad, s[1].q2_initial_rad);
   EXPECT_THROW(paper_scenario(0), std::invalid_argument);
   EXPECT_THROW(paper_scenario(5), std::invalid_argument);
@@ -199,7 +193,8 @@ TEST_F(ShortRun, TubeMissesAStartOutsideItsBox) {
   EXPECT_LT(c.covered, c.measurements / 2);
 }
 
-TEST_F(ShortRun, ResultTableJsonAndFigure) {
+// Table III, its JSON and Fig. 6 of this result: tests/report/scenario_outputs_test.cpp.
+TEST_F(ShortRun, ResultCoverageAndWidths) {
   const ScenarioMeasurement m = measure_scenario(scenario(), model::paper_run1());
   const ParameterSet set = point_parameters("LSMI", model::paper_run1());
   const ScenarioResult r = evaluate_tubes(scenario(), set, {}, m, tubes());
@@ -216,23 +211,6 @@ TEST_F(ShortRun, ResultTableJsonAndFigure) {
   EXPECT_EQ(static_cast<std::size_t>(
                 std::count(r.q2_covered_step.begin(), r.q2_covered_step.end(), true)),
             r.q2_step.covered);
-
-  const std::string svg = svg_scenario(r);
-  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-  EXPECT_NE(svg.find("</svg>"), std::string::npos);
-  EXPECT_NE(svg.find("Scenario (a): x0 = [0, 0, -100 deg, 0], u = 0 N m, LSMI"), std::string::npos);
-  EXPECT_NE(svg.find("class=\"tube\""), std::string::npos);
-  EXPECT_NE(svg.find("class=\"measured\""), std::string::npos);
-  EXPECT_NE(svg.find("time t [s]"), std::string::npos);
-  EXPECT_NE(svg.find("q2 [deg]"), std::string::npos);
-  const std::regex circle("<circle cx=");
-  const auto circles =
-      std::distance(std::sregex_iterator(svg.begin(), svg.end(), circle), std::sregex_iterator());
-  EXPECT_EQ(static_cast<std::size_t>(circles), m.t_s.size() + 2);  // samples + legend's two
-  std::ostringstream rate;
-  rate << "step (paper) " << std::fixed << std::setprecision(1) << 100 * r.q2_step.rate() << " %";
-  EXPECT_NE(svg.find(rate.str()), std::string::npos) << rate.str();
-  EXPECT_EQ(svg.find("tube ends"), std::string::npos);  // it reached the end
 }
 
 // A tube that ends early: the samples past its end are counted apart, and the figure marks it.
@@ -246,7 +224,6 @@ TEST_F(ShortRun, EarlyEndIsReported) {
   EXPECT_EQ(r.q2_step.outside_time, m.t_s.size() - r.q2_step.in_time);
   EXPECT_GT(r.q2_step.outside_time, 20u);
   EXPECT_LT(r.q2_step.rate(), r.q2_step.rate_in_time());
-  EXPECT_NE(svg_scenario(r).find("tube ends at 0.200 s"), std::string::npos);
 }
 
 }  // namespace

@@ -161,10 +161,6 @@ struct GuaranteedResult {
 GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
                                            const GuaranteedOptions& options);
 
-// Fig. 4: the paving projected on two parameters (default fv1, fv2): inner, boundary and outer
-// boxes in three colours, axes with units, the truth or a reference point if given.
-std::string svg_paving(const GuaranteedResult& result, int x_parameter = 5, int y_parameter = 6,
-                       const std::vector<double>* reference = nullptr);
 // Area (or volume) of a list of boxes over the unknowns only.
 double unknowns_volume(const std::vector<Box>& boxes,
                        const std::array<bool, model::kParameterCount>& unknown);

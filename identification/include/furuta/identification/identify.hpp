@@ -48,15 +48,6 @@ struct InputFile {
   std::string path;
   std::string sha256;
 };
-struct DataErrorBounds;  // guaranteed.hpp
-
-// SVG figures: measured signals with their uncertainty bands (Fig. 2/3), measured vs predicted
-// torque on the held-out session (Fig. 5). The bands are the data error bounds SIVIA uses when
-// given (every channel), else the pendulum encoder's quantisation.
-std::string svg_signals(const RawExperiment& raw, const JointSeries& processed,
-                        double angle_resolution_rad, const DataErrorBounds* bounds = nullptr);
-std::string svg_torque_validation(const ValidationResult& validation);
-
 // Hex SHA-256 of a file (inputs are identified by content in results.json).
 std::string sha256_file(const std::string& path);
 

@@ -13,6 +13,11 @@
 
 namespace furuta::report {
 
+// A scenario as the tables and figures name it: "(a)" for 1 ... "(d)" for 4, "#n" beyond 26.
+std::string scenario_label(const validated::Scenario& scenario);
+// "x0 = [0, 0, -100 deg, 0], u = 0 N m"
+std::string scenario_description(const validated::Scenario& scenario);
+
 // Table I: parameter, unit, one column per experiment, all, (CAD), (truth), each +- its standard
 // deviation; condition numbers, residuals, the input lag, the held-out RMSE and the warnings.
 std::string format_table_one(const identification::Identification& id);

@@ -1,8 +1,9 @@
 #pragma once
 // The paper's validation by guaranteed simulation (section IV.B, Fig. 6, Table III): four
 // scenarios run on the simulated rig as "measurements", tubes from interval (SIVIA) and point
-// (LSMI) parameters with the data's uncertainty on the initial state, coverage rates, Table III,
-// Fig. 6-style figures. See validated/README.md, "Scenarios and coverage".
+// (LSMI) parameters with the data's uncertainty on the initial state, coverage rates: the numbers
+// of Table III and Fig. 6 (their text and figures are report/'s). See validated/README.md,
+// "Scenarios and coverage".
 //
 //   const Scenario s = paper_scenario(1);
 //   const ScenarioMeasurement m = measure_scenario(s, model::paper_run1());
@@ -28,9 +29,6 @@ struct Scenario {
   double q2_initial_rad = 0.0;
   double torque_nm = 0.0;
   double duration_s = 4.0;
-
-  std::string label() const;        // "(a)" for 1 ... "(d)" for 4, "#n" beyond
-  std::string description() const;  // "x0 = [0, 0, -100 deg, 0], u = 0 N m"
 };
 
 // The paper's four: [0,0,-100 deg,0] u = 0; [0,0,50 deg,0] u = 0; [0,0,-90 deg,0] u = 0.17 N m;
@@ -172,10 +170,5 @@ ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& p
                                  const StateUncertainty& uncertainty,
                                  const IntegratorOptions& options,
                                  const SplitOptions& split = single_tube());
-
-// Fig. 6: the q2 tube (filled step boxes) with the measured q2 over it (samples outside the
-// paper's test in red), axes in s and deg, the scenario as the title, the coverage rates in the
-// legend. A self-contained SVG document.
-std::string svg_scenario(const ScenarioResult& result);
 
 }  // namespace furuta::validated

@@ -1,32 +1,17 @@
-// The guaranteed identification's outputs: JSON and the Fig. 4-style paving.
+// Fig. 4: the SIVIA paving projected on two parameters.
 #include <algorithm>
-#include <cmath>
 #include <iomanip>
 #include <sstream>
 
-#include "furuta/common/text_format.hpp"
-#include "furuta/identification/guaranteed.hpp"
+#include "furuta/report/svg.hpp"
 
-namespace furuta::identification {
+namespace furuta::report {
 
-double unknowns_volume(const std::vector<Box>& boxes,
-                       const std::array<bool, model::kParameterCount>& unknown) {
-  double total = 0;
-  for (const Box& b : boxes) {
-    double v = 1;
-    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
-      if (unknown[k]) v *= b[k].width();
-    }
-    total += v;
-  }
-  return total;
-}
-
-std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
+std::string svg_paving(const identification::GuaranteedResult& r, int xp, int yp,
                        const std::vector<double>* reference) {
   const auto& p = r.paving;
   // The view: the outer hull with a margin (the prior if the set is empty).
-  Box view = r.empty ? p.prior : p.outer_hull();
+  interval::Box view = r.empty ? p.prior : p.outer_hull();
   const double W = 640, H = 480, left = 90, top = 40, pw = W - left - 30, ph = H - top - 70;
   auto range = [&](int k) {
     double lo = view[static_cast<std::size_t>(k)].lo(), hi = view[static_cast<std::size_t>(k)].hi();
@@ -50,10 +35,11 @@ std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
     << std::setprecision(6);
   s << "<clipPath id=\"plot\"><rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << pw
     << "\" height=\"" << ph << "\"/></clipPath>\n<g clip-path=\"url(#plot)\">\n";
-  const auto draw = [&](const std::vector<Box>& boxes, const char* fill, const char* cls) {
-    for (const Box& b : boxes) {
-      const Interval& bx = b[static_cast<std::size_t>(xp)];
-      const Interval& by = b[static_cast<std::size_t>(yp)];
+  const auto draw = [&](const std::vector<interval::Box>& boxes, const char* fill,
+                        const char* cls) {
+    for (const interval::Box& b : boxes) {
+      const interval::Interval& bx = b[static_cast<std::size_t>(xp)];
+      const interval::Interval& by = b[static_cast<std::size_t>(yp)];
       const double x0 = std::max(X(bx.lo()), left - 1), x1 = std::min(X(bx.hi()), left + pw + 1);
       const double y0 = std::max(Y(by.hi()), top - 1), y1 = std::min(Y(by.lo()), top + ph + 1);
       if (x1 < x0 || y1 < y0) continue;
@@ -97,4 +83,4 @@ std::string svg_paving(const GuaranteedResult& r, int xp, int yp,
   return s.str();
 }
 
-}  // namespace furuta::identification
+}  // namespace furuta::report
