@@ -39,5 +39,11 @@ inline std::string percent(double rate) {
 inline std::string or_dash(double v, const std::string& text) {
   return std::isfinite(v) ? text : "-";
 }
+inline std::string dash_sci(double v, int digits) {
+  return or_dash(v, sci(v, digits));
+}
+inline std::string dash_fixed(double v, int digits) {
+  return or_dash(v, fixed(v, digits));
+}
 
 }  // namespace furuta::report

@@ -1,0 +1,386 @@
+// report.html: render_html, one function per section of the page.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "format.hpp"
+#include "furuta/report/report.hpp"
+#include "furuta/report/svg.hpp"
+#include "furuta/report/tables.hpp"
+#include "html_page.hpp"
+
+namespace furuta::report {
+
+namespace {
+
+constexpr const char* kStyle = R"(
+body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em; color: #222;
+       line-height: 1.4; }
+h1 { margin-bottom: 0.2em; }
+h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
+.meta { color: #666; }
+nav ol { columns: 2; }
+table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
+caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
+th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; white-space: nowrap; }
+td:last-child { white-space: normal; }
+.table { overflow-x: auto; }
+thead th { background: #f0f0f0; }
+tbody th { text-align: left; font-weight: normal; }
+figure { margin: 1em 0; }
+figure svg { max-width: 100%; height: auto; border: 1px solid #eee; }
+figcaption { font-size: 0.9em; color: #444; }
+.warnings li { margin: 0.2em 0; }
+.topic { display: inline-block; min-width: 6em; font-weight: bold; color: #8a4b00; }
+.absent { color: #666; font-style: italic; }
+.none { color: #2a6e2a; }
+)";
+
+// The units as a reader writes them, not as a terminal must.
+std::string pretty_unit(const std::string& unit) {
+  std::string out = unit;
+  const auto replace = [&out](const std::string& from, const std::string& to) {
+    for (std::size_t at = out.find(from); at != std::string::npos; at = out.find(from, at)) {
+      out.replace(at, from.size(), to);
+      at += to.size();
+    }
+  };
+  replace("^-2", "\u207b\u00b2");
+  replace("^2", "\u00b2");
+  return out;
+}
+
+std::string plus_minus(const std::string& value, const std::string& sd) {
+  return value + " \u00b1 " + sd;
+}
+
+std::string table_three_cell(const validated::Coverage& c) {
+  return dash_fixed(100 * c.rate(), 1) + " (" + dash_fixed(100 * c.rate_in_time(), 1) + ")";
+}
+
+// "seed1.lcmlog" -> "fig-signals-1": ids stay ASCII whatever the names are.
+std::string figure_id(const std::string& prefix, std::size_t n) {
+  return prefix + "-" + std::to_string(n);
+}
+
+// The document's head, its title and what it is.
+void page_head(Html& h, const ReportInput& in) {
+  h.raw("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+  h.raw("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+  h.element("title", in.title);
+  h.raw("\n<style>");
+  h.raw(kStyle);
+  h.raw("</style>\n</head>\n<body>\n<header>\n");
+  h.element("h1", in.title);
+  h.paragraph(in.software_version +
+                  ": identification of a rotary inverted (Furuta) pendulum, least squares (LSMI) "
+                  "and guaranteed (SIVIA, validated simulation). The numbers are also in "
+                  "results.json.",
+              "meta");
+  h.raw("</header>\n");
+}
+
+// The table of contents: one link per section.
+void contents(Html& h) {
+  h.raw("<nav>\n<ol>\n");
+  const std::vector<std::pair<std::string, std::string>> contents = {
+      {"summary", "Rig and sessions"},
+      {"warnings", "Warnings"},
+      {"lsmi", "Least squares (Table I)"},
+      {"data", "Data and uncertainty bands (Fig. 2/3)"},
+      {"validation", "Held-out torque (Fig. 5)"},
+      {"sivia", "Guaranteed identification (Table II, Fig. 4)"},
+      {"simulation", "Validated simulation (Table III, Fig. 6)"}};
+  for (const auto& [id, name] : contents) {
+    h.raw("<li><a href=\"#" + id + "\">");
+    h.text(name);
+    h.raw("</a></li>\n");
+  }
+  h.raw("</ol>\n</nav>\n");
+}
+
+// The sessions, from their logs.
+void sessions_table(Html& h, const std::vector<SessionSummary>& sessions) {
+  std::vector<std::vector<std::string>> rows;
+  for (const SessionSummary& s : sessions) {
+    rows.push_back(
+        {s.file, s.role, s.label, s.profile, dash_fixed(s.amplitude_duty, 2),
+         dash_fixed(s.duration_s, 1), dash_fixed(s.period_s * 1e3, 1), std::to_string(s.seed),
+         std::to_string(s.samples), std::to_string(s.missing_samples),
+         std::to_string(s.motor_lost_reports) + " / " + std::to_string(s.encoder_lost_reports),
+         std::to_string(s.overruns), std::to_string(s.faults),
+         s.complete ? "yes" : "no (cut short)"});
+  }
+  h.table("sessions", "Sessions (from their logs)",
+          {"log", "role", "label", "profile", "amplitude [duty]", "duration [s]", "period [ms]",
+           "seed", "samples", "missing samples", "lost reports 1065 / 1047", "missed cycles",
+           "faults", "complete"},
+          rows);
+}
+
+// The rig, the settings, the sessions and the input files.
+void section_rig_and_sessions(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"summary\">\n");
+  h.element("h2", "Rig and sessions");
+  std::vector<std::vector<std::string>> rig_rows;
+  for (const auto& [key, value] : in.rig) rig_rows.push_back({key, value});
+  rig_rows.push_back({"input lag", dash_fixed(in.input_lag_s * 1e3, 3) + " ms"});
+  h.table("rig", "The rig and the identification settings", {"", "value"}, rig_rows);
+  if (!in.sessions.empty()) sessions_table(h, in.sessions);
+  if (!in.inputs.empty()) {
+    h.raw("<p>Inputs: ");
+    for (std::size_t i = 0; i < in.inputs.size(); ++i) {
+      if (i) h.raw(", ");
+      h.element("code", in.inputs[i]);
+    }
+    h.raw("</p>\n");
+  }
+  h.raw("</section>\n");
+}
+
+// The warnings given and derived, by topic; "None" when none.
+void section_warnings(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"warnings\">\n");
+  h.element("h2", "Warnings");
+  std::vector<Warning> warnings = in.warnings;
+  for (Warning& w : derived_warnings(in)) warnings.push_back(std::move(w));
+  if (warnings.empty()) {
+    h.paragraph(
+        "None: the regressor is well conditioned, every parameter is excited, the sessions lost "
+        "nothing, and what ran of SIVIA and the simulation finished.",
+        "none");
+  } else {
+    h.raw("<ul class=\"warnings\">\n");
+    for (const Warning& w : warnings) {
+      h.raw("<li>");
+      h.element("span", w.topic, "class=\"topic\"");
+      h.text(" " + w.text);
+      h.raw("</li>\n");
+    }
+    h.raw("</ul>\n");
+  }
+  h.raw("</section>\n");
+}
+
+// Table I: one column per experiment, all together, CAD and truth; each estimate +- its sd.
+void table_one(Html& h, const ReportInput& in) {
+  std::vector<std::string> header = {"parameter", "unit"};
+  for (const auto& name : in.experiment_names) header.push_back(name);
+  header.push_back("all experiments");
+  if (in.nominal) header.push_back("CAD");
+  if (in.truth) header.push_back("truth");
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t i = 0; i < model::kParameterCount; ++i) {
+    std::vector<std::string> row = {std::string(model::kParameterNames[i]),
+                                    pretty_unit(std::string(model::kParameterUnits[i]))};
+    const auto cell = [i](const identification::LsmiResult& r) {
+      return plus_minus(dash_sci(r.estimate[i], 4), dash_sci(r.std_dev[i], 1));
+    };
+    for (const auto& r : in.per_experiment) row.push_back(cell(r));
+    row.push_back(cell(in.combined));
+    if (in.nominal) row.push_back((*in.nominal)[i] != 0 ? dash_sci((*in.nominal)[i], 4) : "-");
+    if (in.truth) row.push_back(dash_sci((*in.truth)[i], 4));
+    rows.push_back(std::move(row));
+  }
+  h.table("table-1", "Table I: LSMI estimates \u00b1 one standard deviation", header, rows);
+}
+
+// One row of the LSMI diagnostics.
+std::vector<std::string> diagnostic(const std::string& name, const identification::LsmiResult& r) {
+  std::string poorly_excited;
+  for (const auto& p : r.poorly_excited) {
+    poorly_excited += (poorly_excited.empty() ? "" : ", ") + p;
+  }
+  return {name,
+          std::to_string(r.rows / 2),
+          dash_sci(r.condition_number, 2),
+          std::to_string(r.rank),
+          dash_sci(r.sigma, 2),
+          poorly_excited.empty() ? "-" : poorly_excited};
+}
+
+// Table I and how well the data excite the parameters.
+void section_lsmi(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"lsmi\">\n");
+  h.element("h2", "Least squares (Table I)");
+  h.paragraph(
+      "The model's seven parameters by least squares (LSMI) on each experiment and on all "
+      "together, each with its standard deviation (the residual's, through "
+      "(W\u1d40W)\u207b\u00b9). "
+      "The standard deviations measure noise, not bias.");
+  table_one(h, in);
+  std::vector<std::vector<std::string>> diagnostics;
+  for (std::size_t e = 0; e < in.per_experiment.size() && e < in.experiment_names.size(); ++e) {
+    diagnostics.push_back(diagnostic(in.experiment_names[e], in.per_experiment[e]));
+  }
+  diagnostics.push_back(diagnostic("all experiments", in.combined));
+  h.table("lsmi-diagnostics",
+          "How well the data excite the parameters: the column-scaled regressor's condition "
+          "number, its rank (of 7), the residual",
+          {"experiment", "samples", "condition number", "rank", "residual \u03c3 [N m]",
+           "poorly excited"},
+          diagnostics);
+  h.raw("</section>\n");
+}
+
+// Fig. 2/3: one figure per experiment.
+void section_data(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"data\">\n");
+  h.element("h2", "Data and uncertainty bands (Fig. 2/3)");
+  if (in.signals_svg.empty()) {
+    h.paragraph("No experiment figures.", "absent");
+  }
+  for (std::size_t i = 0; i < in.signals_svg.size(); ++i) {
+    const std::string name = i < in.experiment_names.size() ? in.experiment_names[i] : "";
+    h.figure(figure_id("fig-signals", i + 1), in.signals_svg[i],
+             "Fig. " + std::to_string(i + 2) + " (" + name +
+                 "): the measured angles, the filtered velocities and accelerations and the "
+                 "motor torque (eq. 4) over time [s]; " +
+                 (in.signals_bands.empty() ? std::string("the shaded bands are the data's "
+                                                         "uncertainty")
+                                           : in.signals_bands) +
+                 ".");
+  }
+  h.raw("</section>\n");
+}
+
+// Fig. 5, or why there is none.
+void section_validation(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"validation\">\n");
+  h.element("h2", "Held-out torque (Fig. 5)");
+  if (in.validation) {
+    const ValidationSummary& v = *in.validation;
+    h.paragraph("On the held-out session " + v.name +
+                ", the torque predicted by the combined LSMI "
+                "estimate misses the measured one by RMSE " +
+                dash_sci(v.rmse_nm, 3) + " N m, " + dash_fixed(v.rmse_percent_of_range, 2) +
+                " % of the torque range (eq. 12; the paper: 6.4 % with LSMI).");
+    h.figure("fig-5", v.svg,
+             "Fig. 5: measured (black) and LSMI-predicted (red) motor torque [N m] over time [s] "
+             "on a session not used for the fit; RMSE " +
+                 dash_fixed(v.rmse_percent_of_range, 2) + " % of the range.");
+  } else {
+    h.paragraph(
+        "No held-out session was given (furuta identify --validate LOG): no torque "
+        "validation.",
+        "absent");
+  }
+  h.raw("</section>\n");
+}
+
+// Table II: the intervals SIVIA starts from and its outer hull.
+void intervals_table(Html& h, const std::vector<IntervalRow>& table) {
+  std::vector<std::vector<std::string>> rows;
+  for (const IntervalRow& r : table) {
+    rows.push_back({r.parameter, pretty_unit(r.unit),
+                    "[" + dash_sci(r.lo, 4) + ", " + dash_sci(r.hi, 4) + "]", r.origin,
+                    r.outer_hull ? "[" + dash_sci((*r.outer_hull)[0], 4) + ", " +
+                                       dash_sci((*r.outer_hull)[1], 4) + "]"
+                                 : "-"});
+  }
+  if (!rows.empty()) {
+    h.table("table-2",
+            "Table II: the intervals SIVIA starts from, and its outer approximation's hull",
+            {"parameter", "unit", "interval used", "from", "SIVIA outer hull"}, rows);
+  }
+}
+
+// Table II and Fig. 4, or the intervals SIVIA would start from.
+void section_sivia(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"sivia\">\n");
+  h.element("h2", "Guaranteed identification (Table II, Fig. 4)");
+  intervals_table(h, in.table_two);
+  if (in.sivia) {
+    const SiviaSummary& s = *in.sivia;
+    h.paragraph("SIVIA over " + std::to_string(s.samples) + " samples (q = " + std::to_string(s.q) +
+                "): " + std::to_string(s.inner) + " inner, " + std::to_string(s.boundary) +
+                " boundary and " + std::to_string(s.outer) + " outer boxes; " +
+                std::to_string(s.tested) + " tested in " + short_number(s.seconds, 3) + " s" +
+                (s.truncated ? " (truncated)" : "") + ".");
+    if (s.empty) h.paragraph("The feasible set is empty. " + s.finding);
+    h.figure("fig-4", s.svg,
+             "Fig. 4: the SIVIA paving projected on the viscous frictions (fv1, fv2) [N m s]: "
+             "inner boxes (every parameter consistent with the data), boundary boxes "
+             "(undecided at epsilon) and outer boxes (proven inconsistent).");
+  } else {
+    h.paragraph(
+        "SIVIA was not run (furuta identify --sivia): no paving. The intervals above are "
+        "those it would start from.",
+        "absent");
+  }
+  h.raw("</section>\n");
+}
+
+// Table III's rows as the page shows them.
+void table_three(Html& h, const std::vector<validated::ScenarioResult>& results) {
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& r : results) {
+    rows.push_back(
+        {scenario_label(r.scenario) + " " + scenario_description(r.scenario), r.parameters.name,
+         dash_fixed(r.t_reached_s, 3) + " / " + dash_fixed(r.scenario.duration_s, 1),
+         std::to_string(r.steps), table_three_cell(r.q2_step), table_three_cell(r.q2_interpolated),
+         dash_fixed(100 * r.q1_step.rate(), 1), dash_fixed(100 * r.q1_interpolated.rate(), 1),
+         dash_fixed(r.q2_mean_width_rad * 180 / 3.14159265358979323846, 3),
+         std::string(validated::to_string(r.status)) + (r.reason.empty() ? "" : ": " + r.reason)});
+  }
+  h.table("table-3", "Table III: coverage of the measurements by the tubes [%]",
+          {"scenario", "parameters", "reached / duration [s]", "steps", "q2 step, all (reached)",
+           "q2 interp., all (reached)", "q1 step", "q1 interp.", "q2 mean width [deg]", "end"},
+          rows);
+}
+
+// Fig. 6: one figure per scenario and parameter set.
+void figures_six(Html& h, const std::vector<validated::ScenarioResult>& results) {
+  std::size_t n = 0;
+  for (const auto& r : results) {
+    const bool early = r.t_reached_s + 1e-9 < r.scenario.duration_s;
+    h.figure(figure_id("fig-6", ++n), svg_scenario(r),
+             "Fig. 6 " + scenario_label(r.scenario) + ", " + r.parameters.name +
+                 " parameters: the tube of the pendulum angle q2 [deg] over time [s] (shaded) "
+                 "and the measured q2 (points; red where outside the tube); q2 step coverage " +
+                 dash_fixed(100 * r.q2_step.rate(), 1) + " %" +
+                 (early ? ", the tube ended at " + dash_fixed(r.t_reached_s, 3) + " s" : "") + ".");
+  }
+}
+
+// Table III and Fig. 6, or why there are none.
+void section_simulation(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"simulation\">\n");
+  h.element("h2", "Validated simulation (Table III, Fig. 6)");
+  if (in.simulation) {
+    h.paragraph("The paper's four scenarios, measured on the simulated rig (" +
+                in.simulation->measurement_source +
+                "), against guaranteed tubes of the pendulum angle from each parameter set. "
+                "Coverage: the share of the measured samples inside the tube, over all samples "
+                "and (in parentheses) over those the tube reached; \"step\" is the paper's test, "
+                "\"interp.\" the enclosure at the sample's instant. The paper, q2 step: "
+                "46/61/38/25 % with interval parameters, 41/34/20/21 % with LSMI.");
+    table_three(h, in.simulation->results);
+    figures_six(h, in.simulation->results);
+  } else {
+    h.paragraph(
+        "The validated simulation was not run (furuta identify --simulate): no tubes, no "
+        "Table III.",
+        "absent");
+  }
+  h.raw("</section>\n");
+}
+
+}  // namespace
+
+std::string render_html(const ReportInput& in) {
+  Html h;
+  page_head(h, in);
+  contents(h);
+  section_rig_and_sessions(h, in);
+  section_warnings(h, in);
+  section_lsmi(h, in);
+  section_data(h, in);
+  section_validation(h, in);
+  section_sivia(h, in);
+  section_simulation(h, in);
+  h.raw("</body>\n</html>\n");
+  return h.str();
+}
+
+}  // namespace furuta::report

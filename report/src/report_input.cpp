@@ -1,0 +1,176 @@
+// The report's content from the domain results: sessions, Table I, Table II, SIVIA, warnings.
+#include <algorithm>
+#include <set>
+#include <sstream>
+
+#include "format.hpp"
+#include "furuta/common/text_format.hpp"
+#include "furuta/report/report.hpp"
+#include "furuta/report/svg.hpp"
+#include "furuta/report/tables.hpp"
+
+namespace furuta::report {
+
+std::string escape_html(const std::string& text) {
+  return text::xml_escape(text);
+}
+
+SessionSummary summarize_session(const session_log::SessionLog& log, std::string role) {
+  SessionSummary s;
+  s.file = log.path.filename().string();
+  s.role = std::move(role);
+  if (log.start) {
+    s.label = log.start->label;
+    s.profile = log.start->profile;
+    s.amplitude_duty = log.start->amplitude_duty;
+    s.duration_s = log.start->duration_s;
+    s.period_s = static_cast<double>(log.start->period_ns) * 1e-9;
+    s.seed = log.start->seed;
+  }
+  s.samples = log.samples.size();
+  s.missing_samples = log.missing_sequence_numbers().size();
+  if (!log.samples.empty()) {
+    // The counters are cumulative over the session: the last sample holds the totals.
+    s.motor_lost_reports = log.samples.back().motor_lost_reports;
+    s.encoder_lost_reports = log.samples.back().encoder_lost_reports;
+    s.overruns = log.samples.back().overruns;
+  }
+  s.faults = log.faults.size();
+  for (const auto& f : log.faults) {
+    if (f.fatal)
+      s.fatal_faults.push_back(f.reason + (f.detail.empty() ? "" : " (" + f.detail + ")"));
+  }
+  s.complete = log.complete();
+  s.damaged_regions = log.read_stats.damaged_regions;
+  s.truncated_tail = log.read_stats.truncated_tail;
+  return s;
+}
+
+ReportInput report_input(const identification::Identification& id) {
+  ReportInput r;
+  for (const auto& s : id.processed) r.experiment_names.push_back(s.name);
+  r.per_experiment = id.per_experiment;
+  r.combined = id.combined;
+  r.nominal = id.nominal;
+  r.truth = id.truth;
+  r.input_lag_s = id.input_lag_s;
+  if (id.validation) {
+    r.validation = ValidationSummary{id.validation->name, id.validation->fit.rmse_nm,
+                                     id.validation->fit.rmse_percent_of_range,
+                                     svg_torque_validation(*id.validation)};
+  }
+  // identify() prefixes LSMI's warnings as below; what else it warns about comes from the data
+  // (lost reports, missing samples, a cut-short session, irregular CSV time stamps).
+  std::set<std::string> excitation;
+  for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
+    for (const auto& w : id.per_experiment[i].warnings) {
+      excitation.insert(id.processed[i].name + ": " + w);
+    }
+  }
+  for (const auto& w : id.combined.warnings) excitation.insert("all experiments: " + w);
+  for (const auto& w : id.warnings) {
+    r.warnings.push_back({excitation.contains(w) ? "excitation" : "session", w});
+  }
+  return r;
+}
+
+std::vector<IntervalRow> table_two(const model::Parameters<double>& lsmi,
+                                   const config::SiviaConfig& sivia,
+                                   const identification::GuaranteedResult* result) {
+  interval::Box prior;
+  if (result) {
+    prior = result->paving.prior;  // what the paver was given
+  } else {
+    prior = identification::paper_prior(lsmi, sivia.mu_uncertainty_pct);
+    prior[5] = interval::Interval(sivia.fv1_prior[0], sivia.fv1_prior[1]);
+    prior[6] = interval::Interval(sivia.fv2_prior[0], sivia.fv2_prior[1]);
+  }
+  std::optional<interval::Box> hull;
+  if (result && !result->empty) hull = result->paving.outer_hull();
+  std::vector<IntervalRow> rows;
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    IntervalRow row;
+    row.parameter = model::kParameterNames[i];
+    row.unit = model::kParameterUnits[i];
+    const bool unknown = std::find(sivia.unknowns.begin(), sivia.unknowns.end(), row.parameter) !=
+                         sivia.unknowns.end();
+    row.lo = prior[i].lo();
+    row.hi = prior[i].hi();
+    if (unknown) {
+      row.origin = "prior (unknown, bisected)";
+    } else if (k < 5) {
+      std::ostringstream s;
+      s << "LSMI \u00b1 " << sivia.mu_uncertainty_pct[i] << " % (carried)";
+      row.origin = s.str();
+    } else {
+      row.origin = "prior (carried)";
+    }
+    if (hull) row.outer_hull = std::array<double, 2>{(*hull)[i].lo(), (*hull)[i].hi()};
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::string svg) {
+  SiviaSummary s;
+  s.samples = result.samples;
+  s.q = result.q;
+  s.inner = result.paving.inner.size();
+  s.boundary = result.paving.boundary.size();
+  s.outer = result.paving.outer_count;
+  s.tested = result.paving.boxes_tested;
+  s.seconds = result.paving.seconds;
+  s.truncated = result.paving.truncated;
+  s.empty = result.empty;
+  s.finding = result.finding;
+  s.inconsistent_samples = result.inconsistent_samples.size();
+  s.svg = std::move(svg);
+  return s;
+}
+
+std::vector<Warning> derived_warnings(const ReportInput& input) {
+  std::vector<Warning> out;
+  for (const SessionSummary& s : input.sessions) {
+    if (s.damaged_regions > 0) {
+      out.push_back({"session", s.file + ": " + std::to_string(s.damaged_regions) +
+                                    " damaged regions of the log skipped"});
+    }
+    if (s.truncated_tail) out.push_back({"session", s.file + ": the log's tail is truncated"});
+    for (const auto& f : s.fatal_faults) out.push_back({"session", s.file + ": fatal fault " + f});
+  }
+  if (input.sivia) {
+    const SiviaSummary& s = *input.sivia;
+    if (s.empty) {
+      out.push_back({"SIVIA", "empty feasible set: " +
+                                  (s.finding.empty() ? std::string("no parameter is consistent "
+                                                                   "with the data and its bounds")
+                                                     : s.finding)});
+    }
+    if (s.truncated) {
+      out.push_back({"SIVIA", "the paving was truncated: the untested boxes count as boundary"});
+    }
+    if (s.inconsistent_samples > 0) {
+      out.push_back({"SIVIA", std::to_string(s.inconsistent_samples) +
+                                  " samples inconsistent with the whole set (tolerated by q = " +
+                                  std::to_string(s.q) + ")"});
+    }
+  }
+  if (input.simulation) {
+    for (const auto& r : input.simulation->results) {
+      if (r.t_reached_s + 1e-9 >= r.scenario.duration_s &&
+          r.status == validated::IntegrationResult::Status::ok) {
+        continue;
+      }
+      out.push_back({"simulation", "scenario " + scenario_label(r.scenario) + ", " +
+                                       r.parameters.name + ": the tube ended early, at " +
+                                       dash_fixed(r.t_reached_s, 3) + " s of " +
+                                       dash_fixed(r.scenario.duration_s, 1) + " s (" +
+                                       validated::to_string(r.status) +
+                                       (r.reason.empty() ? "" : ": " + r.reason) + ")"});
+    }
+  }
+  return out;
+}
+
+}  // namespace furuta::report
