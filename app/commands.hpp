@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "furuta/model/model.hpp"
-#include "furuta/report/json.hpp"
+#include "furuta/pipeline/pipeline.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::app {
@@ -103,7 +103,21 @@ namespace furuta::app {
 // overrides.
 identification::IdentifyOptions identify_options_for(const config::RigConfig& rig,
                                                      const IdentifyCommandOptions& options);
-// Prints Table I (and the held-out RMSE), writes results.json, table.txt and SVG figures.
+// The pipeline's settings for a rig and the command's options: identify_options_for, [sivia] and
+// the threads, the scenarios (each --simulate-seconds long).
+pipeline::Settings identify_settings(const config::RigConfig& rig,
+                                     const IdentifyCommandOptions& options);
+// The command's inputs as a batch, then pipeline::run (progress on stderr when it is a terminal).
+// Nothing when the inputs are unusable (the reason on err: bad arguments, unreadable or foreign
+// files, a bad configuration); what the fit itself throws passes through.
+std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& options,
+                                                std::ostream& err);
+// What `furuta identify` prints of a run whose files are in dir: Table I, the SIVIA and
+// simulation summaries, where the files are.
+void print_identification(std::ostream& out, const pipeline::Run& run,
+                          const std::filesystem::path& dir);
+// run_identification, then every file (report::write_identification) and print_identification.
+// 0, or 2 for unusable inputs.
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err);
 
@@ -122,20 +136,6 @@ struct SimulateCommandOptions {
 // 0 on success (whatever the tubes reached: failures are reported in the table), 2 on bad input.
 int run_simulate_command(const SimulateCommandOptions& options, std::ostream& out,
                          std::ostream& err);
-
-struct SimulationReport {
-  report::Json json;  // {"truth", "measurement", "integrator", "figures", "results": [...]}
-  std::string table;  // Table III
-  std::vector<std::string> figures;  // file names written
-  std::vector<validated::ScenarioResult> results;
-};
-// Each scenario measured on the simulated rig with `truth`, then tubes for every parameter set,
-// figures written to figures_dir. Shared by `furuta simulate` and `furuta identify --simulate`.
-SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>& scenarios,
-                                          const std::vector<validated::ParameterSet>& sets,
-                                          const model::Parameters<double>& truth,
-                                          const std::filesystem::path& figures_dir,
-                                          const std::string& truth_source, std::size_t pieces = 1);
 
 // --- the identification trigger (log_processor.hpp) ---
 struct ProcessLogsOptions {

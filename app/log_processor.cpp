@@ -14,7 +14,6 @@
 #include <cstring>
 #include <ctime>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -23,6 +22,10 @@
 #include <tuple>
 
 #include "commands.hpp"
+#include "furuta/daemon/rig_connection.hpp"
+#include "furuta/pipeline/pipeline.hpp"
+#include "furuta/report/json.hpp"
+#include "furuta/report/outputs.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::app {
@@ -145,13 +148,6 @@ std::string trimmed(std::string text) {
   return text;
 }
 
-void replace_all(std::string& text, const std::string& from, const std::string& to) {
-  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at)) {
-    text.replace(at, from.size(), to);
-    at += to.size();
-  }
-}
-
 // A complete log waiting in the directory, as far as the trigger needs to know it.
 struct PendingLog {
   fs::path path;
@@ -219,19 +215,17 @@ struct Batch {
   }
 };
 
-std::string batch_json(const Batch& batch, const fs::path& logs_dir) {
-  nlohmann::ordered_json j;
-  j["identification"] = batch.name;
-  j["identified_at"] = utc_now();
-  j["logs_dir"] = logs_dir.string();
+report::BatchManifest manifest(const Batch& batch, const fs::path& logs_dir) {
+  report::BatchManifest m;
+  m.identification = batch.name;
+  m.identified_at = utc_now();
+  m.logs_dir = logs_dir.string();
   const auto entry = [](const PendingLog& log) {
-    return nlohmann::ordered_json{{"log", "done/" + log.path.filename().string()},
-                                  {"label", log.label}};
+    return report::BatchManifest::Log{"done/" + log.path.filename().string(), log.label};
   };
-  j["fit"] = nlohmann::ordered_json::array();
-  for (const auto& log : batch.fit) j["fit"].push_back(entry(log));
-  j["validation"] = batch.validation ? entry(*batch.validation) : nlohmann::ordered_json();
-  return j.dump(2) + "\n";
+  for (const auto& log : batch.fit) m.fit.push_back(entry(log));
+  if (batch.validation) m.validation = entry(*batch.validation);
+  return m;
 }
 
 class Processor {
@@ -334,29 +328,26 @@ class Processor {
     IdentifyCommandOptions options;
     for (const auto& log : batch.fit) options.logs.push_back(log.path);
     if (batch.validation) options.validate = batch.validation->path;
-    options.output_dir = temp;
     options.sivia = o_.automation.sivia;
     options.simulate = o_.automation.simulate;
     options.simulate_seconds = o_.automation.simulate_seconds;
-    std::ostringstream report, problems;
-    int status = 2;
+    std::ostringstream problems;
+    std::optional<pipeline::Run> run;
     try {
-      status = run_identify_command(options, report, problems);
+      run = run_identification(options, problems);
+      if (run) report::write_identification(temp, *run, daemon::kSoftwareVersion);
     } catch (const std::exception& e) {
+      run.reset();
       problems << e.what() << "\n";
     }
-    if (status != 0) {
+    if (!run) {
       fs::remove_all(temp);
       fail(batch.paths(), "identification " + batch.name + " (" + batch.describe() +
                               ") failed: " + trimmed(problems.str()));
       return;
     }
-    {
-      std::ofstream manifest(temp / "batch.json");
-      manifest << batch_json(batch, o_.logs_dir);
-      manifest.close();
-      if (!manifest) throw std::runtime_error("cannot write " + (temp / "batch.json").string());
-    }
+    report::write_text_file(temp / "batch.json",
+                            report::json_text(report::batch_json(manifest(batch, o_.logs_dir))));
     sync_tree(temp);
 
     const fs::path final_dir = free_name_in(o_.identifications_dir, batch.name);
@@ -368,9 +359,8 @@ class Processor {
     for (const auto& path : batch.paths()) move_into(path, done_);
     finish_moves();
 
-    std::string text = report.str();
-    replace_all(text, temp.string(), final_dir.string());
-    out_ << text << "identification " << final_dir.filename().string() << ": " << batch.describe()
+    print_identification(out_, *run, final_dir);
+    out_ << "identification " << final_dir.filename().string() << ": " << batch.describe()
          << "; logs moved to " << done_.string() << "\n";
     pass_.identifications.push_back(final_dir);
     pass_.logs_done += static_cast<int>(batch.paths().size());

@@ -1,54 +1,24 @@
 // `furuta simulate`: the paper's validation by guaranteed simulation (section IV.B): the four
 // scenarios measured on the simulated rig, tubes from point (LSMI) and interval (SIVIA)
-// parameters, coverage rates (Table III) and Fig. 6-style figures. `furuta identify --simulate`
-// runs the same after its fit.
+// parameters, coverage rates (Table III) and Fig. 6-style figures: pipeline::simulate, then the
+// report's writers. `furuta identify --simulate` runs the same after its fit.
 #include <unistd.h>
 
-#include <cctype>
-#include <cstdio>
 #include <fstream>
-#include <iomanip>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <ostream>
 #include <sstream>
 
 #include "commands.hpp"
 #include "furuta/daemon/rig_connection.hpp"
-#include "furuta/report/svg.hpp"
+#include "furuta/pipeline/pipeline.hpp"
+#include "furuta/report/outputs.hpp"
 #include "furuta/report/tables.hpp"
+#include "terminal_progress.hpp"
 
 namespace furuta::app {
 
 namespace {
-
-void write_text(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) throw std::runtime_error("cannot write " + path.string());
-}
-
-// The parameter set's name as a file name part: "LSMI" -> "lsmi", "truth+-1%" -> "truth_pm1pct".
-std::string slug(const std::string& name) {
-  std::string out;
-  for (std::size_t i = 0; i < name.size(); ++i) {
-    const unsigned char c = static_cast<unsigned char>(name[i]);
-    if (std::isalnum(c)) {
-      out += static_cast<char>(std::tolower(c));
-    } else if (name.compare(i, 2, "+-") == 0) {
-      out += "_pm";
-      ++i;
-    } else if (c == '%') {
-      out += "pct";
-    } else if (c == '.') {
-      out += 'p';
-    } else if (out.empty() || out.back() != '_') {
-      out += '_';
-    }
-  }
-  return out.empty() ? "parameters" : out;
-}
 
 std::string percent_text(double pct) {
   std::ostringstream s;
@@ -166,57 +136,6 @@ ResultsParameters read_results(const std::filesystem::path& path) {
 
 }  // namespace
 
-SimulationReport run_scenario_simulations(const std::vector<validated::Scenario>& scenarios,
-                                          const std::vector<validated::ParameterSet>& sets,
-                                          const model::Parameters<double>& truth,
-                                          const std::filesystem::path& figures_dir,
-                                          const std::string& truth_source, std::size_t pieces) {
-  const validated::MeasurementOptions measurement_options;
-  const validated::IntegratorOptions integrator = validated::scenario_integrator_options();
-  const validated::StateUncertainty uncertainty;
-  const bool tty = ::isatty(STDERR_FILENO) == 1;
-
-  std::vector<validated::ScenarioResult> results;
-  SimulationReport report;
-  for (const validated::Scenario& scenario : scenarios) {
-    const validated::ScenarioMeasurement measurement =
-        validated::measure_scenario(scenario, truth, measurement_options);
-    for (const validated::ParameterSet& set : sets) {
-      // Progress only on a terminal: logs and CI stay quiet.
-      if (tty) {
-        std::fprintf(stderr, "\rscenario %s, %s parameters: integrating %.1f s ...        ",
-                     report::scenario_label(scenario).c_str(), set.name.c_str(),
-                     scenario.duration_s);
-        std::fflush(stderr);
-      }
-      results.push_back(validated::evaluate_scenario(
-          scenario, set, measurement, uncertainty, integrator,
-          validated::scenario_split_options(pieces, scenario.duration_s)));
-      const std::string file =
-          "scenario_" + std::to_string(scenario.number) + "_" + slug(set.name) + ".svg";
-      write_text(figures_dir / file, report::svg_scenario(results.back()));
-      report.figures.push_back(file);
-    }
-  }
-  if (tty) std::fprintf(stderr, "\r%60s\r", "");
-
-  report.table = report::format_table_three(results);
-  const validated::ScenarioMeasurement& m0 =
-      results.empty() ? validated::ScenarioMeasurement{} : results.front().measurement;
-  report::SimulationSetup setup;
-  setup.truth = truth;
-  setup.truth_source = truth_source;
-  setup.measurement = measurement_options;
-  setup.arm_resolution_rad = m0.arm_resolution_rad;
-  setup.pendulum_resolution_rad = m0.pendulum_resolution_rad;
-  setup.integrator = integrator;
-  setup.pieces = pieces;
-  setup.figures = report.figures;
-  report.json = report::simulation_json(setup, results);
-  report.results = std::move(results);
-  return report;
-}
-
 int run_simulate_command(const SimulateCommandOptions& options, std::ostream& out,
                          std::ostream& err) {
   if (!options.results.empty() && options.truth) {
@@ -257,7 +176,7 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
 
   std::vector<validated::ParameterSet> sets;
   model::Parameters<double> truth = model::paper_run1();
-  std::string truth_source = "the simulated rig's default (the paper's run 1)";
+  pipeline::MeasurementSource source;  // the simulated rig's default
   std::string note;
   if (!options.results.empty()) {
     ResultsParameters r;
@@ -269,10 +188,10 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
     }
     if (r.truth) {
       truth = *r.truth;
-      truth_source = options.results.string() + " (truth)";
+      source = {pipeline::MeasurementSource::Kind::results_truth, options.results.string()};
     } else {
       note = options.results.string() + " has no truth (not a simulated rig): the measurements " +
-             "come from " + truth_source + "\n";
+             "come from " + report::measurement_source_text(source) + "\n";
     }
     if (r.sivia) sets.push_back({"SIVIA", *r.sivia});
     sets.push_back(validated::point_parameters("LSMI", r.lsmi));
@@ -285,18 +204,16 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
     sets.push_back(validated::point_parameters("truth", truth));
   }
 
-  std::filesystem::create_directories(options.output_dir);
-  const SimulationReport report = run_scenario_simulations(
-      scenarios, sets, truth, options.output_dir, truth_source, options.pieces);
-  report::Json json;
-  json["software_version"] = daemon::kSoftwareVersion;
-  if (!options.results.empty()) json["parameters_from"] = options.results.string();
-  json["simulation"] = report.json;
-  write_text(options.output_dir / "simulate.json", report::json_text(json));
-  write_text(options.output_dir / "table3.txt", report.table);
-  out << note << report.table;
+  TerminalProgress progress;  // only on a terminal: logs and CI stay quiet
+  const pipeline::Simulation simulation =
+      pipeline::simulate(scenarios, sets, truth, source, options.pieces,
+                         ::isatty(STDERR_FILENO) == 1 ? &progress : nullptr);
+  const std::vector<std::string> figures = report::write_simulation(
+      options.output_dir, simulation, daemon::kSoftwareVersion,
+      options.results.empty() ? std::nullopt : std::optional(options.results.string()));
+  out << note << report::format_table_three(simulation.results);
   out << "wrote " << (options.output_dir / "simulate.json").string() << ", table3.txt and "
-      << report.figures.size() << " figures in " << options.output_dir.string() << "\n";
+      << figures.size() << " figures in " << options.output_dir.string() << "\n";
   return 0;
 }
 

@@ -15,37 +15,6 @@ std::string escape_html(const std::string& text) {
   return text::xml_escape(text);
 }
 
-SessionSummary summarize_session(const session_log::SessionLog& log, std::string role) {
-  SessionSummary s;
-  s.file = log.path.filename().string();
-  s.role = std::move(role);
-  if (log.start) {
-    s.label = log.start->label;
-    s.profile = log.start->profile;
-    s.amplitude_duty = log.start->amplitude_duty;
-    s.duration_s = log.start->duration_s;
-    s.period_s = static_cast<double>(log.start->period_ns) * 1e-9;
-    s.seed = log.start->seed;
-  }
-  s.samples = log.samples.size();
-  s.missing_samples = log.missing_sequence_numbers().size();
-  if (!log.samples.empty()) {
-    // The counters are cumulative over the session: the last sample holds the totals.
-    s.motor_lost_reports = log.samples.back().motor_lost_reports;
-    s.encoder_lost_reports = log.samples.back().encoder_lost_reports;
-    s.overruns = log.samples.back().overruns;
-  }
-  s.faults = log.faults.size();
-  for (const auto& f : log.faults) {
-    if (f.fatal)
-      s.fatal_faults.push_back(f.reason + (f.detail.empty() ? "" : " (" + f.detail + ")"));
-  }
-  s.complete = log.complete();
-  s.damaged_regions = log.read_stats.damaged_regions;
-  s.truncated_tail = log.read_stats.truncated_tail;
-  return s;
-}
-
 ReportInput report_input(const identification::Identification& id) {
   ReportInput r;
   for (const auto& s : id.processed) r.experiment_names.push_back(s.name);
@@ -72,6 +41,39 @@ ReportInput report_input(const identification::Identification& id) {
     r.warnings.push_back({excitation.contains(w) ? "excitation" : "session", w});
   }
   return r;
+}
+
+ReportInput report_page(const pipeline::Run& run, const std::string& software_version,
+                        const std::vector<std::string>& signals_svg,
+                        const std::string& paving_svg) {
+  const identification::Identification& id = run.identification;
+  ReportInput page = report_input(id);
+  page.software_version = software_version;
+  const auto number = [](double v, const char* unit) {
+    std::ostringstream s;
+    s << v << " " << unit;
+    return s.str();
+  };
+  page.rig = {{"configuration", run.rig_name.empty() ? "-" : run.rig_name},
+              {"inputs",
+               run.kind == pipeline::InputKind::csv_recordings ? "CSV recordings" : "session logs"},
+              {"sample period", number(id.processed.front().sample_period_s * 1e3, "ms")},
+              {"low-pass cut-off", number(run.settings.identify.preprocess.cutoff_hz, "Hz")}};
+  if (run.simulated_rig) page.rig.push_back({"rig", "simulated (its true parameters are known)"});
+  page.sessions = run.sessions;
+  for (const auto& file : run.inputs) page.inputs.push_back(file.path);
+  page.signals_svg = signals_svg;
+  page.signals_bands = run.data_bounds
+                           ? "the bands are the data error bounds of [sivia] (SIVIA's data boxes)"
+                           : "the band is the pendulum encoder's quantisation";
+  page.table_two = table_two(id.combined.estimate, run.settings.sivia.config,
+                             run.sivia ? &run.sivia->result : nullptr);
+  if (run.sivia) page.sivia = sivia_summary(run.sivia->result, paving_svg);
+  if (run.simulation) {
+    page.simulation =
+        SimulationSummary{measurement_source_text(run.simulation->source), run.simulation->results};
+  }
+  return page;
 }
 
 std::vector<IntervalRow> table_two(const model::Parameters<double>& lsmi,

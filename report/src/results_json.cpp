@@ -2,6 +2,7 @@
 #include <algorithm>
 
 #include "furuta/report/json.hpp"
+#include "furuta/report/outputs.hpp"
 #include "furuta/report/tables.hpp"
 
 namespace furuta::report {
@@ -165,21 +166,46 @@ Json scenarios_json(const std::vector<validated::ScenarioResult>& results) {
   return rows;
 }
 
-Json simulation_json(const SimulationSetup& s,
-                     const std::vector<validated::ScenarioResult>& results) {
+Json simulation_json(const pipeline::Simulation& s) {
+  // The measurement's resolutions as the first scenario's measurement found them.
+  const validated::ScenarioMeasurement m0 =
+      s.results.empty() ? validated::ScenarioMeasurement{} : s.results.front().measurement;
+  std::vector<std::string> figures;
+  for (const validated::ScenarioResult& r : s.results) figures.push_back(scenario_figure_name(r));
   return Json{{"truth", parameters_json(s.truth)},
-              {"truth_source", s.truth_source},
+              {"truth_source", measurement_source_text(s.source)},
               {"measurement", Json{{"step_s", s.measurement.step_s},
                                    {"sample_period_s", s.measurement.sample_period_s},
-                                   {"arm_resolution_rad", s.arm_resolution_rad},
-                                   {"pendulum_resolution_rad", s.pendulum_resolution_rad}}},
+                                   {"arm_resolution_rad", m0.arm_resolution_rad},
+                                   {"pendulum_resolution_rad", m0.pendulum_resolution_rad}}},
               {"integrator", Json{{"order", s.integrator.order},
                                   {"tolerance", s.integrator.tolerance},
                                   {"h_min", s.integrator.h_min},
                                   {"max_width", s.integrator.max_width},
                                   {"pieces", s.pieces}}},
-              {"figures", s.figures},
-              {"results", scenarios_json(results)}};
+              {"figures", figures},
+              {"results", scenarios_json(s.results)}};
+}
+
+Json results_json(const pipeline::Run& run, const std::string& software_version) {
+  Json more = Json::object();
+  if (run.sivia) more["sivia"] = sivia_json(run.sivia->result, run.sivia->samples);
+  if (run.simulation) more["simulation"] = simulation_json(*run.simulation);
+  return results_json(run.identification, run.inputs, software_version, more);
+}
+
+Json batch_json(const BatchManifest& batch) {
+  const auto entry = [](const BatchManifest::Log& log) {
+    return Json{{"log", log.log}, {"label", log.label}};
+  };
+  Json j;
+  j["identification"] = batch.identification;
+  j["identified_at"] = batch.identified_at;
+  j["logs_dir"] = batch.logs_dir;
+  j["fit"] = Json::array();
+  for (const auto& log : batch.fit) j["fit"].push_back(entry(log));
+  j["validation"] = batch.validation ? entry(*batch.validation) : Json();
+  return j;
 }
 
 }  // namespace furuta::report

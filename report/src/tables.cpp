@@ -137,4 +137,29 @@ std::string simulation_summary_text(const std::string& measurement_source, bool 
          format_table_three(results);
 }
 
+std::string measurement_source_text(const pipeline::MeasurementSource& source) {
+  using Kind = pipeline::MeasurementSource::Kind;
+  switch (source.kind) {
+    case Kind::sessions_truth:
+      return "the simulated sessions' truth";
+    case Kind::configured_rig:
+      return "the configuration's simulated rig (the sessions carry no truth)";
+    case Kind::results_truth:
+      return source.file + " (truth)";
+    case Kind::paper_default:
+      break;
+  }
+  return "the simulated rig's default (the paper's run 1)";
+}
+
+std::string terminal_text(const pipeline::Run& run) {
+  std::string text = format_table_one(run.identification);
+  if (run.sivia) text += sivia_summary_text(run.sivia->result, run.identification.truth);
+  if (run.simulation) {
+    text += simulation_summary_text(measurement_source_text(run.simulation->source),
+                                    run.sivia && run.sivia->result.empty, run.simulation->results);
+  }
+  return text;
+}
+
 }  // namespace furuta::report

@@ -3,16 +3,17 @@
 // they are written) and their text. results.json, sivia.json and simulate.json keep the layout
 // they always had; report/README.md lists the files.
 //
-//   Json doc = results_json(id, inputs, "furuta 0.1.0");
-//   write(dir / "results.json", json_text(doc));
+//   write(dir / "results.json", json_text(results_json(run, "furuta 0.1.0")));
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/model/model.hpp"
+#include "furuta/pipeline/pipeline.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::report {
@@ -51,17 +52,26 @@ Json sivia_json(const identification::GuaranteedResult& result,
 // Table III's rows: scenario, parameters as [lo, hi], initial uncertainty, status, coverage.
 Json scenarios_json(const std::vector<validated::ScenarioResult>& results);
 
-// What the scenarios were measured and integrated with, beside their rows ("simulation").
-struct SimulationSetup {
-  model::Parameters<double> truth;
-  std::string truth_source;
-  validated::MeasurementOptions measurement;
-  double arm_resolution_rad = 0, pendulum_resolution_rad = 0;  // as measured
-  validated::IntegratorOptions integrator;
-  std::size_t pieces = 1;
-  std::vector<std::string> figures;  // file names
+// The scenarios with what they were measured and integrated with ("simulation" in results.json
+// and simulate.json): truth, truth_source, measurement, integrator, figures (file names), results.
+Json simulation_json(const pipeline::Simulation& simulation);
+
+// results.json of a run: results_json above with "sivia" and "simulation" when they ran.
+Json results_json(const pipeline::Run& run, const std::string& software_version);
+
+// batch.json, the trigger's record of one identification: its name, when, the logs directory,
+// the fitted logs and the held-out one (null when none) with their labels.
+struct BatchManifest {
+  struct Log {
+    std::string log;  // where the log is now, relative to the logs directory
+    std::string label;
+  };
+  std::string identification;
+  std::string identified_at;  // UTC, ISO 8601
+  std::string logs_dir;
+  std::vector<Log> fit;
+  std::optional<Log> validation;
 };
-Json simulation_json(const SimulationSetup& setup,
-                     const std::vector<validated::ScenarioResult>& results);
+Json batch_json(const BatchManifest& batch);
 
 }  // namespace furuta::report

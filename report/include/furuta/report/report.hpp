@@ -5,10 +5,8 @@
 // uncertainty bands (Fig. 2/3), the tubes and their coverage (Fig. 6, Table III), and what to be
 // wary of. results.json is the machine-readable twin; both come from `furuta identify`.
 //
-//   report::ReportInput input = report::report_input(id);      // Table I, Fig. 5, warnings
-//   input.sessions.push_back(report::summarize_session(log, "fit"));
-//   input.signals_svg.push_back(identification::svg_signals(...));
-//   write(dir / "report.html", report::render_html(input));
+//   report::ReportInput input = report::report_page(run, version, signals_svg, paving_svg);
+//   write(dir / "report.html", report::render_html(input));     // or write_identification
 
 #include <array>
 #include <cstddef>
@@ -21,33 +19,16 @@
 #include "furuta/config/rig_config.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/pipeline/pipeline.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::report {
 
-// What a session log says about itself, as `furuta log info` prints it: the basis of the
-// lost-sample warnings.
-struct SessionSummary {
-  std::string file;  // the log's file name
-  std::string role;  // "fit" or "held out"
-  std::string label, profile;
-  double amplitude_duty = 0;
-  double duration_s = 0;
-  double period_s = 0;
-  std::int64_t seed = 0;
-  std::size_t samples = 0;
-  std::size_t missing_samples = 0;        // sequence numbers absent between the first and the last
-  std::int64_t motor_lost_reports = 0;    // 1065
-  std::int64_t encoder_lost_reports = 0;  // 1047
-  std::int64_t overruns = 0;              // missed loop cycles
-  std::size_t faults = 0;
-  std::vector<std::string> fatal_faults;  // "reason (detail)"
-  bool complete = false;                  // start and end records present
-  std::uint64_t damaged_regions = 0;      // skipped by the checked reader
-  bool truncated_tail = false;
-};
-SessionSummary summarize_session(const session_log::SessionLog& log, std::string role);
+// What a session log says about itself (pipeline.hpp): the sessions table and the lost-sample
+// warnings.
+using pipeline::SessionSummary;
+using pipeline::summarize_session;
 
 struct Warning {
   std::string topic;  // "excitation", "session", "SIVIA", "simulation"
@@ -119,6 +100,11 @@ struct ReportInput {
 // Table I, the validation and identification's warnings (LSMI's as "excitation", the data's as
 // "session") from an identification.
 ReportInput report_input(const identification::Identification& id);
+
+// The whole page of a run: report_input, the rig and the settings, the sessions and input files,
+// the figures given (Fig. 2/3 per experiment, Fig. 4), Table II, SIVIA's summary and the scenarios.
+ReportInput report_page(const pipeline::Run& run, const std::string& software_version,
+                        const std::vector<std::string>& signals_svg, const std::string& paving_svg);
 
 // Table II: the intervals of the SIVIA problem the configuration sets up around the LSMI estimate
 // (the mu's +- [sivia] mu_uncertainty_pct, the frictions' priors; unknowns as in [sivia]), and,

@@ -9,6 +9,7 @@
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/model/model.hpp"
+#include "furuta/pipeline/pipeline.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::report {
@@ -32,9 +33,17 @@ std::string sivia_summary_text(const identification::GuaranteedResult& result,
 // the paper's figures for comparison.
 std::string format_table_three(const std::vector<validated::ScenarioResult>& results);
 
+// Where the scenarios' measurements came from, as a sentence's part: "the simulated sessions'
+// truth", ...
+std::string measurement_source_text(const pipeline::MeasurementSource& source);
+
 // "\nValidation by guaranteed simulation, measurements from <source>:" and Table III; a note
 // first when SIVIA's set was empty (no SIVIA tubes).
 std::string simulation_summary_text(const std::string& measurement_source, bool sivia_set_empty,
                                     const std::vector<validated::ScenarioResult>& results);
+
+// What `furuta identify` prints: Table I, then the SIVIA summary and the simulation summary when
+// they ran.
+std::string terminal_text(const pipeline::Run& run);
 
 }  // namespace furuta::report

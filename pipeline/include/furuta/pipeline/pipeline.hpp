@@ -1,0 +1,196 @@
+#pragma once
+// The identification as one call: preprocessing and LSMI over the fitted recordings, the check on
+// the held-out one, SIVIA, the paper's scenarios as guaranteed tubes. Numbers in, numbers out: no
+// text, JSON, SVG or HTML is made here; report/ writes every output from a Run.
+//
+//   pipeline::Batch batch;                                  // the recordings, loaded
+//   batch.fit.push_back(pipeline::log_recording(log, pipeline::Role::fit));
+//   batch.rig = rig;
+//   pipeline::Settings settings = pipeline::settings_for(rig);
+//   settings.sivia.run = true;
+//   const pipeline::Run run = pipeline::run(batch, settings);
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "furuta/config/rig_config.hpp"
+#include "furuta/identification/csv_import.hpp"
+#include "furuta/identification/guaranteed.hpp"
+#include "furuta/identification/identify.hpp"
+#include "furuta/interval/box.hpp"
+#include "furuta/model/model.hpp"
+#include "furuta/session_log/session_log.hpp"
+#include "furuta/validated/scenarios.hpp"
+
+namespace furuta::pipeline {
+
+// --- what goes in ---
+
+enum class Role { fit, held_out };
+
+// What a session log says about itself, as `furuta log info` prints it: the basis of the
+// report's sessions table and lost-sample warnings.
+struct SessionSummary {
+  std::string file;  // the log's file name
+  std::string role;  // "fit" or "held out"
+  std::string label, profile;
+  double amplitude_duty = 0;
+  double duration_s = 0;
+  double period_s = 0;
+  std::int64_t seed = 0;
+  std::size_t samples = 0;
+  std::size_t missing_samples = 0;        // sequence numbers absent between the first and the last
+  std::int64_t motor_lost_reports = 0;    // 1065
+  std::int64_t encoder_lost_reports = 0;  // 1047
+  std::int64_t overruns = 0;              // missed loop cycles
+  std::size_t faults = 0;
+  std::vector<std::string> fatal_faults;  // "reason (detail)"
+  bool complete = false;                  // start and end records present
+  std::uint64_t damaged_regions = 0;      // skipped by the checked reader
+  bool truncated_tail = false;
+};
+SessionSummary summarize_session(const session_log::SessionLog& log, std::string role);
+
+// One fitted or held-out recording, loaded.
+struct Recording {
+  identification::RawExperiment experiment;
+  std::optional<SessionSummary> session;  // session logs only
+};
+// A session log as a recording (its samples resampled, its summary).
+Recording log_recording(const session_log::SessionLog& log, Role role);
+
+enum class InputKind { session_logs, csv_recordings };
+
+struct Batch {
+  InputKind kind = InputKind::session_logs;
+  std::vector<Recording> fit;
+  std::optional<Recording> held_out;
+  // The files the recordings came from (and an import spec), in the order results.json lists
+  // them with their SHA-256.
+  std::vector<std::filesystem::path> files;
+  config::RigConfig rig;  // [identification], [sivia], the motor for eq. 4, the simulated rig
+  std::optional<model::Parameters<double>> nominal;  // CAD values
+  std::optional<model::Parameters<double>> truth;    // simulated sessions: the rig's parameters
+  identification::VoltageMotor voltage_motor;        // CSV recordings with voltage input
+  double angle_resolution_rad = 0;                   // the pendulum's quantisation
+};
+
+struct SiviaSettings {
+  bool run = false;
+  config::SiviaConfig config;  // prior, unknowns, data bounds, paver (also Table II without SIVIA)
+  int threads = 0;             // 0: every core
+};
+
+struct SimulationSettings {
+  bool run = false;
+  std::vector<validated::Scenario> scenarios = validated::paper_scenarios();
+  std::size_t pieces = 1;  // tubes per run (validated::scenario_split_options)
+};
+
+struct Settings {
+  identification::IdentifyOptions identify;  // preprocessing, LSMI, the input lag
+  SiviaSettings sivia;
+  SimulationSettings simulation;
+};
+
+// The configuration's settings: [identification] as IdentifyOptions, [sivia]; SIVIA and the
+// scenarios off.
+Settings settings_for(const config::RigConfig& rig);
+// [sivia]'s bounds on the preprocessed data (SIVIA's data boxes, the figures' bands), and
+// whether the configuration gives any (a configuration without them leaves them all 0).
+identification::DataErrorBounds data_error_bounds(const config::SiviaConfig& sivia);
+bool has_data_error_bounds(const config::SiviaConfig& sivia);
+
+// Told what the long steps are doing; the caller decides whether and how to show it.
+class Progress {
+ public:
+  virtual ~Progress() = default;
+  virtual void sivia(std::size_t /*tested*/, std::size_t /*pending*/) {}  // per generation
+  virtual void sivia_done() {}
+  virtual void scenario(const validated::Scenario& /*scenario*/,
+                        const std::string& /*parameter_set*/) {}  // before each tube
+  virtual void scenarios_done() {}
+};
+
+// --- what comes out ---
+
+// SIVIA's result and the data it was given.
+struct Guaranteed {
+  identification::GuaranteedResult result;
+  std::vector<identification::IntervalSample> samples;  // the data boxes, in constraint order
+  identification::DataErrorBounds bounds;
+};
+
+// Where the scenarios' "measurements" came from (the simulated rig with these parameters).
+struct MeasurementSource {
+  enum class Kind {
+    sessions_truth,  // the simulated sessions' truth
+    configured_rig,  // the configuration's simulated rig (the sessions carry no truth)
+    paper_default,   // the simulated rig's default, the paper's run 1
+    results_truth,   // the truth recorded in a results.json (`file`)
+  };
+  Kind kind = Kind::paper_default;
+  std::string file;
+};
+
+// One step of a tube: every solution is in `over` over [t0, t1] and in `end` at t1 (all of the
+// tube's state components: q1, dq1, q2, dq2, then carried parameters if any).
+struct StepBoxes {
+  double t0_s = 0, t1_s = 0;
+  interval::Box over, end;
+};
+// A scenario run's tube set: its pieces' steps (one piece unless the run was split).
+struct TubeSet {
+  std::vector<std::vector<StepBoxes>> pieces;
+  std::size_t dimension = 0;
+};
+
+struct Simulation {
+  MeasurementSource source;
+  model::Parameters<double> truth;  // the measurements' parameters
+  validated::MeasurementOptions measurement;
+  validated::IntegratorOptions integrator;
+  validated::StateUncertainty uncertainty;
+  std::size_t pieces = 1;
+  std::vector<validated::ScenarioResult> results;  // per scenario, per parameter set
+  std::vector<TubeSet> tubes;                      // tubes[i] is results[i]'s
+};
+
+// Something that happened that a reader should know of, beyond the numbers.
+struct Warning {
+  enum class Stage { data, lsmi, sivia, simulation };
+  Stage stage = Stage::data;
+  std::string text;
+};
+
+struct Run {
+  InputKind kind = InputKind::session_logs;
+  std::vector<identification::InputFile> inputs;  // Batch::files with their SHA-256
+  std::vector<SessionSummary> sessions;           // session logs: fitted, then held out
+  std::string rig_name;                           // the configuration's name
+  bool simulated_rig = false;                     // the sessions' true parameters are known
+  double angle_resolution_rad = 0;
+  std::optional<identification::DataErrorBounds> data_bounds;  // when [sivia] gives them
+  Settings settings;                                           // as used
+  identification::Identification identification;  // LSMI per experiment and combined, validation
+  std::optional<Guaranteed> sivia;                // settings.sivia.run
+  std::optional<Simulation> simulation;           // settings.simulation.run
+  std::vector<Warning> warnings;
+};
+
+// The whole identification of a batch. Throws what its steps throw (std::invalid_argument for
+// inputs the fit cannot use, std::runtime_error for an unreadable file).
+Run run(const Batch& batch, const Settings& settings, Progress* progress = nullptr);
+
+// The scenarios measured on the simulated rig with `truth`, then a tube per parameter set
+// (`furuta simulate`, and run() after the fit).
+Simulation simulate(const std::vector<validated::Scenario>& scenarios,
+                    const std::vector<validated::ParameterSet>& sets,
+                    const model::Parameters<double>& truth, const MeasurementSource& source,
+                    std::size_t pieces = 1, Progress* progress = nullptr);
+
+}  // namespace furuta::pipeline

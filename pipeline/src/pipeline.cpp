@@ -1,0 +1,190 @@
+// pipeline::run: LSMI, the held-out check, SIVIA and the scenarios over one batch.
+#include "furuta/pipeline/pipeline.hpp"
+
+#include <set>
+#include <utility>
+
+namespace furuta::pipeline {
+
+namespace {
+
+identification::InnerTest inner_test(config::SiviaInnerTest test) {
+  using identification::InnerTest;
+  switch (test) {
+    case config::SiviaInnerTest::witness:
+      return InnerTest::witness;
+    case config::SiviaInnerTest::intermediate_value:
+      return InnerTest::intermediate_value;
+    case config::SiviaInnerTest::for_all_data:
+      return InnerTest::for_all_data;
+    case config::SiviaInnerTest::none:
+      break;
+  }
+  return InnerTest::none;
+}
+
+// SIVIA over the fitted sessions: the mu's around the combined LSMI estimate (Table II style), the
+// frictions' priors, the data bounds and the paver settings from [sivia].
+Guaranteed run_guaranteed(const SiviaSettings& settings, const identification::Identification& id,
+                          const identification::IdentifyOptions& identify, Progress* progress) {
+  using namespace identification;
+  const config::SiviaConfig& cfg = settings.config;
+  GuaranteedOptions g;
+  g.prior = paper_prior(id.combined.estimate, cfg.mu_uncertainty_pct, 1.0);
+  g.prior[5] = interval::Interval(cfg.fv1_prior[0], cfg.fv1_prior[1]);
+  g.prior[6] = interval::Interval(cfg.fv2_prior[0], cfg.fv2_prior[1]);
+  g.unknown.fill(false);
+  for (const std::string& name : cfg.unknowns) {
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      if (name == model::kParameterNames[k]) g.unknown[k] = true;
+    }
+  }
+  g.epsilon = cfg.epsilon;
+  g.epsilon_relative = cfg.epsilon_relative;
+  g.contract = cfg.contract;
+  g.inner = inner_test(cfg.inner_test);
+  g.q = cfg.q;
+  g.threads = settings.threads;
+  if (progress != nullptr) {
+    g.progress = [progress](std::size_t tested, std::size_t pending) {
+      progress->sivia(tested, pending);
+    };
+  }
+  Guaranteed out;
+  out.bounds = data_error_bounds(cfg);
+  std::vector<const JointSeries*> series;
+  for (const JointSeries& s : id.processed) series.push_back(&s);
+  const std::size_t trim = identify.lsmi.trim_samples != 0 ? identify.lsmi.trim_samples
+                                                           : edge_samples(identify.preprocess);
+  out.samples = interval_samples(series, out.bounds, trim);
+  const SampleConstraints constraints(out.samples, g.prior, g.unknown);
+  out.result = guaranteed_identification(constraints, g);
+  if (progress != nullptr) progress->sivia_done();
+  return out;
+}
+
+// The paper's scenarios with the fitted parameters: SIVIA's outer hull when it found a set (the
+// carried mu's as their Table II intervals), the LSMI estimate as points. The measurements come
+// from the simulated rig: the truth when the sessions were simulated, else the configuration's
+// simulated-rig parameters.
+Simulation run_simulation(const SimulationSettings& settings, const Run& run, const Batch& batch,
+                          Progress* progress) {
+  std::vector<validated::ParameterSet> sets;
+  if (run.sivia && !run.sivia->result.empty) {
+    const interval::Box h = run.sivia->result.paving.outer_hull();
+    sets.push_back(
+        {"SIVIA", model::Parameters<interval::Interval>{h[0], h[1], h[2], h[3], h[4], h[5], h[6]}});
+  }
+  sets.push_back(validated::point_parameters("LSMI", run.identification.combined.estimate));
+  MeasurementSource source;
+  source.kind = batch.truth ? MeasurementSource::Kind::sessions_truth
+                            : MeasurementSource::Kind::configured_rig;
+  return simulate(settings.scenarios, sets, batch.truth.value_or(batch.rig.simulation.parameters),
+                  source, settings.pieces, progress);
+}
+
+// identify() prefixes LSMI's warnings with the experiment's name (or "all experiments"); the
+// others come from the data (lost reports, missing samples, a cut-short session, ...).
+std::vector<Warning> identification_warnings(const identification::Identification& id) {
+  std::set<std::string> lsmi;
+  for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
+    for (const auto& w : id.per_experiment[i].warnings)
+      lsmi.insert(id.processed[i].name + ": " + w);
+  }
+  for (const auto& w : id.combined.warnings) lsmi.insert("all experiments: " + w);
+  std::vector<Warning> out;
+  for (const auto& w : id.warnings) {
+    out.push_back({lsmi.contains(w) ? Warning::Stage::lsmi : Warning::Stage::data, w});
+  }
+  return out;
+}
+
+}  // namespace
+
+Recording log_recording(const session_log::SessionLog& log, Role role) {
+  return Recording{identification::experiment_from_log(log),
+                   summarize_session(log, role == Role::fit ? "fit" : "held out")};
+}
+
+Settings settings_for(const config::RigConfig& rig) {
+  Settings s;
+  identification::PreprocessOptions& p = s.identify.preprocess;
+  p.cutoff_hz = rig.identification.cutoff_hz;
+  p.differentiator_passband_hz = rig.identification.cutoff_hz;
+  p.differentiator_stopband_hz = 2 * rig.identification.cutoff_hz;
+  p.butterworth_order = rig.identification.butterworth_order;
+  p.differentiator_taps = rig.identification.differentiator_taps;
+  s.identify.estimate_input_lag = !rig.identification.input_lag_ms.has_value();
+  p.input_lag_s = rig.identification.input_lag_ms.value_or(0.0) * 1e-3;
+  s.sivia.config = rig.sivia;
+  s.sivia.threads = rig.sivia.threads;
+  return s;
+}
+
+identification::DataErrorBounds data_error_bounds(const config::SiviaConfig& cfg) {
+  const auto bound = [](const std::array<double, 2>& b) {
+    return identification::ChannelErrorBound{b[0], b[1]};
+  };
+  identification::DataErrorBounds bounds;
+  bounds.q2 = bound(cfg.q2_bound);
+  bounds.dq1 = bound(cfg.dq1_bound);
+  bounds.dq2 = bound(cfg.dq2_bound);
+  bounds.ddq1 = bound(cfg.ddq1_bound);
+  bounds.ddq2 = bound(cfg.ddq2_bound);
+  bounds.tau = bound(cfg.tau_bound);
+  return bounds;
+}
+
+bool has_data_error_bounds(const config::SiviaConfig& cfg) {
+  for (const auto* b : {&cfg.q2_bound, &cfg.dq1_bound, &cfg.dq2_bound, &cfg.ddq1_bound,
+                        &cfg.ddq2_bound, &cfg.tau_bound}) {
+    if ((*b)[0] > 0 || (*b)[1] > 0) return true;
+  }
+  return false;
+}
+
+Run run(const Batch& batch, const Settings& settings, Progress* progress) {
+  Run out;
+  out.kind = batch.kind;
+  out.settings = settings;
+  out.rig_name = batch.rig.name;
+  out.simulated_rig = batch.truth.has_value();
+  out.angle_resolution_rad = batch.angle_resolution_rad;
+  if (has_data_error_bounds(settings.sivia.config)) {
+    out.data_bounds = data_error_bounds(settings.sivia.config);
+  }
+  std::vector<identification::RawExperiment> experiments;
+  for (const Recording& r : batch.fit) {
+    experiments.push_back(r.experiment);
+    if (r.session) out.sessions.push_back(*r.session);
+  }
+  std::optional<identification::RawExperiment> held_out;
+  if (batch.held_out) {
+    held_out = batch.held_out->experiment;
+    if (batch.held_out->session) out.sessions.push_back(*batch.held_out->session);
+  }
+  out.identification = identification::identify(experiments, held_out, settings.identify,
+                                                batch.rig.motor, batch.voltage_motor);
+  if (batch.nominal) out.identification.nominal = *batch.nominal;
+  if (batch.truth) out.identification.truth = *batch.truth;
+  for (const auto& path : batch.files) {
+    out.inputs.push_back({path.string(), identification::sha256_file(path.string())});
+  }
+  out.warnings = identification_warnings(out.identification);
+
+  if (settings.sivia.run) {
+    out.sivia = run_guaranteed(settings.sivia, out.identification, settings.identify, progress);
+    const identification::GuaranteedResult& r = out.sivia->result;
+    if (r.empty) out.warnings.push_back({Warning::Stage::sivia, "empty set: " + r.finding});
+    if (r.paving.truncated) out.warnings.push_back({Warning::Stage::sivia, "paving truncated"});
+  }
+  if (settings.simulation.run) {
+    out.simulation = run_simulation(settings.simulation, out, batch, progress);
+    if (out.sivia && out.sivia->result.empty) {
+      out.warnings.push_back({Warning::Stage::simulation, "SIVIA's set is empty: no SIVIA tubes"});
+    }
+  }
+  return out;
+}
+
+}  // namespace furuta::pipeline
