@@ -11,9 +11,9 @@ set(FURUTA_MODULE_DEPENDENCIES
   "lcmtypes:"
   "session_log:lcmtypes,firmware_bridge"
   "daemon:firmware_bridge,config,session_log,lcmtypes,model"
-  "identification:model,interval,config,session_log,common"
+  "identification:model,interval,config,session_log"
   "validated:model,interval,common"
-  "pipeline:identification,validated,session_log,config,model,interval,common"
+  "pipeline:identification,validated,session_log,config,model,interval"
   "report:pipeline,identification,validated,session_log,config,model,interval,common"
   "app:firmware_bridge,config,daemon,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
 )

@@ -62,6 +62,37 @@ void append(std::string& out, const Json& value) {
   }
 }
 
+bool has_structured_member(const Json& value) {
+  for (const auto& member : value) {
+    if (member.is_structured()) return true;
+  }
+  return false;
+}
+
+// `value` at nesting `level`: expanded (one member per line, indented) while level < expanded and
+// it holds containers (below the top: [lo, hi] and a list of names stay on their line).
+void append_layout(std::string& out, const Json& value, int level, int expanded) {
+  if (level >= expanded || !value.is_structured() || value.empty() ||
+      (level > 0 && !has_structured_member(value))) {
+    append(out, value);
+    return;
+  }
+  const std::string indent(static_cast<std::size_t>(2 * (level + 1)), ' ');
+  const bool object = value.is_object();
+  out += object ? '{' : '[';
+  bool first = true;
+  for (const auto& [key, member] : value.items()) {
+    out += (first ? "\n" : ",\n") + indent;
+    first = false;
+    if (object) {
+      append_string(out, key);
+      out += ": ";
+    }
+    append_layout(out, member, level + 1, expanded);
+  }
+  out += "\n" + std::string(indent.size() - 2, ' ') + (object ? '}' : ']');
+}
+
 }  // namespace
 
 std::string json_line(const Json& value) {
@@ -70,18 +101,10 @@ std::string json_line(const Json& value) {
   return out;
 }
 
-std::string json_text(const Json& document) {
-  if (!document.is_object() || document.empty()) return json_line(document) + "\n";
-  std::string out = "{";
-  bool first = true;
-  for (const auto& [key, member] : document.items()) {
-    out += first ? "\n  " : ",\n  ";
-    first = false;
-    append_string(out, key);
-    out += ": ";
-    append(out, member);
-  }
-  return out + "\n}\n";
+std::string json_text(const Json& document, int expanded_levels) {
+  std::string out;
+  append_layout(out, document, 0, expanded_levels);
+  return out + "\n";
 }
 
 }  // namespace furuta::report

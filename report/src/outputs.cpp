@@ -14,6 +14,9 @@ namespace furuta::report {
 
 namespace {
 
+// tubes.json's layout: a line per step (document, runs, a run, its pieces, a piece, its steps).
+constexpr int kTubesLevels = 6;
+
 // The parameter set's name as a file name part: "LSMI" -> "lsmi", "truth+-1%" -> "truth_pm1pct".
 std::string slug(const std::string& name) {
   std::string out;
@@ -58,6 +61,8 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
                           const std::string& software_version) {
   std::filesystem::create_directories(dir);
   const identification::Identification& id = run.identification;
+  const Json results = results_json(run, software_version);
+  write_text_file(dir / "results.json", json_text(results));
   write_text_file(dir / "table.txt", format_table_one(id));
   std::string paving_svg;
   if (run.sivia) {
@@ -67,15 +72,15 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
       reference.assign(t.begin(), t.end());
     }
     paving_svg = svg_paving(run.sivia->result, 5, 6, id.truth ? &reference : nullptr);
-    write_text_file(dir / "sivia.json",
-                    json_text(sivia_json(run.sivia->result, run.sivia->samples)));
+    write_text_file(dir / "sivia.json", json_text(results["sivia"]));
     write_text_file(dir / "sivia.svg", paving_svg);
+    write_text_file(dir / "paving.json", json_text(paving_json(*run.sivia), 2));
   }
   if (run.simulation) {
     write_text_file(dir / "table3.txt", format_table_three(run.simulation->results));
     write_scenario_figures(dir, *run.simulation);
+    write_text_file(dir / "tubes.json", json_text(tubes_json(*run.simulation), kTubesLevels));
   }
-  write_text_file(dir / "results.json", json_text(results_json(run, software_version)));
   std::vector<std::string> signals;
   for (std::size_t i = 0; i < id.processed.size(); ++i) {
     signals.push_back(svg_signals(id.raw[i], id.processed[i], run.angle_resolution_rad,
@@ -101,6 +106,7 @@ std::vector<std::string> write_simulation(const std::filesystem::path& dir,
   json["simulation"] = simulation_json(simulation);
   write_text_file(dir / "simulate.json", json_text(json));
   write_text_file(dir / "table3.txt", format_table_three(simulation.results));
+  write_text_file(dir / "tubes.json", json_text(tubes_json(simulation), kTubesLevels));
   std::vector<std::string> figures;
   for (const validated::ScenarioResult& r : simulation.results) {
     figures.push_back(scenario_figure_name(r));

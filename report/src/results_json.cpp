@@ -184,12 +184,16 @@ Json simulation_json(const pipeline::Simulation& s) {
                                   {"max_width", s.integrator.max_width},
                                   {"pieces", s.pieces}}},
               {"figures", figures},
+              {"tubes_file", "tubes.json"},
               {"results", scenarios_json(s.results)}};
 }
 
 Json results_json(const pipeline::Run& run, const std::string& software_version) {
   Json more = Json::object();
-  if (run.sivia) more["sivia"] = sivia_json(run.sivia->result, run.sivia->samples);
+  if (run.sivia) {
+    more["sivia"] = sivia_json(run.sivia->result, run.sivia->samples);
+    more["sivia"]["paving_file"] = "paving.json";
+  }
   if (run.simulation) more["simulation"] = simulation_json(*run.simulation);
   return results_json(run.identification, run.inputs, software_version, more);
 }

@@ -20,10 +20,12 @@ namespace furuta::report {
 
 using Json = nlohmann::ordered_json;
 
-// A document's text: an object's members one per line, every value on one line ({"a": 1, "b":
-// [1, 2]}), numbers in the shortest form that reads back as the same double, NaN and infinities as
-// null (JSON has neither), strings UTF-8 (invalid bytes replaced). Ends with a newline.
-std::string json_text(const Json& document);
+// A document's text: the top-level members one per line (and, to `expanded_levels` levels, the
+// members of the containers below that hold containers), every value below that on one line ({"a":
+// 1, "b": [1, 2]}), numbers in the shortest form that reads back as the same double, NaN and
+// infinities as null (JSON has neither), strings UTF-8 (invalid bytes replaced). Ends with a
+// newline.
+std::string json_text(const Json& document, int expanded_levels = 1);
 // One value on one line, as inside json_text.
 std::string json_line(const Json& value);
 
@@ -53,10 +55,22 @@ Json sivia_json(const identification::GuaranteedResult& result,
 Json scenarios_json(const std::vector<validated::ScenarioResult>& results);
 
 // The scenarios with what they were measured and integrated with ("simulation" in results.json
-// and simulate.json): truth, truth_source, measurement, integrator, figures (file names), results.
+// and simulate.json): truth, truth_source, measurement, integrator, figures (file names),
+// tubes_file (tubes.json beside it), results.
 Json simulation_json(const pipeline::Simulation& simulation);
 
-// results.json of a run: results_json above with "sivia" and "simulation" when they ran.
+// tubes.json: per scenario run (scenario, parameter set, parameters, status, components) every
+// piece's every step: its time interval "t" [t0, t1], the box "over" the step and the box at its
+// "end", one [lo, hi] per component. Every solution from the initial box lies in `over` at every
+// t in [t0, t1] (for a split run: in some piece's).
+Json tubes_json(const pipeline::Simulation& simulation);
+// paving.json: every SIVIA box with its verdict (inner, boundary, outer when kept), the prior and
+// the unknowns, the data error bounds and every sample's data boxes (q2, dq1, dq2, ddq1, ddq2, tau
+// as [lo, hi]), from which the constraint rows are built.
+Json paving_json(const pipeline::Guaranteed& guaranteed);
+
+// results.json of a run: results_json above with "sivia" (naming paving.json in "paving_file")
+// and "simulation" when they ran.
 Json results_json(const pipeline::Run& run, const std::string& software_version);
 
 // batch.json, the trigger's record of one identification: its name, when, the logs directory,

@@ -17,14 +17,14 @@
 namespace furuta::report {
 
 // results.json, table.txt, signals_<n>.svg, torque_validation.svg (held out), report.html; with
-// SIVIA sivia.json, sivia.svg (Fig. 4); with the scenarios table3.txt and
-// scenario_<n>_<set>.svg (Fig. 6). `dir` is created. std::runtime_error when a file cannot be
-// written.
+// SIVIA sivia.json, sivia.svg (Fig. 4), paving.json; with the scenarios table3.txt,
+// scenario_<n>_<set>.svg (Fig. 6), tubes.json. `dir` is created. std::runtime_error when a file
+// cannot be written.
 void write_identification(const std::filesystem::path& dir, const pipeline::Run& run,
                           const std::string& software_version);
 
 // `furuta simulate`'s files: simulate.json ({"software_version", "parameters_from" when given,
-// "simulation"}), table3.txt and the figures. Returns the figures' file names.
+// "simulation"}), table3.txt, tubes.json and the figures. Returns the figures' file names.
 std::vector<std::string> write_simulation(const std::filesystem::path& dir,
                                           const pipeline::Simulation& simulation,
                                           const std::string& software_version,

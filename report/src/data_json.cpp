@@ -1,0 +1,116 @@
+// tubes.json and paving.json: every tube step of every scenario run, every SIVIA box with its
+// verdict and the data boxes SIVIA was given, for checking the results outside the project.
+#include "furuta/report/json.hpp"
+#include "furuta/report/tables.hpp"
+
+namespace furuta::report {
+
+namespace {
+
+// The tubes' components: the state, then the parameters when they are carried as state.
+constexpr const char* kComponents[] = {"q1",  "dq1", "q2",  "dq2", "mu1", "mu2",
+                                       "mu3", "mu4", "mug", "fv1", "fv2"};
+constexpr const char* kUnits[] = {"rad",    "rad/s",  "rad",         "rad/s", "kg m^2", "kg m^2",
+                                  "kg m^2", "kg m^2", "kg m^2 s^-2", "N m s", "N m s"};
+
+Json tube_json(const validated::ScenarioResult& r, const pipeline::TubeSet& tubes) {
+  Json run;
+  run["scenario"] = r.scenario.number;
+  run["label"] = scenario_label(r.scenario);
+  run["q2_initial_rad"] = r.scenario.q2_initial_rad;
+  run["torque_nm"] = r.scenario.torque_nm;
+  run["duration_s"] = r.scenario.duration_s;
+  run["parameter_set"] = r.parameters.name;
+  Json parameters = Json::object();
+  for (std::size_t k = 0; k < r.parameters.parameters.size(); ++k) {
+    parameters[model::kParameterNames[k]] = interval_json(r.parameters.parameters[k]);
+  }
+  run["parameters"] = parameters;
+  run["status"] = validated::to_string(r.status);
+  run["t_reached_s"] = r.t_reached_s;
+  run["steps"] = r.steps;
+  run["components"] = Json::array();
+  run["units"] = Json::array();
+  for (std::size_t i = 0; i < tubes.dimension && i < std::size(kComponents); ++i) {
+    run["components"].push_back(kComponents[i]);
+    run["units"].push_back(kUnits[i]);
+  }
+  run["pieces"] = Json::array();
+  for (const std::vector<pipeline::StepBoxes>& piece : tubes.pieces) {
+    Json steps = Json::array();
+    for (const pipeline::StepBoxes& s : piece) {
+      steps.push_back(Json{{"t", Json::array({s.t0_s, s.t1_s})},
+                           {"over", box_json(s.over)},
+                           {"end", box_json(s.end)}});
+    }
+    run["pieces"].push_back(Json{{"steps", steps}});
+  }
+  return run;
+}
+
+Json bound_json(const identification::ChannelErrorBound& b) {
+  return Json{{"absolute", b.absolute}, {"relative", b.relative}};
+}
+
+}  // namespace
+
+Json tubes_json(const pipeline::Simulation& s) {
+  Json j;
+  j["truth"] = parameters_json(s.truth);
+  j["truth_source"] = measurement_source_text(s.source);
+  j["initial_uncertainty"] = Json{{"q1_rad", s.uncertainty.q1_rad},
+                                  {"dq1_rad_s", s.uncertainty.dq1_rad_s},
+                                  {"q2_rad", s.uncertainty.q2_rad},
+                                  {"dq2_rad_s", s.uncertainty.dq2_rad_s}};
+  j["runs"] = Json::array();
+  for (std::size_t i = 0; i < s.results.size() && i < s.tubes.size(); ++i) {
+    j["runs"].push_back(tube_json(s.results[i], s.tubes[i]));
+  }
+  return j;
+}
+
+Json paving_json(const pipeline::Guaranteed& g) {
+  const identification::GuaranteedResult& r = g.result;
+  const interval::SubPaving& p = r.paving;
+  Json j;
+  j["parameters"] = Json::array();
+  j["unknowns"] = Json::array();
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    j["parameters"].push_back(model::kParameterNames[k]);
+    if (r.unknown[k]) j["unknowns"].push_back(model::kParameterNames[k]);
+  }
+  j["prior"] = box_json(p.prior);
+  j["q"] = r.q;
+  j["empty"] = r.empty;
+  j["truncated"] = p.truncated;
+  j["outer_count"] = p.outer_count;
+  j["outer_kept"] = p.outer.size();
+  j["boxes"] = Json::array();
+  const auto boxes = [&](const std::vector<interval::Box>& list, const char* verdict) {
+    for (const interval::Box& b : list) {
+      j["boxes"].push_back(Json{{"verdict", verdict}, {"box", box_json(b)}});
+    }
+  };
+  boxes(p.inner, "inner");
+  boxes(p.boundary, "boundary");
+  boxes(p.outer, "outer");
+  j["data_error_bounds"] =
+      Json{{"q2", bound_json(g.bounds.q2)},     {"dq1", bound_json(g.bounds.dq1)},
+           {"dq2", bound_json(g.bounds.dq2)},   {"ddq1", bound_json(g.bounds.ddq1)},
+           {"ddq2", bound_json(g.bounds.ddq2)}, {"tau", bound_json(g.bounds.tau)}};
+  j["samples"] = Json::array();
+  for (const identification::IntervalSample& s : g.samples) {
+    j["samples"].push_back(Json{{"experiment", s.experiment},
+                                {"index", s.index},
+                                {"t_s", s.t_s},
+                                {"q2", interval_json(s.q2)},
+                                {"dq1", interval_json(s.dq1)},
+                                {"dq2", interval_json(s.dq2)},
+                                {"ddq1", interval_json(s.ddq1)},
+                                {"ddq2", interval_json(s.ddq2)},
+                                {"tau", interval_json(s.tau)}});
+  }
+  return j;
+}
+
+}  // namespace furuta::report

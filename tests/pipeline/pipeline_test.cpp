@@ -1,0 +1,225 @@
+// pipeline::run on sessions of the simulated rig: two fitted, one held out, SIVIA on, the scenarios
+// shortened. The numbers come close to the truth, the long steps report their progress, and the
+// Run holds numbers and short names, no formatted text.
+#include "furuta/pipeline/pipeline.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "furuta/config/rig_config.hpp"
+#include "furuta/session_log/session_log.hpp"
+#include "simulated_logs.hpp"
+#include "temp_dir.hpp"
+
+namespace furuta::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+using furuta::testing::TempDir;
+
+// As tests/app/identify_command_test.cpp: what 16 ms samples of this rig allow.
+constexpr std::array<double, model::kParameterCount> kAchievableRelativeError = {
+    0.08, 0.09, 0.08, 0.08, 0.08, 0.03, 0.16};
+
+class CountingProgress : public Progress {
+ public:
+  void sivia(std::size_t, std::size_t) override { ++sivia_generations; }
+  void sivia_done() override { ++sivia_ends; }
+  void scenario(const validated::Scenario&, const std::string& set) override {
+    scenario_sets.push_back(set);
+  }
+  void scenarios_done() override { ++scenario_ends; }
+  int sivia_generations = 0, sivia_ends = 0, scenario_ends = 0;
+  std::vector<std::string> scenario_sets;
+};
+
+// Every string a Run holds, with where it is.
+void collect(const Run& run, std::vector<std::pair<std::string, std::string>>& out) {
+  const auto add = [&out](const std::string& where, const std::string& text) {
+    out.emplace_back(where, text);
+  };
+  add("rig_name", run.rig_name);
+  for (const auto& i : run.inputs) add("inputs.path", i.path), add("inputs.sha256", i.sha256);
+  for (const auto& s : run.sessions) {
+    for (const auto* t : {&s.file, &s.role, &s.label, &s.profile}) add("sessions", *t);
+    for (const auto& f : s.fatal_faults) add("sessions.fatal_faults", f);
+  }
+  const identification::Identification& id = run.identification;
+  for (const auto& e : id.raw) {
+    add("raw.name", e.name);
+    for (const auto& w : e.warnings) add("raw.warnings", w);
+  }
+  for (const auto& s : id.processed) add("processed.name", s.name);
+  for (const auto& r : id.per_experiment) {
+    for (const auto& w : r.warnings) add("lsmi.warnings", w);
+    for (const auto& p : r.poorly_excited) add("lsmi.poorly_excited", p);
+  }
+  for (const auto& w : id.warnings) add("identification.warnings", w);
+  if (id.validation) add("validation.name", id.validation->name);
+  for (const auto& w : run.warnings) add("warnings", w.text);
+  if (run.sivia) {
+    add("sivia.finding", run.sivia->result.finding);
+    for (const auto& s : run.sivia->samples) add("sivia.samples.experiment", s.experiment);
+  }
+  if (run.simulation) {
+    add("simulation.source.file", run.simulation->source.file);
+    for (const auto& r : run.simulation->results) {
+      add("results.parameters.name", r.parameters.name);
+      add("results.reason", r.reason);
+    }
+  }
+}
+
+class PipelineOnSimulatedSessions : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = std::make_unique<TempDir>();
+    const fs::path logs = dir_->path() / "logs";
+    std::vector<fs::path> paths;
+    for (std::int64_t seed = 1; seed <= 3; ++seed) {
+      paths.push_back(
+          furuta::testing::simulated_session_log(logs, "seed" + std::to_string(seed), seed));
+    }
+    Batch batch;
+    for (std::size_t i = 0; i < paths.size(); ++i) {
+      const session_log::SessionLog log = session_log::load_session_log(paths[i]);
+      if (i == 0) batch.rig = config::parse_rig_config(log.start->rig_config_toml, "log");
+      if (i < 2) {
+        batch.fit.push_back(log_recording(log, Role::fit));
+      } else {
+        batch.held_out = log_recording(log, Role::held_out);
+      }
+      batch.files.push_back(paths[i]);
+    }
+    batch.nominal = batch.rig.nominal;
+    batch.truth = batch.rig.simulation.parameters;
+    Settings settings = settings_for(batch.rig);
+    settings.sivia.run = true;
+    settings.sivia.threads = 2;
+    settings.simulation.run = true;
+    for (validated::Scenario& s : settings.simulation.scenarios) s.duration_s = 0.2;
+    progress_ = std::make_unique<CountingProgress>();
+    run_ = std::make_unique<pipeline::Run>(pipeline::run(batch, settings, progress_.get()));
+  }
+  static void TearDownTestSuite() {
+    run_.reset();
+    progress_.reset();
+    dir_.reset();
+  }
+  static std::unique_ptr<TempDir> dir_;
+  static std::unique_ptr<CountingProgress> progress_;
+  static std::unique_ptr<pipeline::Run> run_;
+};
+std::unique_ptr<TempDir> PipelineOnSimulatedSessions::dir_;
+std::unique_ptr<CountingProgress> PipelineOnSimulatedSessions::progress_;
+std::unique_ptr<pipeline::Run> PipelineOnSimulatedSessions::run_;
+
+TEST_F(PipelineOnSimulatedSessions, LsmiComesCloseToTheTruthAndTheHeldOutTorqueFits) {
+  const pipeline::Run& r = *run_;
+  ASSERT_TRUE(r.identification.truth.has_value());
+  const model::Parameters<double>& truth = *r.identification.truth;
+  EXPECT_TRUE(r.simulated_rig);
+  EXPECT_EQ(r.kind, InputKind::session_logs);
+  EXPECT_EQ(r.identification.per_experiment.size(), 2u);
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const double relative = (r.identification.combined.estimate[k] - truth[k]) / truth[k];
+    EXPECT_LT(std::abs(relative), kAchievableRelativeError[k]) << model::kParameterNames[k];
+  }
+  ASSERT_TRUE(r.identification.validation.has_value());
+  EXPECT_LT(r.identification.validation->fit.rmse_percent_of_range, 4.0);
+  // The configuration's lag, not an estimate.
+  EXPECT_EQ(r.identification.input_lag_s, 2.0e-3);
+  ASSERT_EQ(r.sessions.size(), 3u);
+  EXPECT_EQ(r.sessions[0].role, "fit");
+  EXPECT_EQ(r.sessions[2].role, "held out");
+  ASSERT_EQ(r.inputs.size(), 3u);
+  for (const auto& input : r.inputs) EXPECT_EQ(input.sha256.size(), 64u) << input.path;
+}
+
+TEST_F(PipelineOnSimulatedSessions, SiviaContainsTheTruthsFrictionsFromTheDataItWasGiven) {
+  const pipeline::Run& r = *run_;
+  ASSERT_TRUE(r.sivia.has_value());
+  const identification::GuaranteedResult& g = r.sivia->result;
+  ASSERT_FALSE(g.empty) << g.finding;
+  const interval::Box hull = g.paving.outer_hull();
+  const model::Parameters<double>& truth = *r.identification.truth;
+  EXPECT_TRUE(hull[5].contains(truth.fv1)) << hull[5];
+  EXPECT_TRUE(hull[6].contains(truth.fv2)) << hull[6];
+  EXPECT_EQ(r.sivia->samples.size(), g.samples);
+  for (const auto& s : r.sivia->samples) {
+    EXPECT_FALSE(s.tau.is_empty());
+    EXPECT_LE(s.tau.lo(), s.tau.hi());
+  }
+  EXPECT_EQ(progress_->sivia_ends, 1);
+  EXPECT_GE(progress_->sivia_generations, 1);
+}
+
+TEST_F(PipelineOnSimulatedSessions, ScenariosRunWithSiviasHullAndLsmiAndKeepTheirTubes) {
+  const pipeline::Run& r = *run_;
+  ASSERT_TRUE(r.simulation.has_value());
+  const Simulation& s = *r.simulation;
+  EXPECT_EQ(s.source.kind, MeasurementSource::Kind::sessions_truth);
+  EXPECT_EQ(s.truth.fv1, r.identification.truth->fv1);
+  ASSERT_EQ(s.results.size(), 8u) << "SIVIA and LSMI for each of the four scenarios";
+  ASSERT_EQ(s.tubes.size(), s.results.size());
+  for (std::size_t i = 0; i < s.results.size(); ++i) {
+    const validated::ScenarioResult& result = s.results[i];
+    EXPECT_EQ(result.parameters.name, i % 2 == 0 ? "SIVIA" : "LSMI");
+    EXPECT_EQ(result.scenario.duration_s, 0.2);
+    ASSERT_EQ(s.tubes[i].pieces.size(), 1u);
+    EXPECT_EQ(s.tubes[i].pieces[0].size(), result.steps);
+    EXPECT_EQ(s.tubes[i].dimension, i % 2 == 0 ? 11u : 4u) << "parameters carried as state";
+    if (result.parameters.name == "LSMI") {
+      EXPECT_DOUBLE_EQ(result.t_reached_s, 0.2) << result.reason;
+      EXPECT_GT(result.q2_step.rate(), 0.0);
+    }
+  }
+  EXPECT_EQ(progress_->scenario_sets.size(), s.results.size());
+  EXPECT_EQ(progress_->scenario_ends, 1);
+}
+
+TEST_F(PipelineOnSimulatedSessions, NothingInTheRunIsFormattedText) {
+  std::vector<std::pair<std::string, std::string>> strings;
+  collect(*run_, strings);
+  EXPECT_GT(strings.size(), 10u);
+  for (const auto& [where, text] : strings) {
+    EXPECT_EQ(text.find('\n'), std::string::npos) << where << ": " << text;
+    EXPECT_EQ(text.find('<'), std::string::npos) << where << ": " << text;
+    EXPECT_EQ(text.find('{'), std::string::npos) << where << ": " << text;
+    EXPECT_EQ(text.find('"'), std::string::npos) << where << ": " << text;
+    EXPECT_LT(text.size(), 200u) << where << ": " << text;
+  }
+}
+
+TEST(PipelineSettings, FromTheConfiguration) {
+  config::RigConfig rig;
+  rig.identification.cutoff_hz = 12;
+  rig.identification.input_lag_ms = 3.0;
+  rig.sivia.threads = 3;
+  const Settings s = settings_for(rig);
+  EXPECT_EQ(s.identify.preprocess.cutoff_hz, 12);
+  EXPECT_EQ(s.identify.preprocess.differentiator_stopband_hz, 24);
+  EXPECT_FALSE(s.identify.estimate_input_lag);
+  EXPECT_DOUBLE_EQ(s.identify.preprocess.input_lag_s, 3e-3);
+  EXPECT_FALSE(s.sivia.run);
+  EXPECT_FALSE(s.simulation.run);
+  EXPECT_EQ(s.sivia.threads, 3);
+  EXPECT_EQ(s.simulation.scenarios.size(), 4u);
+  rig.identification.input_lag_ms.reset();
+  EXPECT_TRUE(settings_for(rig).identify.estimate_input_lag);
+
+  config::SiviaConfig sivia;
+  EXPECT_FALSE(has_data_error_bounds(sivia));
+  sivia.tau_bound = {0.01, 0.05};
+  EXPECT_TRUE(has_data_error_bounds(sivia));
+  EXPECT_EQ(data_error_bounds(sivia).tau.absolute, 0.01);
+  EXPECT_EQ(data_error_bounds(sivia).tau.relative, 0.05);
+}
+
+}  // namespace
+}  // namespace furuta::pipeline
