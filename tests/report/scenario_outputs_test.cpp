@@ -13,30 +13,14 @@
 #include "furuta/report/svg.hpp"
 #include "furuta/report/tables.hpp"
 #include "furuta/validated/scenarios.hpp"
+#include "short_scenario_run.hpp"
 
 namespace furuta::report {
 namespace {
 
 using namespace furuta::validated;
 
-// One short real run shared by the tests below (computed once): scenario (a) for 0.2 s with the
-// truth as point parameters and the data uncertainty on x0.
-class ScenarioOutputs : public ::testing::Test {
- protected:
-  static const Scenario& scenario() {
-    static const Scenario s = [] {
-      Scenario a = paper_scenario(1);
-      a.duration_s = 0.2;
-      return a;
-    }();
-    return s;
-  }
-  static const ScenarioTubes& tubes() {
-    static const ScenarioTubes t =
-        run_scenario_tubes(scenario(), interval_parameters(model::paper_run1()), {}, {});
-    return t;
-  }
-};
+using ScenarioOutputs = furuta::testing::ShortScenarioRun;
 
 TEST(ScenarioNames, ThePapersFour) {
   const std::vector<Scenario> s = paper_scenarios();

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "short_scenario_run.hpp"
+
 namespace furuta::validated {
 namespace {
 
@@ -135,24 +137,7 @@ TEST(ScenarioParameters, IntervalSetsWidenTheMusAndTakeTheFrictions) {
                std::invalid_argument);
 }
 
-// One short real run shared by the tests below (computed once): scenario (a) for 0.2 s with the
-// truth as point parameters and the data uncertainty on x0.
-class ShortRun : public ::testing::Test {
- protected:
-  static const Scenario& scenario() {
-    static const Scenario s = [] {
-      Scenario a = paper_scenario(1);
-      a.duration_s = 0.2;
-      return a;
-    }();
-    return s;
-  }
-  static const ScenarioTubes& tubes() {
-    static const ScenarioTubes t =
-        run_scenario_tubes(scenario(), interval_parameters(model::paper_run1()), {}, {});
-    return t;
-  }
-};
+using ShortRun = furuta::testing::ShortScenarioRun;
 
 // Every solution from x0 +- the uncertainty is in the tube: the true model's own samples, from
 // the centre and from starts inside the box, are all covered, in both modes.
