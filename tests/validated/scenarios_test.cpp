@@ -198,7 +198,8 @@ TEST_F(ShortRun, ResultCoverageAndWidths) {
             r.q2_step.covered);
 }
 
-// A tube that ends early: the samples past its end are counted apart, and the figure marks it.
+// A tube that ends early: the samples past its end are counted apart (the figure's mark is
+// report's test, tests/report/scenario_outputs_test.cpp).
 TEST_F(ShortRun, EarlyEndIsReported) {
   Scenario longer = scenario();
   longer.duration_s = 0.8;
