@@ -1,5 +1,5 @@
-// `furuta start|stop|estop|status` (a running daemon, over LCM), `furuta run` (one session without
-// a daemon), `furuta log info|export-csv`, `furuta replay`.
+// `furuta start|stop|estop|status` (a running daemon, over LCM) and `furuta run` (one session
+// without a daemon).
 #include <unistd.h>
 
 #include <chrono>
@@ -74,29 +74,6 @@ void fill_start_command(const StartOptions& start, const config::ExcitationConfi
 std::string lcm_url_for(const RemoteOptions& remote) {
   if (!remote.lcm_url.empty()) return remote.lcm_url;
   return config::load_rig_config(remote.config_path).daemon.lcm_url;
-}
-
-// The last command written to the 1065 as the log recorded it: on every way a session ends it must
-// be the zero command, so this is what to look at after a fault.
-std::string last_motor_command(const session_log::SessionLog& log) {
-  const furuta::rig_usb_report_t* last = nullptr;
-  for (const auto& r : log.usb_reports) {
-    if (r.board == furuta::rig_usb_report_t::BOARD_MOTOR_1065 &&
-        (r.kind == furuta::rig_usb_report_t::KIND_OUTPUT ||
-         r.kind == furuta::rig_usb_report_t::KIND_ERROR)) {
-      last = &r;
-    }
-  }
-  if (!last) return "no command logged";
-  bridge::MotorOutput1065 output;
-  if (bridge::decode_output_1065(last->bytes, output) != bridge::CodecStatus::ok) {
-    return "last command undecodable (" + std::to_string(last->bytes.size()) + " bytes)";
-  }
-  std::ostringstream text;
-  text << "last command duty " << output.duty_cycle() << ", braking " << output.braking_fraction();
-  if (last->kind == furuta::rig_usb_report_t::KIND_ERROR)
-    text << " (write failed: " << last->status << ")";
-  return text.str();
 }
 
 }  // namespace
@@ -201,141 +178,6 @@ int run_session_command(const RunOptions& options, std::ostream& out, std::ostre
     return 1;
   }
   return daemon::is_fault(stop) ? 1 : 0;
-}
-
-int run_log_info_command(const std::filesystem::path& path, std::ostream& out, std::ostream&) {
-  const session_log::SessionLog log = session_log::load_session_log(path);
-  out << path.string() << "\n";
-  if (log.start) {
-    const auto& s = *log.start;
-    out << "  session   " << s.session << (s.label.empty() ? "" : " (" + s.label + ")") << "\n";
-    out << "  profile   " << s.profile << ", amplitude " << s.amplitude_duty << ", duration "
-        << s.duration_s << " s, seed " << s.seed << ", period " << s.period_ns / 1000 << " us\n";
-    out << "  software  " << s.software_version << "\n";
-  } else {
-    out << "  no session start record\n";
-  }
-  out << "  samples   " << log.samples.size();
-  const auto missing = log.missing_sequence_numbers();
-  if (!missing.empty()) out << " (" << missing.size() << " sequence numbers missing)";
-  out << "\n  usb       " << log.usb_reports.size() << " raw reports\n";
-  out << "  faults    " << log.faults.size();
-  for (const auto& f : log.faults) {
-    if (f.fatal) out << "; fatal: " << f.reason << (f.detail.empty() ? "" : " (" + f.detail + ")");
-  }
-  out << "\n  motor     " << last_motor_command(log);
-  out << "\n  end       "
-      << (log.end ? log.end->end_reason + ", " + std::to_string(log.end->samples) + " samples"
-                  : std::string("missing: the session was cut short"))
-      << "\n";
-  const auto& st = log.read_stats;
-  out << "  file      " << st.events << " events";
-  if (st.damaged_regions > 0) {
-    out << ", " << st.damaged_regions << " damaged regions (" << st.bytes_skipped
-        << " bytes skipped)";
-  }
-  if (st.truncated_tail) out << ", truncated tail";
-  if (log.undecodable_events > 0) out << ", " << log.undecodable_events << " undecodable";
-  out << "\n";
-  return log.complete() ? 0 : 1;
-}
-
-int run_log_export_csv_command(const std::filesystem::path& path,
-                               const std::filesystem::path& csv_path, std::ostream& out,
-                               std::ostream& err) {
-  const session_log::SessionLog log = session_log::load_session_log(path);
-  std::ofstream csv(csv_path);
-  if (!csv) {
-    err << "furuta log export-csv: cannot write " << csv_path.string() << "\n";
-    return 2;
-  }
-  csv << "seq,t_s,arm_counts,pendulum_counts,q1_rad,q2_rad,commanded_duty,applied_duty,"
-         "current_a,supply_v,motor_flags,encoder_flags,motor_lost,encoder_lost,overruns,flags\n";
-  csv << std::setprecision(10);
-  const std::int64_t t0 = log.samples.empty() ? 0 : log.samples.front().monotonic_ns;
-  for (const auto& s : log.samples) {
-    csv << s.seq << ',' << static_cast<double>(s.monotonic_ns - t0) * 1e-9 << ',' << s.arm_counts
-        << ',' << s.pendulum_counts << ',' << s.arm_angle_rad << ',' << s.pendulum_angle_rad << ','
-        << s.commanded_duty << ',' << s.applied_duty << ',' << s.motor_current_a << ','
-        << s.supply_voltage_v << ',' << s.motor_status_flags << ',' << s.encoder_flags << ','
-        << s.motor_lost_reports << ',' << s.encoder_lost_reports << ',' << s.overruns << ','
-        << s.flags << '\n';
-  }
-  csv.close();
-  if (!csv) {
-    err << "furuta log export-csv: error writing " << csv_path.string() << "\n";
-    return 2;
-  }
-  out << "wrote " << log.samples.size() << " samples to " << csv_path.string() << "\n";
-  return 0;
-}
-
-int run_replay_command(const std::filesystem::path& path, const std::filesystem::path& config_path,
-                       std::ostream& out, std::ostream& err) {
-  const session_log::SessionLog log = session_log::load_session_log(path);
-  if (!log.start) {
-    err << "furuta replay: " << path.string() << " has no session start record\n";
-    return 2;
-  }
-  // The log carries the configuration it ran with; a given file overrides it.
-  const config::RigConfig rig =
-      config_path.empty()
-          ? config::parse_rig_config(log.start->rig_config_toml, path.string() + " (rig config)")
-          : config::load_rig_config(config_path);
-  daemon::DaemonSettings settings = daemon::daemon_settings_from_config(rig);
-  const auto temp =
-      std::filesystem::temp_directory_path() / ("furuta-replay-" + std::to_string(::getpid()));
-  settings.recorder.logs_dir = temp;
-  settings.loop.wait_when_queue_full = true;
-  // The loop's first cycle falls on the recorded session's first deadline and the session starts
-  // there: the original already passed the rest check (the replayed traffic starts with the
-  // session).
-  settings.loop.rest_check_s = 0.0;
-  daemon::ConnectOptions connect{daemon::BackendChoice::replay, path, true,
-                                 log.start->monotonic_ns - log.start->period_ns};
-  daemon::RigConnection rig_io = daemon::connect_rig(rig, connect);
-  settings.recorder.motor_device = log.start->motor_device;
-  settings.recorder.encoder_device = log.start->encoder_device;
-  lcm::LCM lcm("memq://");
-  std::optional<std::filesystem::path> replay_log;
-  {
-    daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
-    daemon.start_replayed_session(*log.start);
-    daemon.loop().exit_when_idle();
-    daemon.start();
-    daemon.wait();
-    replay_log = daemon.recorder().last_log();
-  }
-  if (!replay_log) {
-    err << "furuta replay: the replayed session wrote no log\n";
-    std::filesystem::remove_all(temp);
-    return 2;
-  }
-  const session_log::SessionLog again = session_log::load_session_log(*replay_log);
-  std::filesystem::remove_all(temp);
-  std::size_t differing = 0;
-  std::int64_t first_difference = -1;
-  const std::size_t n = std::min(log.samples.size(), again.samples.size());
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& a = log.samples[i];
-    const auto& b = again.samples[i];
-    const bool same = a.seq == b.seq && a.monotonic_ns == b.monotonic_ns &&
-                      a.arm_counts == b.arm_counts && a.pendulum_counts == b.pendulum_counts &&
-                      a.commanded_duty == b.commanded_duty && a.applied_duty == b.applied_duty &&
-                      a.motor_report_host_ns == b.motor_report_host_ns &&
-                      a.encoder_delta_counts == b.encoder_delta_counts && a.flags == b.flags;
-    if (!same) {
-      ++differing;
-      if (first_difference < 0) first_difference = a.seq;
-    }
-  }
-  out << "replayed " << again.samples.size() << " of " << log.samples.size() << " samples";
-  if (differing == 0 && again.samples.size() == log.samples.size()) {
-    out << ": identical\n";
-    return 0;
-  }
-  out << ": " << differing << " differ (first at seq " << first_difference << ")\n";
-  return 1;
 }
 
 }  // namespace furuta::app
