@@ -14,6 +14,20 @@
 
 namespace furuta::app {
 
+// One rule for every command's exit status (README, "Exit status").
+inline constexpr int kExitDone = 0;  // everything asked happened
+inline constexpr int kExitPartOrRefused =
+    1;                                  // done in part, or refused: the output says what and why
+inline constexpr int kExitNotDone = 2;  // bad usage or input (named), or nothing answered
+inline constexpr const char* kExitStatusHelp =
+    "Exit status: 0 done; 1 done in part or refused (the output says what was set aside and why); "
+    "2 not done: bad usage, bad or untrustworthy input, or nothing answered.";
+// CLI11's own codes for a usage error (100 and up) folded into the rule; --help and --version are
+// 0.
+inline int usage_exit_status(int cli11_exit_code) {
+  return cli11_exit_code == 0 ? kExitDone : kExitNotDone;
+}
+
 struct DevicesOptions {
   bool simulated = false;  // list the simulated rig's boards instead of the USB bus
   // With `simulated`: the configuration whose [simulation] builds the rig (its boards' serials and

@@ -92,7 +92,7 @@ int report_discovery(const bridge::DiscoveryResult& found, std::ostream& out, st
   if (!found.error.empty()) {
     err << "cannot read the USB bus: libusb could not start (" << found.error << ").\n"
         << "Is this a container or machine without /dev/bus/usb? Pass the USB devices through, or "
-           "use --simulated.\n";
+           "use --sim.\n";
     return kUsbUnreadable;
   }
 

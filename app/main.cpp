@@ -6,18 +6,25 @@
 
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
+#include "furuta/daemon/rig_connection.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"furuta: identification experiments on a rotary inverted pendulum"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", furuta::daemon::kSoftwareVersion);
+  app.footer(furuta::app::kExitStatusHelp);
+  // Every option whose default is a plain value shows it in --help.
+  app.option_defaults()->always_capture_default();
 
   furuta::app::DevicesOptions devices;
   CLI::App* devices_cmd = app.add_subcommand("devices", "List connected Phidget boards");
-  devices_cmd->add_flag("--simulated", devices.simulated,
+  devices_cmd->add_flag("--sim", devices.simulated,
                         "List the simulated rig's boards instead, through its USB descriptors");
-  devices_cmd->add_option("--config", devices.config_path,
-                          "With --simulated: the rig configuration whose [simulation] builds the "
-                          "boards (serials, firmware)");
+  devices_cmd
+      ->add_option("-c,--config", devices.config_path,
+                   "With --sim: the rig configuration whose [simulation] builds the boards "
+                   "(serials, firmware); default: the built-in simulated rig")
+      ->check(CLI::ExistingFile);
 
   // A running daemon, over LCM.
   furuta::app::RemoteOptions remote;
@@ -25,9 +32,9 @@ int main(int argc, char** argv) {
   furuta::app::StartOptions start;
   auto add_remote = [&](CLI::App* cmd) {
     cmd->add_option("--lcm-url", remote.lcm_url, "LCM URL (default: the configuration's)");
-    cmd->add_option("--config", remote.config_path, "Rig configuration (TOML)")
+    cmd->add_option("-c,--config", remote.config_path, "Rig configuration (TOML)")
         ->check(CLI::ExistingFile);
-    cmd->add_option("--timeout", remote.reply_timeout_s, "Seconds to wait for the daemon")
+    cmd->add_option("--timeout", remote.reply_timeout_s, "Seconds to wait for the daemon's answer")
         ->check(CLI::Range(0.1, 60.0));
   };
   auto add_session = [&](CLI::App* cmd, furuta::app::StartOptions& start) {
@@ -52,32 +59,44 @@ int main(int argc, char** argv) {
   furuta::app::RunOptions run;
   run.config_path = furuta::config::default_rig_config_path();
   CLI::App* run_cmd = app.add_subcommand("run", "Run one session without a daemon");
-  run_cmd->add_option("--config", run.config_path, "Rig configuration (TOML)")
+  run_cmd->add_option("-c,--config", run.config_path, "Rig configuration (TOML)")
       ->check(CLI::ExistingFile);
   run_cmd->add_flag("--sim", run.simulated, "Use the simulated rig");
   run_cmd->add_flag("--virtual-time", run.virtual_time,
                     "Simulated rig: run as fast as possible instead of in real time");
-  run_cmd->add_option("--logs-dir", run.logs_dir, "Where the log goes");
-  run_cmd->add_option("--lcm-url", run.lcm_url, "LCM URL for samples (memq:// for none)");
+  run_cmd->add_option("--logs-dir", run.logs_dir,
+                      "Where the log goes (default: the configuration's [daemon] logs_dir)");
+  run_cmd->add_option("--lcm-url", run.lcm_url,
+                      "LCM URL for samples (memq:// for none; default: the configuration's)");
   add_session(run_cmd, run.session);
 
   std::string log_path, csv_path, replay_config;
   CLI::App* log_cmd = app.add_subcommand("log", "Session logs");
   log_cmd->require_subcommand(1);
   CLI::App* info_cmd = log_cmd->add_subcommand("info", "Summarise a session log");
-  info_cmd->add_option("LOG", log_path)->required()->check(CLI::ExistingFile);
+  info_cmd->add_option("LOG", log_path, "A session log (.lcmlog)")
+      ->required()
+      ->check(CLI::ExistingFile);
   CLI::App* export_cmd = log_cmd->add_subcommand("export-csv", "Samples of a log as CSV");
-  export_cmd->add_option("LOG", log_path)->required()->check(CLI::ExistingFile);
-  export_cmd->add_option("-o,--output", csv_path, "CSV file")->required();
+  export_cmd->add_option("LOG", log_path, "A session log (.lcmlog)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  export_cmd->add_option("-o,--output", csv_path, "The CSV file to write")->required();
   CLI::App* replay_cmd =
       app.add_subcommand("replay", "Replay a log's USB traffic and check the samples reproduce");
-  replay_cmd->add_option("LOG", log_path)->required()->check(CLI::ExistingFile);
-  replay_cmd->add_option("--config", replay_config, "Override the configuration the log carries");
+  replay_cmd->add_option("LOG", log_path, "A session log (.lcmlog)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  replay_cmd
+      ->add_option("-c,--config", replay_config,
+                   "Rig configuration (default: the one the log carries)")
+      ->check(CLI::ExistingFile);
 
   furuta::app::IdentifyCommandOptions identify;
   CLI::App* identify_cmd = app.add_subcommand(
       "identify", "Least-squares identification (Table I) of session logs or CSV recordings");
-  identify_cmd->add_option("LOG", identify.logs, "Session logs to fit")->check(CLI::ExistingFile);
+  identify_cmd->add_option("LOG", identify.logs, "Session logs (.lcmlog) to fit")
+      ->check(CLI::ExistingFile);
   identify_cmd
       ->add_option("--csv", identify.csvs,
                    "A CSV recording to fit instead of logs (repeat for several); needs "
@@ -93,7 +112,7 @@ int main(int argc, char** argv) {
                    "A held-out session: a log, or a CSV (name ending .csv) when fitting CSVs")
       ->check(CLI::ExistingFile);
   identify_cmd
-      ->add_option("--config", identify.config_path,
+      ->add_option("-c,--config", identify.config_path,
                    "Rig configuration (default: the one the first log carries; with CSVs only "
                    "needed for duty input)")
       ->check(CLI::ExistingFile);
@@ -126,7 +145,7 @@ int main(int argc, char** argv) {
       "The paper's validation scenarios by guaranteed simulation: coverage rates (Table III) and "
       "tubes (Fig. 6)");
   std::string scenario_choice = "all";
-  simulate_cmd->add_option("--scenario", scenario_choice, "1, 2, 3, 4 or all (default: all)");
+  simulate_cmd->add_option("--scenario", scenario_choice, "1, 2, 3, 4 or all");
   auto* results_option = simulate_cmd->add_option(
       "--results", simulate.results,
       "results.json of furuta identify: its LSMI estimate and SIVIA hull as the parameters");
@@ -152,16 +171,20 @@ int main(int argc, char** argv) {
       "to done/ or failed/ (what furuta-identify@.service runs)");
   process_logs_cmd->add_option("DIR", process_logs.logs_dir,
                                "Logs directory (default: the configuration's [daemon] logs_dir)");
-  process_logs_cmd->add_option("--config", process_logs.config_path, "Rig configuration (TOML)")
+  process_logs_cmd->add_option("-c,--config", process_logs.config_path, "Rig configuration (TOML)")
       ->check(CLI::ExistingFile);
   process_logs_cmd->add_option(
-      "-o,--identifications", process_logs.identifications_dir,
-      "Where identifications go (default: [automation] identifications_dir)");
+      "-o,--output", process_logs.identifications_dir,
+      "Where identifications go (default: the configuration's [automation] identifications_dir)");
   process_logs_cmd->add_flag("--watch", process_logs.watch,
                              "Keep watching: a pass whenever a log lands (machines without "
                              "systemd)");
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return furuta::app::usage_exit_status(app.exit(e));
+  }
 
   try {
     using furuta::app::RemoteKind;

@@ -48,7 +48,18 @@ int main(int argc, char** argv) {
   app.add_flag("--require-rt", require_rt, "Fail if the real-time set-up is refused");
   app.add_option("--logs-dir", logs_dir, "Where session logs go (overrides the configuration)");
   app.add_option("--lcm-url", lcm_url, "LCM URL (overrides the configuration)");
-  CLI11_PARSE(app, argc, argv);
+  app.set_version_flag("--version", daemon::kSoftwareVersion);
+  app.footer(
+      "Exit status: 0 stopped as asked (a signal, or the end of --replay); 1 the control loop "
+      "failed while running; 2 not started: bad usage or configuration, the boards, LCM or the "
+      "logs directory unusable, or --require-rt refused.");
+  app.option_defaults()->always_capture_default();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // CLI11's usage codes (100 and up) folded into the rule; --help and --version are 0.
+    return app.exit(e) == 0 ? 0 : 2;
+  }
 
   // Before any thread exists, so every thread inherits the mask.
   const sigset_t signals = termination_signals();
@@ -101,7 +112,7 @@ int main(int argc, char** argv) {
     lcm::LCM lcm(lcm_url);
     if (!lcm.good()) {
       std::cerr << "furutad: cannot open LCM at " << lcm_url << "\n";
-      return 1;
+      return 2;
     }
     daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
     if (replayed) {
@@ -116,7 +127,7 @@ int main(int argc, char** argv) {
       std::cerr << "furutad: --require-rt: stopping\n";
       daemon.stop(daemon::StopReason::signal);
       daemon.wait();
-      return 3;
+      return 2;
     }
     std::cerr << "furutad: running on " << rig_io.description << ", period "
               << settings.loop.period_ns / 1000 << " us, logs in "
@@ -169,8 +180,8 @@ int main(int argc, char** argv) {
   } catch (const config::ConfigError& e) {
     std::cerr << "furutad: " << e.what() << "\n";
     return 2;
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // before the loop ran: the boards, a log, the USB bus
     std::cerr << "furutad: " << e.what() << "\n";
-    return 1;
+    return 2;
   }
 }

@@ -78,7 +78,7 @@ TEST(CliArguments, FurutaRejectsMalformedArgumentsBeforeDoingAnything) {
   };
   for (const auto& [line, mention] : cases) {
     const Outcome o = run(line);
-    EXPECT_GT(o.exit_code, 0) << line << "\n" << o.output;
+    EXPECT_EQ(o.exit_code, 2) << line << "\n" << o.output;  // usage: 2, as every command's
     EXPECT_TRUE(has(o, mention)) << line << "\n" << o.output;
   }
   EXPECT_TRUE(fs::is_empty(logs.path()));
@@ -97,9 +97,71 @@ TEST(CliArguments, FurutadRejectsBadArgumentsAndBadConfigurations) {
   };
   for (const auto& [line, mention] : cases) {
     const Outcome o = run(line);
-    EXPECT_GT(o.exit_code, 0) << line << "\n" << o.output;
+    EXPECT_EQ(o.exit_code, 2) << line << "\n" << o.output;
     EXPECT_TRUE(has(o, mention)) << line << "\n" << o.output;
   }
+}
+
+// The commit the sources are at, as `git rev-parse` gives it; empty outside a git checkout.
+std::string source_commit() {
+  const Outcome o = run("git -C " FURUTA_SOURCE_DIR " rev-parse --short=12 HEAD");
+  if (o.exit_code != 0 || o.output.size() < 12) return "";
+  return o.output.substr(0, 12);
+}
+
+TEST(CliArguments, VersionNamesTheVersionAndTheGitCommitOfBothPrograms) {
+  const std::string commit = source_commit();
+  for (const std::string program : {FURUTA_CLI, FURUTA_DAEMON}) {
+    const Outcome o = run(program + " --version");
+    EXPECT_EQ(o.exit_code, 0) << program << "\n" << o.output;
+    EXPECT_TRUE(has(o, "furuta 0.1.0 (git ")) << program << "\n" << o.output;
+    EXPECT_TRUE(has(o, commit.empty() ? "unknown" : commit)) << program << "\n" << o.output;
+  }
+}
+
+TEST(CliArguments, TheSameThingHasTheSameOptionNameInEveryCommand) {
+  const std::string cli = FURUTA_CLI;
+  for (const char* command : {"start", "stop", "estop", "status", "run", "replay", "identify",
+                              "process-logs", "devices"}) {
+    const Outcome o = run(cli + " " + command + " --help");
+    EXPECT_EQ(o.exit_code, 0) << command;
+    EXPECT_TRUE(has(o, "-c,--config")) << command << "\n" << o.output;
+  }
+  for (const char* command : {"identify", "simulate", "process-logs", "log export-csv"}) {
+    const Outcome o = run(cli + " " + command + " --help");
+    EXPECT_TRUE(has(o, "-o,--output")) << command << "\n" << o.output;
+  }
+  for (const char* command : {"run", "devices"}) {
+    EXPECT_TRUE(has(run(cli + " " + command + " --help"), "--sim ")) << command;
+  }
+  EXPECT_TRUE(has(run(std::string(FURUTA_DAEMON) + " --help"), "--sim "));
+}
+
+TEST(CliArguments, HelpDescribesPositionalsShowsDefaultsAndTheExitRule) {
+  const std::string cli = FURUTA_CLI;
+  const std::pair<const char*, const char*> positionals[] = {
+      {"log info", "LOG TEXT:FILE REQUIRED      A session log"},
+      {"log export-csv", "LOG TEXT:FILE REQUIRED      A session log"},
+      {"replay", "LOG TEXT:FILE REQUIRED      A session log"},
+      {"identify", "Session logs (.lcmlog) to fit"},
+      {"process-logs", "DIR TEXT                    Logs directory"},
+  };
+  for (const auto& [command, text] : positionals) {
+    const Outcome o = run(cli + " " + command + " --help");
+    EXPECT_TRUE(has(o, text)) << command << "\n" << o.output;
+  }
+  const std::pair<const char*, const char*> defaults[] = {
+      {"status", "--timeout FLOAT:FLOAT in [0.1 - 60]=2"},
+      {"identify", "-o,--output TEXT=identification"},
+      {"simulate", "-o,--output TEXT=simulation"},
+      {"simulate", "--pieces UINT=1"},
+  };
+  for (const auto& [command, text] : defaults) {
+    const Outcome o = run(cli + " " + command + " --help");
+    EXPECT_TRUE(has(o, text)) << command << "\n" << o.output;
+    EXPECT_TRUE(has(o, "Exit status: 0 done; 1 done in part or refused")) << command;
+  }
+  EXPECT_TRUE(has(run(std::string(FURUTA_DAEMON) + " --help"), "Exit status: 0 stopped as asked"));
 }
 
 }  // namespace

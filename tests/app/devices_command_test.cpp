@@ -58,7 +58,7 @@ TEST(DevicesCommand, SimulatedListsBothBoardsWithSerials) {
   EXPECT_EQ(err.str(), "");
 }
 
-// `furuta devices --simulated` lists the rig from its USB descriptors, as the vendor reads them:
+// `furuta devices --sim` lists the rig from its USB descriptors, as the vendor reads them:
 // a vendor-class 1047 with bcdDevice 0x0210 is firmware 210, and one the codecs do not know says
 // so.
 TEST(DevicesCommand, SimulatedBoardsShowTheirFirmwareAsTheVendorReportsIt) {

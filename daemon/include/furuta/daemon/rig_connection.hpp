@@ -49,6 +49,8 @@ RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions&
 ExcitationSpec excitation_from_config(const config::ExcitationConfig& config);
 DaemonSettings daemon_settings_from_config(const config::RigConfig& config);
 
-inline constexpr const char* kSoftwareVersion = "furuta 0.1.0";
+// "furuta <version> (git <commit>)": what the binaries were built from, as --version prints it and
+// session logs and results.json record it.
+extern const char* const kSoftwareVersion;
 
 }  // namespace furuta::daemon
