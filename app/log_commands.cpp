@@ -225,7 +225,7 @@ int run_replay_command(const std::filesystem::path& path, const std::filesystem:
     }
   }
   const std::size_t logged = log.samples.size();
-  out << "replayed " << compared << " of " << logged << " logged samples";
+  out << "replayed " << compared << " of " << logged << " samples";
   if (again.samples.size() > compared) {
     out << " (and " << again.samples.size() - compared << " the log does not have)";
   }
