@@ -81,8 +81,9 @@ IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role
   const std::string role_name = role == Role::fit ? "fit" : "held out";
   for (std::size_t i = 0; i < kept.size(); ++i) {
     identification::RawExperiment e = identification::experiment_from_log(run_log(log, kept[i]));
-    if (kept.size() > 1)
-      e.name += " part " + std::to_string(i + 1) + " (" + seq_range(log, kept[i]) + ")";
+    // Named by its samples whenever the log was cut: Table I's columns and the held-out fit say
+    // which part they are.
+    if (runs.size() > 1) e.name += " (" + seq_range(log, kept[i]) + ")";
     // The session's own warnings (lost reports, overruns) once, with the account.
     if (i == 0) {
       e.warnings.push_back(parts.account);

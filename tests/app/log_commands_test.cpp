@@ -220,6 +220,23 @@ TEST_F(LogCommands, WithUseIntactPartADamagedLogFitsLikeTheIntactOne) {
   EXPECT_TRUE(contains(warnings, "separate part(s) (seq 0-")) << warnings;
 }
 
+// One held-out recording per batch: the longest intact run, the other said to be set aside.
+TEST_F(LogCommands, WithUseIntactPartADamagedHeldOutLogKeepsItsLongestRun) {
+  IdentifyCommandOptions options;
+  options.logs = {first_};
+  options.validate = damaged_copy(second_);
+  options.use_intact_part = true;
+  std::ostringstream err;
+  const std::optional<pipeline::Run> run = run_identification(options, err);
+  ASSERT_TRUE(run) << err.str();
+  ASSERT_TRUE(run->identification.validation.has_value());
+  EXPECT_TRUE(contains(run->identification.validation->name, " (seq "))
+      << run->identification.validation->name;
+  std::string warnings;
+  for (const auto& w : run->warnings) warnings += w.text + "\n";
+  EXPECT_TRUE(contains(warnings, "(held out: only the longest run is used)")) << warnings;
+}
+
 // Before: "LSMI: 0 equations for 7 parameters", naming neither the log nor what it lacks.
 TEST_F(LogCommands, IdentifyRefusesASessionTooShortNamingTheLogAndTheLengthNeeded) {
   IdentifyCommandOptions options;
