@@ -71,11 +71,16 @@ struct RunOptions {
 int run_session_command(const RunOptions& options, std::ostream& out, std::ostream& err);
 
 // --- logs ---
+// Each applies session_log::integrity_problems. log info: 0 intact, 1 not intact (the problems
+// listed), 2 not a session log.
 int run_log_info_command(const std::filesystem::path& log, std::ostream& out, std::ostream& err);
+// Writes the samples the log has: 0; 1 when the log is not intact or has no samples (the header
+// only), saying so on err; 2 when it is not a session log (nothing written).
 int run_log_export_csv_command(const std::filesystem::path& log, const std::filesystem::path& csv,
                                std::ostream& out, std::ostream& err);
 // Replays a log's USB traffic through the daemon (virtual time) and compares the samples with the
-// logged ones: 0 when identical.
+// logged ones, matched by sequence number: 0 when identical; 1 when any differ, either side has
+// samples the other lacks, or the log is not intact (then only what both have is compared).
 int run_replay_command(const std::filesystem::path& log, const std::filesystem::path& config_path,
                        std::ostream& out, std::ostream& err);
 
@@ -104,6 +109,10 @@ struct IdentifyCommandOptions {
   // simulated-rig parameters). Each scenario's duration, if given (else the paper's 4 s).
   bool simulate = false;
   std::optional<double> simulate_seconds;
+  // A log that is not intact (damaged, truncated, cut short, samples missing) is refused unless
+  // this is set; then each contiguous run of its samples long enough for the filters is fitted as
+  // a recording of its own, and the warnings say what was used and what was dropped.
+  bool use_intact_part = false;
 };
 }  // namespace furuta::app
 namespace furuta::config {
@@ -131,7 +140,7 @@ std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& op
 void print_identification(std::ostream& out, const pipeline::Run& run,
                           const std::filesystem::path& dir);
 // run_identification, then every file (report::write_identification) and print_identification.
-// 0, or 2 for unusable inputs.
+// 0, or 2 for unusable inputs (a log not intact without use_intact_part, one too short to fit).
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err);
 

@@ -15,6 +15,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/outputs.hpp"
+#include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "terminal_progress.hpp"
 
@@ -30,11 +31,35 @@ bool is_csv(const std::filesystem::path& path) {
   return extension == ".csv";
 }
 
-// Session logs: the rig is the one the first log carries, unless --config gives one.
+// Session logs: the rig is the one the first log carries, unless --config gives one. A log that
+// is not intact is refused (or, with --use-intact-part, cut at its gaps); one too short for the
+// filters is refused, naming the file and the length needed.
 std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& options,
                                                 std::ostream& err) {
   std::vector<session_log::SessionLog> logs;
   for (const auto& path : options.logs) logs.push_back(session_log::load_session_log(path));
+  std::optional<session_log::SessionLog> held_out_log;
+  if (!options.validate.empty()) held_out_log = session_log::load_session_log(options.validate);
+
+  bool refused = false;
+  const auto check_intact = [&](const session_log::SessionLog& log) {
+    const auto problems = session_log::integrity_problems(log);
+    if (problems.empty() || options.use_intact_part) return;
+    const bool foreign =
+        session_log::has_problem(problems, session_log::LogProblem::Kind::not_a_session_log);
+    err << "furuta identify: " << log.path.string() << (foreign ? ": " : " is not intact: ")
+        << session_log::describe(problems) << "\n";
+    refused = true;
+  };
+  for (const auto& log : logs) check_intact(log);
+  if (held_out_log) check_intact(*held_out_log);
+  if (refused) {
+    err << "furuta identify: refused: filtering and differentiating across a gap gives wrong "
+           "parameters without a sign of it. Pass --use-intact-part to fit only the intact parts "
+           "(each run of samples between gaps on its own), or leave the log out\n";
+    return std::nullopt;
+  }
+
   if (!logs.front().start && options.config_path.empty()) {
     err << "furuta identify: " << options.logs.front().string()
         << " has no session start record (and so no configuration); pass --config\n";
@@ -45,13 +70,44 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
                ? config::parse_rig_config(logs.front().start->rig_config_toml,
                                           options.logs.front().string() + " (rig configuration)")
                : config::load_rig_config(options.config_path);
-  for (const auto& log : logs) in.fit.push_back(pipeline::log_recording(log, pipeline::Role::fit));
+  const identification::IdentifyOptions identify = identify_options_for(in.rig, options);
+  const std::size_t min_samples = identification::minimum_samples(identify);
+  // Each log as one recording, or as its intact parts; nothing when it cannot be used.
+  const auto recordings = [&](const session_log::SessionLog& log, pipeline::Role role) {
+    std::vector<pipeline::Recording> out;
+    if (options.use_intact_part && !session_log::integrity_problems(log).empty()) {
+      pipeline::IntactParts parts = pipeline::intact_part_recordings(log, role, min_samples);
+      if (parts.recordings.empty()) {
+        err << "furuta identify: " << parts.account << "\n";
+        refused = true;
+      }
+      return std::move(parts.recordings);
+    }
+    if (log.samples.size() < 2) {
+      err << "furuta identify: " << log.path.string() << ": no samples to identify ("
+          << log.samples.size() << ")\n";
+      refused = true;
+      return out;
+    }
+    out.push_back(pipeline::log_recording(log, role));
+    const std::string too_short = identification::length_problem(out.back().experiment, identify);
+    if (!too_short.empty()) {
+      err << "furuta identify: " << log.path.string() << ": " << too_short << "\n";
+      refused = true;
+      out.clear();
+    }
+    return out;
+  };
+  for (const auto& log : logs) {
+    for (auto& r : recordings(log, pipeline::Role::fit)) in.fit.push_back(std::move(r));
+  }
   in.files = options.logs;
-  if (!options.validate.empty()) {
-    in.held_out = pipeline::log_recording(session_log::load_session_log(options.validate),
-                                          pipeline::Role::held_out);
+  if (held_out_log) {
+    auto held_out = recordings(*held_out_log, pipeline::Role::held_out);
+    if (!held_out.empty()) in.held_out = std::move(held_out.front());
     in.files.push_back(options.validate);
   }
+  if (refused) return std::nullopt;
   in.nominal = in.rig.nominal;
   if (in.rig.backend == config::UsbBackend::simulated) in.truth = in.rig.simulation.parameters;
   in.angle_resolution_rad = bridge::resolution_rad(in.rig.pendulum_encoder);

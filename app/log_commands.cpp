@@ -6,8 +6,10 @@
 #include <fstream>
 #include <iomanip>
 #include <lcm/lcm-cpp.hpp>
+#include <optional>
 #include <ostream>
 #include <sstream>
+#include <unordered_map>
 
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
@@ -15,6 +17,7 @@
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/rig_usb_report_t.hpp"
+#include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::app {
@@ -44,9 +47,28 @@ std::string last_motor_command(const session_log::SessionLog& log) {
   return text.str();
 }
 
+// The one rule (session_log::integrity_problems) as every log command reports it: the problems
+// under "integrity", a line on err naming the command and the file. 0: intact; 1: a session log
+// that is not intact; 2: not a session log at all.
+int report_integrity(const char* command, const session_log::SessionLog& log, std::ostream& out,
+                     std::ostream& err) {
+  const auto problems = session_log::integrity_problems(log);
+  if (problems.empty()) {
+    out << "  integrity intact\n";
+    return 0;
+  }
+  out << "  integrity not intact\n";
+  for (const auto& p : problems) out << "            - " << p.text << "\n";
+  const bool foreign =
+      session_log::has_problem(problems, session_log::LogProblem::Kind::not_a_session_log);
+  err << "furuta " << command << ": " << log.path.string() << (foreign ? ": " : " is not intact: ")
+      << session_log::describe(problems) << "\n";
+  return foreign ? 2 : 1;
+}
+
 }  // namespace
 
-int run_log_info_command(const std::filesystem::path& path, std::ostream& out, std::ostream&) {
+int run_log_info_command(const std::filesystem::path& path, std::ostream& out, std::ostream& err) {
   const session_log::SessionLog log = session_log::load_session_log(path);
   out << path.string() << "\n";
   if (log.start) {
@@ -80,13 +102,19 @@ int run_log_info_command(const std::filesystem::path& path, std::ostream& out, s
   if (st.truncated_tail) out << ", truncated tail";
   if (log.undecodable_events > 0) out << ", " << log.undecodable_events << " undecodable";
   out << "\n";
-  return log.complete() ? 0 : 1;
+  return report_integrity("log info", log, out, err);
 }
 
 int run_log_export_csv_command(const std::filesystem::path& path,
                                const std::filesystem::path& csv_path, std::ostream& out,
                                std::ostream& err) {
   const session_log::SessionLog log = session_log::load_session_log(path);
+  const auto problems = session_log::integrity_problems(log);
+  if (session_log::has_problem(problems, session_log::LogProblem::Kind::not_a_session_log)) {
+    err << "furuta log export-csv: " << path.string() << ": " << session_log::describe(problems)
+        << "; nothing written\n";
+    return 2;
+  }
   std::ofstream csv(csv_path);
   if (!csv) {
     err << "furuta log export-csv: cannot write " << csv_path.string() << "\n";
@@ -110,14 +138,33 @@ int run_log_export_csv_command(const std::filesystem::path& path,
     return 2;
   }
   out << "wrote " << log.samples.size() << " samples to " << csv_path.string() << "\n";
+  // The header alone still replaces an older export: the file never shows another log's samples.
+  if (log.samples.empty()) {
+    err << "furuta log export-csv: " << path.string() << " has no samples"
+        << (log.end ? " (the session ended: " + log.end->end_reason + ")" : std::string())
+        << (problems.empty() ? "" : "; " + session_log::describe(problems)) << "; wrote "
+        << csv_path.string() << " with the header only\n";
+    return 1;
+  }
+  if (!problems.empty()) {
+    err << "furuta log export-csv: " << path.string()
+        << " is not intact: " << session_log::describe(problems) << "; wrote the "
+        << log.samples.size() << " samples it has"
+        << (session_log::has_problem(problems, session_log::LogProblem::Kind::missing_samples)
+                ? " (the seq column shows where samples are missing)"
+                : "")
+        << "\n";
+    return 1;
+  }
   return 0;
 }
 
 int run_replay_command(const std::filesystem::path& path, const std::filesystem::path& config_path,
                        std::ostream& out, std::ostream& err) {
   const session_log::SessionLog log = session_log::load_session_log(path);
+  const auto problems = session_log::integrity_problems(log);
   if (!log.start) {
-    err << "furuta replay: " << path.string() << " has no session start record\n";
+    err << "furuta replay: " << path.string() << ": " << session_log::describe(problems) << "\n";
     return 2;
   }
   // The log carries the configuration it ran with; a given file overrides it.
@@ -156,28 +203,48 @@ int run_replay_command(const std::filesystem::path& path, const std::filesystem:
   }
   const session_log::SessionLog again = session_log::load_session_log(*replay_log);
   std::filesystem::remove_all(temp);
-  std::size_t differing = 0;
-  std::int64_t first_difference = -1;
-  const std::size_t n = std::min(log.samples.size(), again.samples.size());
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& a = log.samples[i];
-    const auto& b = again.samples[i];
-    const bool same = a.seq == b.seq && a.monotonic_ns == b.monotonic_ns &&
-                      a.arm_counts == b.arm_counts && a.pendulum_counts == b.pendulum_counts &&
+  // Matched by sequence number, so that samples missing from the log do not shift the rest; only
+  // what both have is compared.
+  std::unordered_map<std::int64_t, const furuta::rig_sample_t*> replayed;
+  for (const auto& b : again.samples) replayed.emplace(b.seq, &b);
+  std::size_t compared = 0, differing = 0;
+  std::optional<std::int64_t> first_difference;
+  for (const auto& a : log.samples) {
+    const auto found = replayed.find(a.seq);
+    if (found == replayed.end()) continue;
+    const auto& b = *found->second;
+    ++compared;
+    const bool same = a.monotonic_ns == b.monotonic_ns && a.arm_counts == b.arm_counts &&
+                      a.pendulum_counts == b.pendulum_counts &&
                       a.commanded_duty == b.commanded_duty && a.applied_duty == b.applied_duty &&
                       a.motor_report_host_ns == b.motor_report_host_ns &&
                       a.encoder_delta_counts == b.encoder_delta_counts && a.flags == b.flags;
     if (!same) {
       ++differing;
-      if (first_difference < 0) first_difference = a.seq;
+      if (!first_difference) first_difference = a.seq;
     }
   }
-  out << "replayed " << again.samples.size() << " of " << log.samples.size() << " samples";
-  if (differing == 0 && again.samples.size() == log.samples.size()) {
+  const std::size_t logged = log.samples.size();
+  out << "replayed " << compared << " of " << logged << " samples";
+  if (again.samples.size() > compared) {
+    out << " (and " << again.samples.size() - compared << " the log does not have)";
+  }
+  if (differing > 0) {
+    out << ": " << differing << " differ (first at seq " << *first_difference << ")\n";
+  } else if (compared == logged && again.samples.size() == logged && problems.empty()) {
     out << ": identical\n";
     return 0;
+  } else {
+    out << ": none of them differ\n";
   }
-  out << ": " << differing << " differ (first at seq " << first_difference << ")\n";
+  if (!problems.empty()) {
+    err << "furuta replay: " << path.string()
+        << " is not intact: " << session_log::describe(problems) << "; only the " << compared
+        << " samples both the log and the replay have were compared\n";
+  } else if (compared < logged) {
+    err << "furuta replay: the replay stopped after " << compared << " of the log's " << logged
+        << " samples\n";
+  }
   return 1;
 }
 

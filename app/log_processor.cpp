@@ -26,6 +26,7 @@
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/outputs.hpp"
+#include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::app {
@@ -167,22 +168,15 @@ PendingLog examine(const fs::path& path) {
     pending.problem = std::string("cannot be read: ") + e.what();
     return pending;
   }
-  const session_log::LogReadStats& stats = log.read_stats;
+  // The rule every log command applies (session_log/log_integrity.hpp).
+  const auto problems = session_log::integrity_problems(log);
   std::ostringstream problem;
-  if (!log.start) {
-    problem << "not a session log: no session start record (" << stats.events
-            << " readable events, " << stats.bytes_skipped << " bytes unreadable)";
-  } else if (stats.damaged_regions > 0) {
-    problem << "damaged: " << stats.damaged_regions << " unreadable region(s), "
-            << stats.bytes_skipped << " bytes skipped";
-  } else if (stats.truncated_tail) {
-    problem << "truncated: the file ends inside an event after " << stats.readable_prefix_bytes
-            << " readable bytes";
-  } else if (log.undecodable_events > 0) {
-    problem << log.undecodable_events << " event(s) are not messages of their channel's type";
-  } else if (!log.end) {
-    problem << "the session was cut short (no session end record, as in a log recovered after a "
-               "crash); identify it by hand with furuta identify if its samples are wanted";
+  if (!problems.empty()) {
+    problem << session_log::describe(problems);
+    if (log.start) {
+      problem << "; to identify it by hand from what is intact: furuta identify "
+                 "--use-intact-part";
+    }
   } else if (log.samples.empty()) {
     problem << "the session has no samples (it ended: " << log.end->end_reason << ")";
   }

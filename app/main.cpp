@@ -131,6 +131,9 @@ int main(int argc, char** argv) {
   identify_cmd->add_option("--threads", identify.threads, "SIVIA threads (0: all cores)")
       ->check(CLI::Range(0, 1024));
 
+  identify_cmd->add_flag("--use-intact-part", identify.use_intact_part,
+                         "Fit a damaged, truncated or cut-short log's intact parts (each run of "
+                         "samples between gaps on its own) instead of refusing it");
   identify_cmd->add_flag("--simulate", identify.simulate,
                          "After the fit, the paper's four scenarios by guaranteed simulation "
                          "(Table III, Fig. 6), with the LSMI and (with --sivia) SIVIA parameters");

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "furuta/session_log/lcm_log.hpp"
+#include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 using namespace furuta::session_log;
@@ -66,6 +67,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const SessionLog log = load_session_log(temp_log());
   check(log.read_stats.events == events.size());
   (void)log.missing_sequence_numbers();
+  (void)integrity_problems(log);
+  std::size_t covered = 0;
+  for (const SampleRun& run : contiguous_sample_runs(log)) {
+    check(run.begin == covered && run.end > run.begin);
+    covered = run.end;
+  }
+  check(covered == log.samples.size());
   for (std::int8_t board :
        {furuta::rig_usb_report_t::BOARD_MOTOR_1065, furuta::rig_usb_report_t::BOARD_ENCODER_1047}) {
     try {

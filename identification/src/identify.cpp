@@ -9,16 +9,58 @@
 #include <iomanip>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include "furuta/identification/guaranteed.hpp"
 
 namespace furuta::identification {
+
+namespace {
+
+std::size_t trim_samples(const IdentifyOptions& options) {
+  return options.lsmi.trim_samples != 0 ? options.lsmi.trim_samples
+                                        : edge_samples(options.preprocess);
+}
+
+// Before any filtering: a short experiment would otherwise surface as "LSMI: 0 equations for 7
+// parameters", naming neither the recording nor what it lacks.
+void check_length(const RawExperiment& e, const IdentifyOptions& options) {
+  const std::string problem = length_problem(e, options);
+  if (!problem.empty()) throw std::invalid_argument(e.name + ": " + problem);
+}
+
+}  // namespace
+
+std::size_t minimum_samples(const IdentifyOptions& options) {
+  return 2 * trim_samples(options) + (model::kParameterCount + 1) / 2;
+}
+
+std::string length_problem(const RawExperiment& e, const IdentifyOptions& options) {
+  const std::size_t needed = minimum_samples(options);
+  if (e.t_s.size() >= needed) return "";
+  std::ostringstream text;
+  text << std::setprecision(3) << "too short to identify: " << e.t_s.size() << " samples";
+  if (e.sample_period_s > 0) {
+    text << " (" << static_cast<double>(e.t_s.size()) * e.sample_period_s << " s)";
+  }
+  text << "; the fit needs at least " << needed << " samples";
+  if (e.sample_period_s > 0) {
+    text << " (" << static_cast<double>(needed) * e.sample_period_s << " s at "
+         << e.sample_period_s * 1e3 << " ms)";
+  }
+  text << ": " << trim_samples(options) << " at each end for the filters' transient and "
+       << needed - 2 * trim_samples(options) << " between for " << model::kParameterCount
+       << " parameters";
+  return text.str();
+}
 
 Identification identify(const std::vector<RawExperiment>& experiments,
                         const std::optional<RawExperiment>& validation,
                         const IdentifyOptions& options, const model::MotorData& motor,
                         const VoltageMotor& voltage_motor) {
   if (experiments.empty()) throw std::invalid_argument("identify: no experiment given");
+  for (const RawExperiment& e : experiments) check_length(e, options);
+  if (validation) check_length(*validation, options);
   Identification id;
   id.raw = experiments;
   LsmiOptions lsmi = options.lsmi;

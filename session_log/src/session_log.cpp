@@ -54,7 +54,15 @@ SessionLog load_session_log(const std::filesystem::path& path) {
   log.path = path;
   LcmLogReader reader(path);
   LogEvent event;
+  std::uint64_t damaged_so_far = 0;
   while (reader.next(event)) {
+    if (reader.stats().damaged_regions != damaged_so_far) {
+      damaged_so_far = reader.stats().damaged_regions;
+      if (!log.samples.empty() && (log.damage_before_sample.empty() ||
+                                   log.damage_before_sample.back() != log.samples.size())) {
+        log.damage_before_sample.push_back(log.samples.size());
+      }
+    }
     const std::string_view channel = event.channel;
     bool decoded = true;
     if (channel == kChannelSession) {

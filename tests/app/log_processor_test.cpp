@@ -215,6 +215,11 @@ TEST_F(Trigger, ABatchWhoseIdentificationFailsGoesToFailedTogether) {
     EXPECT_NE(reason.find("identification " + fits_[0].stem().string()), std::string::npos)
         << reason;
     EXPECT_NE(reason.find("failed: "), std::string::npos) << reason;
+    // Before: "LSMI: 0 equations for 7 parameters". Now the log, its length and the length needed.
+    EXPECT_NE(reason.find(too_short_.filename().string() + ": too short to identify: "),
+              std::string::npos)
+        << reason;
+    EXPECT_NE(reason.find("the fit needs at least 82 samples"), std::string::npos) << reason;
   }
   EXPECT_TRUE(identifications_in(options_.identifications_dir).empty());
 }

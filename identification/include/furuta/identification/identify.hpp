@@ -39,6 +39,17 @@ struct Identification {
   std::vector<std::string> warnings;
 };
 
+// The fewest samples one experiment (fitted or held out) needs: the filters' edge at each end,
+// trimmed before fitting (edge_samples, or lsmi.trim_samples when given), and enough samples
+// between for as many equations (two per sample) as there are parameters.
+std::size_t minimum_samples(const IdentifyOptions& options);
+
+// Why an experiment is too short to identify ("too short to identify: 62 samples (0.992 s); the
+// fit needs at least 82 ..."), or "" when it is long enough.
+std::string length_problem(const RawExperiment& experiment, const IdentifyOptions& options);
+
+// Throws std::invalid_argument naming the experiment, its length and the length needed when one
+// has fewer than minimum_samples (length_problem).
 Identification identify(const std::vector<RawExperiment>& experiments,
                         const std::optional<RawExperiment>& validation,
                         const IdentifyOptions& options, const model::MotorData& motor,

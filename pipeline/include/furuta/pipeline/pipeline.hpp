@@ -63,6 +63,18 @@ struct Recording {
 // A session log as a recording (its samples resampled, its summary).
 Recording log_recording(const session_log::SessionLog& log, Role role);
 
+// A log that is not intact (session_log::integrity_problems), used as far as it is: its samples
+// cut at every gap (session_log::contiguous_sample_runs), each run a recording of its own, so that
+// nothing is filtered or differentiated across a gap. Runs shorter than min_samples (the fit's
+// identification::minimum_samples) are dropped; held out, only the longest run is kept. The first
+// recording carries the session summary and, as a warning, `account`.
+struct IntactParts {
+  std::vector<Recording> recordings;  // empty: no run is long enough
+  std::string account;  // what was used and what was dropped, naming the file and the samples
+};
+IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role,
+                                   std::size_t min_samples);
+
 enum class InputKind { session_logs, csv_recordings };
 
 struct Batch {

@@ -33,6 +33,10 @@ struct SessionLog {
   LogReadStats read_stats;
   std::uint64_t undecodable_events = 0;  // intact on disk but not a message of its channel's type
   std::uint64_t unknown_channel_events = 0;
+  // Indices i (ascending) such that the reader skipped a damaged region between samples[i - 1] and
+  // samples[i]: the samples on either side are not contiguous in time even when no sequence
+  // number is missing (the region may have held USB reports only).
+  std::vector<std::size_t> damage_before_sample;
 
   bool complete() const { return start.has_value() && end.has_value(); }
   // Sample sequence numbers not present between the first and the last (each should be explained by

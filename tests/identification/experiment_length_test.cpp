@@ -1,0 +1,60 @@
+// An experiment too short for the filters and the seven parameters is refused by name, with its
+// length and the length needed, before any filtering (it used to surface as "LSMI: 0 equations for
+// 7 parameters").
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "furuta/identification/identify.hpp"
+
+namespace furuta::identification {
+namespace {
+
+RawExperiment experiment(const std::string& name, std::size_t samples) {
+  RawExperiment e;
+  e.name = name;
+  e.sample_period_s = 0.016;
+  for (std::size_t i = 0; i < samples; ++i) {
+    const double t = 0.016 * static_cast<double>(i);
+    e.t_s.push_back(t);
+    e.q1.push_back(std::sin(t));
+    e.q2.push_back(0.1 * std::sin(3 * t));
+    e.input.push_back(0.3 * std::sin(2 * t));
+  }
+  return e;
+}
+
+TEST(ExperimentLength, TheMinimumIsTheFiltersEdgeAtEachEndAndFourSamplesBetween) {
+  IdentifyOptions options;  // 31 taps: an edge of 39 samples
+  EXPECT_EQ(edge_samples(options.preprocess), 39u);
+  EXPECT_EQ(minimum_samples(options), 82u);
+  options.lsmi.trim_samples = 10;
+  EXPECT_EQ(minimum_samples(options), 24u);
+  EXPECT_EQ(length_problem(experiment("long", 24), options), "");
+}
+
+TEST(ExperimentLength, AShortFittedOrHeldOutExperimentIsRefusedByName) {
+  const IdentifyOptions options;
+  const model::MotorData motor;
+  try {
+    identify({experiment("long", 400), experiment("one-second", 62)}, std::nullopt, options, motor);
+    FAIL() << "a 62-sample experiment was fitted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "one-second: too short to identify: 62 samples (0.992 s); the fit needs at least 82 "
+              "samples (1.31 s at 16 ms): 39 at each end for the filters' transient and 4 between "
+              "for 7 parameters");
+  }
+  try {
+    identify({experiment("long", 400)}, experiment("held-out", 81), options, motor);
+    FAIL() << "an 81-sample held-out experiment was used";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("held-out: too short to identify: 81 samples"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace furuta::identification
