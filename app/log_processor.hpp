@@ -5,10 +5,10 @@
 // systemd.
 //
 // Layout, for a logs directory L and an identifications directory I:
-//   L/<session>.lcmlog           complete logs, pending (L/.partial/ is the daemon's: never
-//   touched) L/done/<session>.lcmlog      identified (or not: a label [automation] does not
-//   name, said per log) L/failed/<session>.lcmlog    with L/failed/<session>.reason.txt saying why
-//   I/<first fit session>/       one identification: results.json, report.html, batch.json, ...
+// - L/<session>.lcmlog: complete logs, pending (L/.partial/ is the daemon's: never touched);
+// - L/done/<session>.lcmlog: identified, or not (a label [automation] does not name: said per log);
+// - L/failed/<session>.lcmlog, with L/failed/<session>.reason.txt saying why;
+// - I/<first fit session>/: one identification (results.json, report.html, batch.json, ...).
 //
 // Crash safety: an identification is written into I/.tmp-<name>/ and renamed into place; a journal
 // (L/.commit) names it and its logs until they are all in done/. Whatever point a pass dies at,
