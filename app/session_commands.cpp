@@ -313,32 +313,36 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
     return as_asked ? 0 : 1;
   }
 
-  // stop, estop: the reply's state is from before the loop acted on it.
+  // stop, estop: the reply's state is from before the loop acted on it. Its session name may lag
+  // the loop's state by a moment (the I/O thread names it): then the session is the first one
+  // after the reply's last_session.
   const char* done =
       kind == RemoteKind::estop ? "e-stop: motor commanded to zero, braked" : "stop requested";
-  const std::string session = reply->state == furuta::rig_status_t::STATE_RUNNING
-                                  ? (reply->session.empty() ? reply->last_session : reply->session)
-                                  : std::string();
-  if (session.empty()) {
+  if (reply->state != furuta::rig_status_t::STATE_RUNNING) {
     out << name << ": " << done << "; no session was running"
         << (kind == RemoteKind::stop ? ": nothing to stop" : "") << "\n";
     print_status(*reply, out);
     return 0;
   }
+  const std::string session = reply->session;
+  const std::string before = reply->last_session;
+  const std::string which = session.empty() ? "the running session" : "session " + session;
   if (!remote.wait) {
-    out << name << ": " << done << "; not waiting for session " << session << " to end\n";
+    out << name << ": " << done << "; not waiting for " << which << " to end\n";
     return 0;
   }
   const auto ended = poll_status(channel, millis(remote.wait_s), [&](const auto& s) {
-    return s.last_session == session && !s.last_session_end.empty();
+    if (s.last_session_end.empty()) return false;
+    return session.empty() ? !s.last_session.empty() && s.last_session != before
+                           : s.last_session == session;
   });
   if (!ended) {
-    err << name << ": " << done << ", but session " << session << " still ran after "
-        << remote.wait_s << " s; `furuta status` (and `furuta estop`)\n";
+    err << name << ": " << done << ", but " << which << " still ran after " << remote.wait_s
+        << " s; `furuta status` (and `furuta estop`)\n";
     return 2;
   }
-  out << name << ": " << done << "; session " << session << " ended: " << ended->last_session_end
-      << "\n";
+  out << name << ": " << done << "; session " << ended->last_session
+      << " ended: " << ended->last_session_end << "\n";
   print_status(*ended, out);
   return 0;
 }
