@@ -155,17 +155,14 @@ int main(int argc, char** argv) {
       std::uint64_t watchdog_usec = 0;
       const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
       while (!done.load()) {
-        if (!ready_sent && daemon.ready()) {
+        const bool announce = !ready_sent && daemon.ready();
+        if (announce || (ready_sent && daemon.logs_problem() != logs_problem)) {
           logs_problem = daemon.logs_problem();
-          const std::string status =
-              logs_problem.empty() ? "running" : "running; starts refused: " + logs_problem;
-          sd_notify(0, ("READY=1\nSTATUS=" + status).c_str());
+          const std::string state =
+              std::string(announce ? "READY=1\n" : "") + "STATUS=running" +
+              (logs_problem.empty() ? "" : "; starts refused: " + logs_problem);
+          sd_notify(0, state.c_str());
           ready_sent = true;
-        } else if (ready_sent && daemon.logs_problem() != logs_problem) {
-          logs_problem = daemon.logs_problem();
-          const std::string status =
-              logs_problem.empty() ? "running" : "running; starts refused: " + logs_problem;
-          sd_notify(0, ("STATUS=" + status).c_str());
         }
         const std::int64_t beat = daemon.heartbeat();
         if (watchdog && beat != last_heartbeat) sd_notify(0, "WATCHDOG=1");
