@@ -43,6 +43,10 @@ struct RemoteOptions {
   std::string lcm_url;  // empty: the configuration's
   std::filesystem::path config_path;
   double reply_timeout_s = 2.0;
+  // start: how long to wait, after the daemon accepted it, for the session to run or be refused
+  // (the loop refuses a pendulum that swings); stop, estop: for the session to end.
+  double wait_s = 5.0;
+  bool wait = true;  // false: return once the daemon has answered the command itself
 };
 // A session's excitation as the user gave it; what is left out comes from the configuration's
 // [excitation], field by field.
@@ -54,8 +58,11 @@ struct StartOptions {
   std::optional<std::int64_t> seed;
 };
 enum class RemoteKind { start, stop, estop, status };
-// Sends one command and prints the daemon's reply. 0: accepted; 1: refused (the reason is printed);
-// 2: no daemon answered.
+// Sends one command and reports the daemon's verdict on it. start: 0 once the session runs, 1
+// refused (by the command's check, or by the loop: a session running, the pendulum swinging, the
+// logs directory), 2 no answer, or no verdict within wait_s. stop, estop: 0 once the session has
+// ended (or when none ran: said so), 2 when it still runs after wait_s. status: 0. Over LCM;
+// daemon_channel.hpp takes another channel.
 int run_remote_command(RemoteKind kind, const RemoteOptions& remote, const StartOptions& start,
                        std::ostream& out, std::ostream& err);
 

@@ -279,11 +279,11 @@ class Processor {
         const fs::path target = move_into(path, done_);
         sync_directory(done_);
         sync_directory(o_.logs_dir);
-        out_ << path.filename().string() << ": label '" << log.label
-             << "' is neither a fit label nor the validation label of [automation]: nothing to "
-                "identify, moved to "
-             << target.string() << "\n";
-        ++pass_.logs_done;
+        out_ << path.filename().string() << ": not identified: label '" << log.label
+             << "' is not in [automation] (fit_labels " << describe_fit_labels()
+             << (a.validation_label.empty() ? "" : ", validation_label " + a.validation_label)
+             << "); moved to " << target.string() << " for a manual `furuta identify`\n";
+        ++pass_.logs_not_identified;
         moved = true;
       }
     }
@@ -303,9 +303,23 @@ class Processor {
     pass_.logs_waiting =
         static_cast<int>(fits.size() - used_fits + validations.size() - used_validations);
     if (!moved && pass_.logs_waiting > 0) {
-      out_ << pass_.logs_waiting << " log(s) wait for the rest of their identification ("
-           << a.fit_sessions << " of " << describe_fit_labels() << " sessions"
-           << (a.validation_label.empty() ? "" : " and one " + a.validation_label) << ")\n";
+      // Each log left pending, and what its batch still lacks.
+      const std::size_t fits_left = fits.size() - used_fits;
+      const std::size_t validations_left = validations.size() - used_validations;
+      std::ostringstream batch;
+      batch << std::min(fits_left, fit_count) << " of " << fit_count << " '"
+            << describe_fit_labels() << "' session(s)";
+      if (!a.validation_label.empty()) {
+        batch << " and " << std::min<std::size_t>(validations_left, 1) << " of 1 '"
+              << a.validation_label << "'";
+      }
+      const auto say = [&](const PendingLog& log) {
+        out_ << log.path.filename().string() << ": waiting for its batch: " << batch.str() << " ("
+             << o_.logs_dir.string() << ")\n";
+      };
+      std::for_each(fits.begin() + static_cast<std::ptrdiff_t>(used_fits), fits.end(), say);
+      std::for_each(validations.begin() + static_cast<std::ptrdiff_t>(used_validations),
+                    validations.end(), say);
     }
     return moved;
   }
@@ -527,9 +541,12 @@ int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& ou
   }
   const ProcessingPass pass = process_logs(processor, out, err);
   out << "process-logs: " << pass.identifications.size() << " identification(s), " << pass.logs_done
-      << " log(s) to done/, " << pass.logs_failed << " to failed/, " << pass.logs_waiting
-      << " waiting\n";
-  // Non-zero when a log was set aside, so `systemctl --failed` shows that someone should look.
+      << " log(s) identified to done/, " << pass.logs_not_identified
+      << " not identified (label not in [automation]) to done/, " << pass.logs_failed
+      << " to failed/, " << pass.logs_waiting << " waiting\n";
+  // Non-zero when a log was set aside, so `systemctl --failed` shows that someone should look. A
+  // label [automation] does not name is no failure: the session was not meant for the trigger,
+  // and each such log is named above.
   return pass.logs_failed > 0 ? 1 : 0;
 }
 

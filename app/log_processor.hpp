@@ -5,10 +5,10 @@
 // systemd.
 //
 // Layout, for a logs directory L and an identifications directory I:
-//   L/<session>.lcmlog           complete logs, pending (L/.partial/ is the daemon's: never
-//   touched) L/done/<session>.lcmlog      identified (or nothing to identify: a label [automation]
-//   ignores) L/failed/<session>.lcmlog    with L/failed/<session>.reason.txt saying why I/<first
-//   fit session>/       one identification: results.json, report.html, batch.json, ...
+// - L/<session>.lcmlog: complete logs, pending (L/.partial/ is the daemon's: never touched);
+// - L/done/<session>.lcmlog: identified, or not (a label [automation] does not name: said per log);
+// - L/failed/<session>.lcmlog, with L/failed/<session>.reason.txt saying why;
+// - I/<first fit session>/: one identification (results.json, report.html, batch.json, ...).
 //
 // Crash safety: an identification is written into I/.tmp-<name>/ and renamed into place; a journal
 // (L/.commit) names it and its logs until they are all in done/. Whatever point a pass dies at,
@@ -34,10 +34,11 @@ struct LogProcessorOptions {
 
 struct ProcessingPass {
   std::vector<std::filesystem::path> identifications;  // written by this pass, in place
-  int logs_done = 0;       // moved to done/ (identified, or nothing to identify)
-  int logs_failed = 0;     // moved to failed/, with their reason
-  int logs_waiting = 0;    // left pending: their identification is not complete yet
-  bool recovered = false;  // a crashed pass's work was finished or undone first
+  int logs_done = 0;                                   // identified, moved to done/
+  int logs_not_identified = 0;  // a label [automation] does not name: moved to done/, unfitted
+  int logs_failed = 0;          // moved to failed/, with their reason
+  int logs_waiting = 0;         // left pending: their identification is not complete yet
+  bool recovered = false;       // a crashed pass's work was finished or undone first
 };
 
 // One pass: takes the directory's lock (a second pass waits for the first), finishes or undoes

@@ -46,13 +46,31 @@ int main(int argc, char** argv) {
     cmd->add_option("--label", start.label, "A label for the session's name");
     cmd->add_option("--seed", start.seed, "Seed of randomised profiles");
   };
-  CLI::App* start_cmd = app.add_subcommand("start", "Start a session on the running daemon");
+  // The daemon answers a command at once; the session starts (or is refused) or ends a moment
+  // later.
+  bool no_wait = false;
+  auto add_wait = [&](CLI::App* cmd, const std::string& what) {
+    auto* wait = cmd->add_option("--wait", remote.wait_s,
+                                 "Seconds to wait for " + what + " (exit 2 if it has not by then)")
+                     ->check(CLI::Range(0.1, 600.0));
+    cmd->add_flag("--no-wait", no_wait, "Return once the daemon has accepted the command")
+        ->excludes(wait);
+  };
+  CLI::App* start_cmd = app.add_subcommand(
+      "start",
+      "Start a session on the running daemon; waits until it runs (exit 0) or is refused (1)");
   add_remote(start_cmd);
   add_session(start_cmd, start);
-  CLI::App* stop_cmd = app.add_subcommand("stop", "Stop the running session");
+  add_wait(start_cmd,
+           "the session to run or be refused, after the daemon accepted it (the pendulum must "
+           "have hung still for [daemon] rest_check_s)");
+  CLI::App* stop_cmd =
+      app.add_subcommand("stop", "Stop the running session; waits until it has ended");
   add_remote(stop_cmd);
+  add_wait(stop_cmd, "the session to end");
   CLI::App* estop_cmd = app.add_subcommand("estop", "Emergency stop: motor to zero, braked");
   add_remote(estop_cmd);
+  add_wait(estop_cmd, "the session to end");
   CLI::App* status_cmd = app.add_subcommand("status", "The daemon's state");
   add_remote(status_cmd);
 
@@ -188,6 +206,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return furuta::app::usage_exit_status(app.exit(e));
   }
+  remote.wait = !no_wait;
 
   try {
     using furuta::app::RemoteKind;

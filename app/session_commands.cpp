@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <ctime>
+#include <deque>
 #include <fstream>
 #include <iomanip>
 #include <lcm/lcm-cpp.hpp>
@@ -13,6 +15,7 @@
 #include <thread>
 
 #include "commands.hpp"
+#include "daemon_channel.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
@@ -43,24 +46,145 @@ const char* state_name(std::int8_t state) {
   }
 }
 
+std::string utc_time(std::int64_t wall_ns) {
+  const auto seconds = static_cast<std::time_t>(wall_ns / 1'000'000'000);
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S UTC", &utc);
+  return stamp;
+}
+
+// One line (scripts read "state X", "cycles N," and "last fault: reason"); counts that have no
+// data yet say so rather than showing a zero.
 void print_status(const furuta::rig_status_t& s, std::ostream& out) {
   out << "state " << state_name(s.state);
   if (!s.session.empty()) out << ", session " << s.session;
-  out << "; cycles " << s.cycles << ", overruns " << s.overruns << ", lost reports 1065 "
-      << s.motor_lost_reports << " / 1047 " << s.encoder_lost_reports;
-  out << std::fixed << std::setprecision(1) << "; wake-up latency mean " << s.jitter_mean_us
-      << " us, p99 " << s.jitter_p99_us << " us, max " << s.jitter_max_us << " us";
-  if (!s.last_fault.empty()) out << "; last fault: " << s.last_fault;
+  if (s.cycles == 0) {
+    out << "; cycles 0: the loop has not run yet, no reports";
+  } else {
+    out << "; cycles " << s.cycles << ", overruns " << s.overruns << ", lost reports 1065 "
+        << s.motor_lost_reports << " / 1047 " << s.encoder_lost_reports;
+  }
+  out << "; wake-up latency ";
+  if (s.latency_samples == 0) {
+    out << "no data yet (figures are per session)";
+  } else {
+    out << (s.session.empty() ? "of the last session" : "of this session") << " ("
+        << s.latency_samples << " cycles) " << std::fixed << std::setprecision(1) << "mean "
+        << s.jitter_mean_us << " us, p99 " << s.jitter_p99_us << " us, max " << s.jitter_max_us
+        << " us";
+    out.unsetf(std::ios::floatfield);
+  }
+  if (s.session.empty() && !s.last_session.empty()) {
+    out << "; last session " << s.last_session << " ended " << s.last_session_end;
+  }
+  if (s.last_fault.empty()) {
+    out << "; no fault since start-up";
+  } else {
+    out << "; last fault: " << s.last_fault << " (" << utc_time(s.last_fault_wall_ns)
+        << (s.last_fault_session.empty() ? ", no session running"
+                                         : ", in session " + s.last_fault_session)
+        << "), " << s.sessions_since_fault << " session(s) ended well since";
+  }
+  if (!s.logs_problem.empty()) out << "; starts refused: cannot log a session: " << s.logs_problem;
   out << "\n";
 }
 
-struct ReplyWaiter {
-  std::int64_t request_id = 0;
-  std::optional<furuta::rig_status_t> reply;
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_status_t* m) {
-    if (m->reply_to_request_id == request_id) reply = *m;
+// duration_reached and stop_command end a session as asked; every other end is a fault.
+bool ended_as_asked(const std::string& end_reason) {
+  const std::string reason = end_reason.substr(0, end_reason.find(':'));
+  return reason == "duration_reached" || reason == "stop_command";
+}
+
+class LcmChannel final : public DaemonChannel {
+ public:
+  explicit LcmChannel(std::string url) : url_(std::move(url)), lcm_(url_) {
+    if (lcm_.good()) {
+      subscription_ = lcm_.subscribe(session_log::kChannelStatus, &LcmChannel::on_status, this);
+    }
   }
+  ~LcmChannel() override {
+    if (subscription_) lcm_.unsubscribe(subscription_);
+  }
+  bool good() { return lcm_.good(); }
+  void send(const furuta::rig_command_t& command) override {
+    lcm_.publish(session_log::kChannelCommand, &command);
+  }
+  std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) override {
+    const auto deadline = std::chrono::steady_clock::now() + wait;
+    while (received_.empty()) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return std::nullopt;
+      lcm_.handleTimeout(static_cast<int>(std::max<std::int64_t>(1, left.count())));
+    }
+    furuta::rig_status_t first = std::move(received_.front());
+    received_.pop_front();
+    return first;
+  }
+  std::string where() const override { return url_; }
+
+ private:
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_status_t* m) {
+    received_.push_back(*m);
+  }
+  std::string url_;
+  lcm::LCM lcm_;
+  lcm::Subscription* subscription_ = nullptr;
+  std::deque<furuta::rig_status_t> received_;
 };
+
+// Random and non-zero: zero means "not a reply", and two `furuta` at once must not share one.
+std::int64_t new_request_id() {
+  std::random_device entropy;
+  return static_cast<std::int64_t>(((std::uint64_t{entropy()} << 31) ^ entropy()) >> 1) + 1;
+}
+
+std::chrono::milliseconds millis(double seconds) {
+  return std::chrono::milliseconds(std::llround(seconds * 1000));
+}
+
+// The first status for which `done` holds, within `limit`. A status request goes out now and
+// every 250 ms (the daemon's own status comes once a second): any status is the current state,
+// whoever asked.
+template <class Done>
+std::optional<furuta::rig_status_t> poll_status(DaemonChannel& channel,
+                                                std::chrono::milliseconds limit, Done done) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  auto next_request = std::chrono::steady_clock::now();
+  for (;;) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline) return std::nullopt;
+    if (now >= next_request) {
+      furuta::rig_command_t ask{};
+      ask.request_id = new_request_id();
+      ask.kind = furuta::rig_command_t::KIND_STATUS_REQUEST;
+      channel.send(ask);
+      next_request = now + std::chrono::milliseconds(250);
+    }
+    const auto wait = std::min(next_request, deadline) - now;
+    if (auto s = channel.receive(std::chrono::duration_cast<std::chrono::milliseconds>(wait) +
+                                 std::chrono::milliseconds(1));
+        s && done(*s)) {
+      return s;
+    }
+  }
+}
+
+const char* command_name(RemoteKind kind) {
+  switch (kind) {
+    case RemoteKind::start:
+      return "start";
+    case RemoteKind::stop:
+      return "stop";
+    case RemoteKind::estop:
+      return "estop";
+    case RemoteKind::status:
+      return "status";
+  }
+  return "?";
+}
 
 void fill_start_command(const StartOptions& start, const config::ExcitationConfig& defaults,
                         furuta::rig_command_t& command) {
@@ -76,24 +200,45 @@ std::string lcm_url_for(const RemoteOptions& remote) {
   return config::load_rig_config(remote.config_path).daemon.lcm_url;
 }
 
+std::string describe_rig(const config::RigConfig& rig, const RunOptions& options,
+                         const daemon::RigConnection& rig_io) {
+  const bridge::DeviceInfo& motor = rig_io.motor->device_info();
+  const bridge::DeviceInfo& encoder = rig_io.encoder->device_info();
+  std::ostringstream text;
+  if (options.simulated) {
+    text << "simulated (--sim)";
+  } else if (rig.backend == config::UsbBackend::simulated) {
+    text << "simulated ([rig] backend = \"simulated\" in " << options.config_path.string()
+         << "; set hidapi or libusb for the USB boards)";
+  } else {
+    text << "USB boards through " << rig_io.description;
+  }
+  text << ": 1065 serial " << motor.serial << " (firmware " << motor.firmware_version
+       << "), 1047 serial " << encoder.serial << " (firmware " << encoder.firmware_version << ")";
+  if (options.virtual_time) text << ", virtual time";
+  return text.str();
+}
+
 }  // namespace
 
 int run_remote_command(RemoteKind kind, const RemoteOptions& remote, const StartOptions& start,
                        std::ostream& out, std::ostream& err) {
   const std::string url = lcm_url_for(remote);
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    err << "furuta: cannot open LCM at " << url << "\n";
+  LcmChannel channel(url);
+  if (!channel.good()) {
+    err << "furuta " << command_name(kind) << ": cannot open LCM at " << url
+        << " (check [daemon] lcm_url or --lcm-url)\n";
     return 2;
   }
-  ReplyWaiter waiter;
-  std::random_device entropy;
-  waiter.request_id = static_cast<std::int64_t>(entropy() >> 1) + 1;
-  lcm::Subscription* sub =
-      lcm.subscribe(session_log::kChannelStatus, &ReplyWaiter::on_status, &waiter);
+  return run_remote_command(kind, channel, remote, start, out, err);
+}
 
+int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOptions& remote,
+                       const StartOptions& start, std::ostream& out, std::ostream& err) {
+  const std::string name = std::string("furuta ") + command_name(kind);
   furuta::rig_command_t command{};
-  command.request_id = waiter.request_id;
+  command.request_id = new_request_id();
+  const std::int64_t id = command.request_id;
   switch (kind) {
     case RemoteKind::start:
       command.kind = furuta::rig_command_t::KIND_START_SESSION;
@@ -109,21 +254,96 @@ int run_remote_command(RemoteKind kind, const RemoteOptions& remote, const Start
       command.kind = furuta::rig_command_t::KIND_STATUS_REQUEST;
       break;
   }
-  lcm.publish(session_log::kChannelCommand, &command);
-  const auto deadline = std::chrono::steady_clock::now() +
-                        std::chrono::milliseconds(std::llround(remote.reply_timeout_s * 1000));
-  while (!waiter.reply && std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(50);
-  lcm.unsubscribe(sub);
-  if (!waiter.reply) {
-    err << "furuta: no answer from furutad on " << url << " within " << remote.reply_timeout_s
-        << " s (is it running? `systemctl status furutad`)\n";
+  channel.send(command);
+  std::optional<furuta::rig_status_t> reply;
+  const auto deadline = std::chrono::steady_clock::now() + millis(remote.reply_timeout_s);
+  while (!reply && std::chrono::steady_clock::now() < deadline) {
+    auto s = channel.receive(std::chrono::milliseconds(50));
+    if (s && s->reply_to_request_id == id) reply = std::move(s);
+  }
+  if (!reply) {
+    err << name << ": no answer from furutad on " << channel.where() << " within "
+        << remote.reply_timeout_s
+        << " s (is it running? `systemctl status furutad`; a furutad of another version does not "
+           "understand this furuta)\n";
     return 2;
   }
-  if (!waiter.reply->request_accepted) {
-    err << "furuta: refused: " << waiter.reply->request_reason << "\n";
+  if (!reply->request_accepted) {
+    err << name << ": refused: " << reply->request_reason << "\n";
+    print_status(*reply, out);
     return 1;
   }
-  print_status(*waiter.reply, out);
+  if (kind == RemoteKind::status) {
+    print_status(*reply, out);
+    return 0;
+  }
+
+  if (kind == RemoteKind::start) {
+    if (!remote.wait) {
+      out << name << ": accepted (request " << id
+          << "); not waiting for it to run: `furuta status` shows whether it does\n";
+      print_status(*reply, out);
+      return 0;
+    }
+    // The reply says the command was valid and queued; the loop decides (the pendulum must hang
+    // still first) and the status names the request either way.
+    const auto verdict = poll_status(channel, millis(remote.wait_s), [&](const auto& s) {
+      return s.last_session_request_id == id || s.refused_request_id == id;
+    });
+    if (!verdict) {
+      err << name << ": accepted (request " << id << "), but within " << remote.wait_s
+          << " s the session neither ran nor was refused; `furuta status` shows what the daemon "
+             "does\n";
+      return 2;
+    }
+    if (verdict->refused_request_id == id) {
+      err << name << ": refused: " << verdict->refused_reason << "\n";
+      print_status(*verdict, out);
+      return 1;
+    }
+    if (verdict->last_session_end.empty()) {
+      out << name << ": session " << verdict->last_session << " running\n";
+      print_status(*verdict, out);
+      return 0;
+    }
+    const bool as_asked = ended_as_asked(verdict->last_session_end);
+    (as_asked ? out : err) << name << ": session " << verdict->last_session
+                           << " ran and has already ended: " << verdict->last_session_end << "\n";
+    print_status(*verdict, out);
+    return as_asked ? 0 : 1;
+  }
+
+  // stop, estop: the reply's state is from before the loop acted on it. Its session name may lag
+  // the loop's state by a moment (the I/O thread names it): then the session is the first one
+  // after the reply's last_session.
+  const char* done =
+      kind == RemoteKind::estop ? "e-stop: motor commanded to zero, braked" : "stop requested";
+  if (reply->state != furuta::rig_status_t::STATE_RUNNING) {
+    out << name << ": " << done << "; no session was running"
+        << (kind == RemoteKind::stop ? ": nothing to stop" : "") << "\n";
+    print_status(*reply, out);
+    return 0;
+  }
+  const std::string session = reply->session;
+  const std::string before = reply->last_session;
+  const std::string which = session.empty() ? "the running session" : "session " + session;
+  if (!remote.wait) {
+    out << name << ": " << done << "; not waiting for " << which << " to end\n";
+    return 0;
+  }
+  const auto ended = poll_status(channel, millis(remote.wait_s), [&](const auto& s) {
+    if (s.last_session_end.empty()) return false;
+    return session.empty() ? !s.last_session.empty() && s.last_session != before
+                           : s.last_session == session;
+  });
+  if (!ended) {
+    err << name << ": " << done << ", but " << which << " still ran after " << remote.wait_s
+        << " s; `furuta status` (and `furuta estop`)\n";
+    return 2;
+  }
+  out << name << ": " << done << "; session " << ended->last_session
+      << " ended: " << ended->last_session_end << "\n";
+  print_status(*ended, out);
   return 0;
 }
 
@@ -141,6 +361,10 @@ int run_session_command(const RunOptions& options, std::ostream& out, std::ostre
   connect.virtual_time = options.virtual_time;
   daemon::RigConnection rig_io = daemon::connect_rig(rig, connect);
   for (const std::string& warning : rig_io.warnings) err << "furuta run: " << warning << "\n";
+  // Before anything moves: which rig, and why that one (a configuration left at its default
+  // backend drives the simulated rig, which must not pass for the real one).
+  out << "furuta run: configuration " << options.config_path.string() << "\n";
+  out << "furuta run: rig: " << describe_rig(rig, options, rig_io) << "\n";
   settings.recorder.motor_device = bridge::format_trace_device_line(rig_io.motor->device_info());
   settings.recorder.encoder_device =
       bridge::format_trace_device_line(rig_io.encoder->device_info());

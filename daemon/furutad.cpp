@@ -72,7 +72,19 @@ int main(int argc, char** argv) {
     if (lcm_url.empty()) lcm_url = rig.daemon.lcm_url;
     if (require_rt) settings.realtime.enabled = true;
 
-    // A log that cannot be recovered now (the directory read-only, the disk gone) stays as it is
+    // A daemon that cannot log must say so now, not at the first start. It still comes up: it is
+    // what writes the zero command to a 1065 left driving by a daemon killed mid-session, and a
+    // directory can come back (a mount, a permission) without a restart. Until then every start
+    // is refused with this reason and the status says it (daemon/README.md, "Logs").
+    if (std::string why = session_log::logs_dir_problem(settings.recorder.logs_dir, 0);
+        !why.empty()) {
+      std::cerr << "furutad: WARNING: cannot log sessions in "
+                << settings.recorder.logs_dir.string() << ": " << why
+                << "; every start is refused until it can (set [daemon] logs_dir or --logs-dir to "
+                   "a writable directory; the systemd unit may write under /var/lib/furuta only)\n";
+    }
+
+    // A log that cannot be recovered now (an I/O error, the disk gone) stays as it is
     // for the next start; the daemon must still come up to keep the rig safe and say why.
     try {
       for (const auto& recovered : session_log::recover_partial_logs(settings.recorder.logs_dir)) {
@@ -146,14 +158,21 @@ int main(int argc, char** argv) {
     });
 
     // systemd: READY once the boards answer; the watchdog is fed only while the loop cycles.
+    // STATUS (`systemctl status furutad`) says when sessions cannot be logged.
     std::thread notify_thread([&] {
       bool ready_sent = false;
+      std::string logs_problem;
       std::int64_t last_heartbeat = -1;
       std::uint64_t watchdog_usec = 0;
       const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
       while (!done.load()) {
-        if (!ready_sent && daemon.ready()) {
-          sd_notify(0, "READY=1\nSTATUS=running");
+        const bool announce = !ready_sent && daemon.ready();
+        if (announce || (ready_sent && daemon.logs_problem() != logs_problem)) {
+          logs_problem = daemon.logs_problem();
+          const std::string state =
+              std::string(announce ? "READY=1\n" : "") + "STATUS=running" +
+              (logs_problem.empty() ? "" : "; starts refused: " + logs_problem);
+          sd_notify(0, state.c_str());
           ready_sent = true;
         }
         const std::int64_t beat = daemon.heartbeat();

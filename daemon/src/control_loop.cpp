@@ -96,8 +96,9 @@ void ControlLoop::emit(LoopEvent::Kind kind) noexcept {
 }
 
 void ControlLoop::emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
-                             std::int64_t now_ns) noexcept {
+                             std::int64_t now_ns, std::int64_t request_id) noexcept {
   FaultEvent& f = event_.fault;
+  f.request_id = request_id;
   f.reason = reason;
   copy_text(f.what, what);
   copy_text(f.detail, detail);
@@ -291,11 +292,13 @@ void ControlLoop::watch_encoders(const RigSample& sample) noexcept {
 
 void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_ns) {
   if (running_) {
-    emit_fault("start_refused", "a session is already running", StopReason::none, false, now_ns);
+    emit_fault("start_refused", "a session is already running", StopReason::none, false, now_ns,
+               request.request_id);
     return;
   }
   if (usb_failure_ != TransportStatus::ok) {
-    emit_fault("start_refused", "the boards are not reachable", StopReason::none, false, now_ns);
+    emit_fault("start_refused", "the boards are not reachable", StopReason::none, false, now_ns,
+               request.request_id);
     return;
   }
   excitation_ = request.excitation;
@@ -317,6 +320,7 @@ void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_
   SessionStartEvent& s = event_.start;
   s.session = request.session;
   s.label = request.label;
+  s.request_id = request.request_id;
   s.excitation = excitation_.spec();
   s.period_ns = settings_.period_ns;
   s.monotonic_ns = now_ns;
@@ -338,7 +342,7 @@ void ControlLoop::consider_pending_request(std::int64_t now_ns) {
     if (now_ns - pending_since_ns_ < wait_ns) return;  // keep waiting
     have_pending_ = false;
     emit_fault("start_refused", "the pendulum is not at rest: wait until it hangs still",
-               StopReason::none, false, now_ns);
+               StopReason::none, false, now_ns, pending_.request_id);
     return;
   }
   have_pending_ = false;
@@ -394,14 +398,17 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
     // waiting for the pendulum to rest: no session asked for before an e-stop may start after it.
     const StopReason idle_stop = stop_request_.exchange(StopReason::none);
     if (idle_stop != StopReason::none) {
-      const bool cancelled = have_pending_ || requests_.read_available() > 0;
-      have_pending_ = false;
-      auto discard = [](const SessionRequest&) {};
-      requests_.consume_all(discard);
-      if (cancelled) {
-        emit_fault("start_cancelled", to_string(idle_stop).data(), StopReason::none, false,
-                   deadline_ns);
+      // One event per start cancelled, each naming its request: every start gets its verdict.
+      const char* why = to_string(idle_stop).data();
+      if (have_pending_) {
+        emit_fault("start_cancelled", why, StopReason::none, false, deadline_ns,
+                   pending_.request_id);
       }
+      have_pending_ = false;
+      auto cancel = [&](const SessionRequest& r) {
+        emit_fault("start_cancelled", why, StopReason::none, false, deadline_ns, r.request_id);
+      };
+      requests_.consume_all(cancel);
       // An e-stop while idle still brakes the motor (something else may have moved it).
       if (idle_stop == StopReason::estop_command) {
         write_command(0.0, settings_.stop_braking_fraction, nullptr);

@@ -84,7 +84,13 @@ void Daemon::on_session_logged(std::function<void(const std::filesystem::path&)>
   on_logged_ = std::move(callback);
 }
 
+std::string Daemon::logs_problem() const {
+  std::lock_guard lock(snapshot_mutex_);
+  return snapshot_.logs_problem;
+}
+
 RealtimeResult Daemon::start() {
+  check_logs_dir();  // before the first command can ask
   io_thread_ = std::thread([this] { io_thread_main(); });
   lcm_thread_ = std::thread([this] { lcm_thread_main(); });
   std::promise<RealtimeResult> rt_result;
@@ -126,6 +132,8 @@ void Daemon::refresh_snapshot() {
   std::lock_guard lock(snapshot_mutex_);
   snapshot_.session = recorder_->current_session();
   snapshot_.last_fault = recorder_->last_fault();
+  snapshot_.history = recorder_->history();
+  snapshot_.latency_samples = static_cast<std::int64_t>(h.count());
   snapshot_.jitter_mean_us = h.mean_us();
   snapshot_.jitter_p99_us = h.quantile_us(0.99);
   snapshot_.jitter_max_us = h.max_us();
@@ -156,7 +164,26 @@ furuta::rig_status_t Daemon::status_message() {
   m.jitter_mean_us = snapshot_.jitter_mean_us;
   m.jitter_p99_us = snapshot_.jitter_p99_us;
   m.jitter_max_us = snapshot_.jitter_max_us;
+  m.latency_samples = snapshot_.latency_samples;
+  const SessionRecorder::History& h = snapshot_.history;
+  m.last_fault_wall_ns = m.last_fault.empty() ? 0 : h.last_fault_wall_ns;
+  m.last_fault_session = h.last_fault_session;
+  m.sessions_since_fault = h.sessions_since_fault;
+  m.last_session = h.last_session;
+  m.last_session_request_id = h.last_session_request_id;
+  m.last_session_end = h.last_session_end;
+  m.refused_request_id = h.refused_request_id;
+  m.refused_reason = h.refused_reason;
+  m.logs_problem = snapshot_.logs_problem;
   return m;
+}
+
+void Daemon::check_logs_dir() {
+  if (settings_.recorder.logs_dir.empty()) return;  // a daemon without logs (tests)
+  std::string problem = session_log::logs_dir_problem(settings_.recorder.logs_dir,
+                                                      settings_.recorder.min_free_bytes_to_start);
+  std::lock_guard lock(snapshot_mutex_);
+  snapshot_.logs_problem = std::move(problem);
 }
 
 void Daemon::io_thread_main() {
@@ -164,6 +191,7 @@ void Daemon::io_thread_main() {
   LoopEvent event;
   auto next_status = std::chrono::steady_clock::now();
   auto publish_status = [&] {
+    check_logs_dir();
     refresh_snapshot();
     const furuta::rig_status_t status = status_message();
     lcm_.publish(session_log::kChannelStatus, &status);
@@ -245,7 +273,17 @@ CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {
   CommandDecision decision{true, {}};
   switch (command.kind) {
     case furuta::rig_command_t::KIND_START_SESSION: {
+      // Decided here when it can be, so the reply is the verdict; the loop still checks (a
+      // session may begin between this and its turn) and refuses by the request's id.
+      if (loop_->counters().state.load() == LoopState::running) {
+        std::lock_guard lock(snapshot_mutex_);
+        decision = {false, "a session is already running" +
+                               (snapshot_.session.empty() ? "" : ": " + snapshot_.session) +
+                               " (furuta stop ends it)"};
+        break;
+      }
       SessionRequest request;
+      request.request_id = command.request_id;
       try {
         const ExcitationSpec spec = spec_from_command(command, settings_.default_excitation);
         if (std::string why = check_spec_limits(spec, settings_.command_limits); !why.empty()) {

@@ -117,12 +117,28 @@ void SessionRecorder::on_log_status(session_log::LogWriteStatus status) {
 void SessionRecorder::fail_log(const std::string& why, bool still_logging) {
   log_failed_ = !still_logging;
   log_failure_ = why;
-  last_fault_ = why;
+  note_fault(why);
   if (on_log_failure_) on_log_failure_(last_fault_);
+}
+
+void SessionRecorder::note_fault(std::string what) {
+  last_fault_ = std::move(what);
+  // This thread's wall clock, a moment after the loop's event: a status needs the time to the
+  // second, not the cycle.
+  history_.last_fault_wall_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                    std::chrono::system_clock::now().time_since_epoch())
+                                    .count();
+  history_.last_fault_session = session_;
+  history_.sessions_since_fault = 0;
+  if (!session_.empty()) session_faulted_ = true;
 }
 
 void SessionRecorder::start_session(const SessionStartEvent& start) {
   session_ = text_of(start.session);
+  session_faulted_ = false;
+  history_.last_session = session_;
+  history_.last_session_request_id = start.request_id;
+  history_.last_session_end.clear();
   wake_latency_.reset();
   log_failed_ = false;
   log_failure_.clear();
@@ -209,10 +225,17 @@ void SessionRecorder::record_fault(const FaultEvent& f) {
   // The loop stops a session for a log failure without knowing what failed; this thread does, and
   // the fault must say it (disk full, the directory, ...) rather than a bare log_error.
   if (f.reason == StopReason::log_error && m.detail.empty()) m.detail = log_failure_;
-  // A board lost while idle ends no session, and a start the loop refuses (the pendulum still
-  // swings) was already answered "accepted": no fatal fault says either, so the status must.
-  if (f.fatal || m.reason == "disconnected" || m.reason == "start_refused") {
-    last_fault_ = m.reason + (m.detail.empty() ? "" : ": " + m.detail);
+  // A board lost while idle ends no session: no fatal fault says it, so the status must.
+  if (f.fatal || m.reason == "disconnected") {
+    note_fault(m.reason + (m.detail.empty() ? "" : ": " + m.detail));
+  }
+  // A start the loop refuses (the pendulum still swings) or a stop cancels was already answered
+  // "accepted": this is the verdict `furuta start` waits for, under its request's id.
+  if (m.reason == "start_refused" || m.reason == "start_cancelled") {
+    history_.refused_request_id = f.request_id;
+    history_.refused_reason = m.reason == "start_cancelled"
+                                  ? "cancelled by " + m.detail + " before it could start"
+                                  : m.detail;
   }
   publish_and_log(session_log::kChannelFault, m, f.monotonic_ns);
 }
@@ -243,6 +266,8 @@ void SessionRecorder::end_session(const SessionEndEvent& e) {
       fail_log("session log: cannot finish " + log_->partial_path().string());
     }
   }
+  history_.last_session_end = m.end_reason;
+  if (!is_fault(e.reason) && !session_faulted_ && !log_failed_) ++history_.sessions_since_fault;
   // A failed log stays as .part: recovery at the next start keeps its readable prefix.
   log_.reset();
   session_.clear();

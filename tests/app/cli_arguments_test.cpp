@@ -165,3 +165,31 @@ TEST(CliArguments, HelpDescribesPositionalsShowsDefaultsAndTheExitRule) {
 }
 
 }  // namespace
+
+namespace {
+
+// furutad with a logs directory it cannot write (under a regular file: that stops root too) says
+// so as it starts, naming the directory and the error, rather than at the first start. (It stays
+// up, daemon/README.md says why; a replay exits by itself once the replayed session ends.)
+TEST(CliArguments, FurutadSaysAtStartUpThatItCannotLog) {
+  furuta::testing::TempDir dir;
+  const Outcome made = run(run_options(dir.path() / "logs") + " --duration 0.2 --label short");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  fs::path log;
+  for (const auto& entry : fs::directory_iterator(dir.path() / "logs")) {
+    if (entry.path().extension() == ".lcmlog") log = entry.path();
+  }
+  ASSERT_FALSE(log.empty()) << made.output;
+  std::ofstream(dir.path() / "file") << "not a directory";
+  const fs::path logs = dir.path() / "file" / "logs";
+  // timeout: a hang guard, in case the replay did not end.
+  const Outcome o = run("timeout 60 " + std::string(FURUTA_DAEMON) +
+                        " --lcm-url memq:// --config " FURUTA_SOURCE_DIR "/config/rig.toml" +
+                        " --logs-dir " + logs.string() + " --replay " + log.string());
+  EXPECT_NE(o.exit_code, 124) << o.output;
+  EXPECT_TRUE(has(o, "furutad: WARNING: cannot log sessions in " + logs.string())) << o.output;
+  EXPECT_TRUE(has(o, "Not a directory")) << o.output;
+  EXPECT_TRUE(has(o, "every start is refused until it can")) << o.output;
+}
+
+}  // namespace

@@ -237,11 +237,51 @@ TEST_F(Trigger, LogsWaitForTheRestOfTheirBatchAndOtherLabelsAreLeftOut) {
                                       validations_[0].filename().string()}));
   EXPECT_EQ(logs_in(options_.logs_dir / "done"),
             std::vector<std::string>{other.filename().string()});
-  EXPECT_NE(out_.str().find("label 'free-play'"), std::string::npos) << out_.str();
+  // Each log left alone says why: the label [automation] does not name (not counted as
+  // identified), and what each waiting log's batch still lacks.
+  EXPECT_EQ(p.logs_not_identified, 1);
+  EXPECT_EQ(p.logs_done, 0);
+  EXPECT_NE(out_.str().find(other.filename().string() +
+                            ": not identified: label 'free-play' is not in [automation] "
+                            "(fit_labels bang-bang, validation_label validation)"),
+            std::string::npos)
+      << out_.str();
+  EXPECT_NE(out_.str().find("for a manual `furuta identify`"), std::string::npos) << out_.str();
+  for (const fs::path& waiting : {fits_[0], validations_[0]}) {
+    EXPECT_NE(out_.str().find(waiting.filename().string() +
+                              ": waiting for its batch: 1 of 2 'bang-bang' session(s) and 1 of "
+                              "1 'validation'"),
+              std::string::npos)
+        << out_.str();
+  }
   land(fits_[1]);
   p = pass();
   EXPECT_EQ(p.identifications.size(), 1u) << err_.str();
   EXPECT_TRUE(logs_in(options_.logs_dir).empty());
+}
+
+// The command as the README's example leaves it: a session labelled run1 is not identified, and
+// the command says so per log and in its summary, and exits 0 (nothing failed).
+TEST_F(Trigger, TheCommandSaysWhichLogsItLeftAloneAndWhy) {
+  land(session(dir_.path() / "other", "run1", 9, 0.5));
+  land(fits_[0]);
+  ProcessLogsOptions command;
+  command.logs_dir = options_.logs_dir;
+  command.identifications_dir = options_.identifications_dir;
+  command.config_path = kRigConfig;
+  std::ostringstream out, err;
+  EXPECT_EQ(run_process_logs_command(command, out, err), 0) << out.str() << err.str();
+  EXPECT_NE(out.str().find("_run1.lcmlog: not identified: label 'run1' is not in [automation]"),
+            std::string::npos)
+      << out.str();
+  EXPECT_NE(out.str().find(fits_[0].filename().string() + ": waiting for its batch: 1 of 2"),
+            std::string::npos)
+      << out.str();
+  EXPECT_NE(out.str().find("process-logs: 0 identification(s), 0 log(s) identified to done/, 1 "
+                           "not identified (label not in [automation]) to done/, 0 to failed/, 1 "
+                           "waiting"),
+            std::string::npos)
+      << out.str();
 }
 
 TEST_F(Trigger, PartialLogsAndOtherFilesAreNeverTouched) {

@@ -2,16 +2,28 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <condition_variable>
+#include <deque>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <mutex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
 #include "commands.hpp"
+#include "daemon_channel.hpp"
+#include "furuta/daemon/daemon.hpp"
+#include "furuta/daemon/rig_connection.hpp"
+#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/session_log/lcm_log.hpp"
 #include "furuta/session_log/session_log.hpp"
+#include "stepped_clock.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::app {
@@ -125,6 +137,237 @@ TEST(RemoteCommand, WithNoDaemonListeningItSaysSoAndReturns2) {
   std::ostringstream out, err;
   EXPECT_EQ(run_remote_command(RemoteKind::status, remote, {}, out, err), 2);
   EXPECT_NE(err.str().find("no answer from furutad"), std::string::npos) << err.str();
+}
+
+// A daemon of the simulated rig in this process, in stepped time, behind the channel `furuta
+// start|stop|estop|status` use: each command sent moves the loop one cycle (so time moves only as
+// the command polls), and every status the daemon publishes comes back through LCM (memq://).
+class SteppedDaemon final : public DaemonChannel {
+ public:
+  SteppedDaemon() {
+    sim_ = std::make_unique<bridge::SimulatedRig>(config_.simulation, clock_);
+    motor_usb_ = sim_->make_transport();
+    encoder_usb_ = sim_->make_transport();
+    EXPECT_EQ(motor_usb_->open({bridge::kPhidgetsVendorId, bridge::kProductMotorControl1065, {}}),
+              bridge::TransportStatus::ok);
+    EXPECT_EQ(encoder_usb_->open({bridge::kPhidgetsVendorId, bridge::kProductEncoder1047, {}}),
+              bridge::TransportStatus::ok);
+    motor_ = std::make_unique<daemon::DirectBoardLink>(*motor_usb_);
+    encoder_ = std::make_unique<daemon::DirectBoardLink>(*encoder_usb_);
+    settings_ = daemon::daemon_settings_from_config(config_);
+    settings_.recorder.motor_device = bridge::format_trace_device_line(motor_usb_->device_info());
+    settings_.recorder.encoder_device =
+        bridge::format_trace_device_line(encoder_usb_->device_info());
+    settings_.recorder.logs_dir = logs_.path();
+    settings_.loop.wait_when_queue_full = true;
+    settings_.command_limits.max_commands_per_s = 1000;  // the polls are not under test
+    subscription_ = lcm_.subscribe(session_log::kChannelStatus, &SteppedDaemon::on_status, this);
+    daemon_ = std::make_unique<daemon::Daemon>(settings_, *motor_, *encoder_, clock_, lcm_);
+    daemon_->start();
+  }
+  ~SteppedDaemon() override {
+    clock_.run_free();
+    daemon_.reset();
+    lcm_.unsubscribe(subscription_);
+  }
+
+  // The loop's cycles, each on time (the pendulum hangs still: the rest check passes at 63).
+  void step_cycles(int n) {
+    const auto& cycles = daemon_->loop().counters().cycles;
+    for (int i = 0; i < n; ++i) {
+      const std::int64_t target = cycles.load() + 1;
+      ASSERT_TRUE(clock_.wake_sleeper_on_time()) << "the loop stopped sleeping";
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+      while (cycles.load() < target) {
+        ASSERT_LT(std::chrono::steady_clock::now(), give_up) << "the loop stopped cycling";
+        std::this_thread::yield();
+      }
+    }
+  }
+  void keep_time_still() { steps_per_command_ = 0; }
+
+  void send(const furuta::rig_command_t& command) override {
+    lcm_.publish(session_log::kChannelCommand, &command);
+    step_cycles(steps_per_command_);
+  }
+  std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) override {
+    std::unique_lock lock(mutex_);
+    if (!arrived_.wait_for(lock, wait, [&] { return !statuses_.empty(); })) return std::nullopt;
+    furuta::rig_status_t first = statuses_.front();
+    statuses_.pop_front();
+    return first;
+  }
+  std::string where() const override { return "memq:// (a test daemon)"; }
+
+ private:
+  void on_status(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_status_t* m) {
+    {
+      std::lock_guard lock(mutex_);
+      statuses_.push_back(*m);
+    }
+    arrived_.notify_all();
+  }
+
+  TempDir logs_{"furuta-remote"};
+  config::RigConfig config_ = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  furuta::testing::SteppedClock clock_{1'000'000'000};
+  std::unique_ptr<bridge::SimulatedRig> sim_;
+  std::unique_ptr<bridge::Transport> motor_usb_, encoder_usb_;
+  std::unique_ptr<daemon::DirectBoardLink> motor_, encoder_;
+  daemon::DaemonSettings settings_;
+  lcm::LCM lcm_{"memq://"};
+  lcm::Subscription* subscription_ = nullptr;
+  std::unique_ptr<daemon::Daemon> daemon_;
+  int steps_per_command_ = 1;
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::deque<furuta::rig_status_t> statuses_;
+};
+
+struct Said {
+  int code = -1;
+  std::string out, err;
+  bool has(const std::string& part) const {
+    return out.find(part) != std::string::npos || err.find(part) != std::string::npos;
+  }
+};
+
+Said remote(SteppedDaemon& daemon, RemoteKind kind, StartOptions start = {},
+            RemoteOptions options = {}) {
+  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  std::ostringstream out, err;
+  Said said;
+  said.code = run_remote_command(kind, daemon, options, start, out, err);
+  said.out = out.str();
+  said.err = err.str();
+  return said;
+}
+
+StartOptions session_of(const std::string& profile, double duration_s, const std::string& label) {
+  StartOptions start;
+  start.profile = profile;
+  start.amplitude_duty = 0.1;
+  start.duration_s = duration_s;
+  start.label = label;
+  return start;
+}
+
+TEST(RemoteCommand, StartWaitsUntilTheSessionRunsAndStopUntilItHasEnded) {
+  SteppedDaemon daemon;
+  daemon.step_cycles(70);  // past the one-second rest check
+  const Said started = remote(daemon, RemoteKind::start, session_of("free_decay", 30, "first"));
+  EXPECT_EQ(started.code, 0) << started.out << started.err;
+  EXPECT_TRUE(started.has("furuta start: session ")) << started.out;
+  EXPECT_TRUE(started.has("_first running")) << started.out;
+  EXPECT_TRUE(started.has("state running, session ")) << started.out;
+
+  // Another start while it runs: refused, exit 1, saying which session runs.
+  const Said second = remote(daemon, RemoteKind::start, session_of("free_decay", 30, "second"));
+  EXPECT_EQ(second.code, 1) << second.out << second.err;
+  EXPECT_TRUE(second.has("furuta start: refused: a session is already running: ")) << second.err;
+  EXPECT_TRUE(second.has("_first")) << second.err;
+
+  // stop prints the state after it took effect, not before.
+  const Said stopped = remote(daemon, RemoteKind::stop);
+  EXPECT_EQ(stopped.code, 0) << stopped.out << stopped.err;
+  EXPECT_TRUE(stopped.has("furuta stop: stop requested; session ")) << stopped.out;
+  EXPECT_TRUE(stopped.has("_first ended: stop_command")) << stopped.out;
+  EXPECT_TRUE(stopped.has("\nstate idle;")) << stopped.out;
+
+  // Nothing to stop: said, and no failure.
+  const Said again = remote(daemon, RemoteKind::stop);
+  EXPECT_EQ(again.code, 0) << again.out << again.err;
+  EXPECT_TRUE(again.has("no session was running: nothing to stop")) << again.out;
+}
+
+// The loop refuses a start the command thread accepted (the pendulum has not hung still for the
+// rest check yet): `furuta start` waits for that verdict and exits 1 with it.
+TEST(RemoteCommand, AStartTheLoopRefusesExits1WithTheReason) {
+  SteppedDaemon daemon;
+  daemon.step_cycles(20);
+  const Said said = remote(daemon, RemoteKind::start, session_of("bang_bang", 30, "early"));
+  EXPECT_EQ(said.code, 1) << said.out << said.err;
+  EXPECT_TRUE(said.has("furuta start: refused: the pendulum is not at rest")) << said.err;
+  EXPECT_TRUE(said.has("state idle")) << said.out;
+}
+
+// Accepted, then no verdict within --wait (here the loop is held still): exit 2, and says so.
+// --no-wait returns at the acceptance.
+TEST(RemoteCommand, AStartWithNoVerdictInTimeExits2AndNoWaitReturnsAtTheAcceptance) {
+  SteppedDaemon daemon;
+  daemon.step_cycles(70);
+  daemon.keep_time_still();
+  RemoteOptions quick;
+  quick.wait_s = 0.3;
+  const Said waited = remote(daemon, RemoteKind::start, session_of("bang_bang", 30, "held"), quick);
+  EXPECT_EQ(waited.code, 2) << waited.out << waited.err;
+  EXPECT_TRUE(waited.has("the session neither ran nor was refused")) << waited.err;
+
+  RemoteOptions no_wait;
+  no_wait.wait = false;
+  SteppedDaemon other;
+  other.step_cycles(70);
+  const Said said =
+      remote(other, RemoteKind::start, session_of("bang_bang", 30, "nowait"), no_wait);
+  EXPECT_EQ(said.code, 0) << said.out << said.err;
+  EXPECT_TRUE(said.has("furuta start: accepted (request ")) << said.out;
+  EXPECT_TRUE(said.has("not waiting for it to run")) << said.out;
+}
+
+// status: no latency figures before any session ("no data yet", not 0.0), no fault since start-up;
+// after an e-stop and a later good session, the fault with its time and session, and that one
+// session ended well since.
+TEST(RemoteCommand, StatusSaysWhatHasNoDataAndWhenTheLastFaultHappened) {
+  SteppedDaemon daemon;
+  daemon.step_cycles(70);
+  const Said idle = remote(daemon, RemoteKind::status);
+  EXPECT_EQ(idle.code, 0) << idle.err;
+  EXPECT_TRUE(idle.has("wake-up latency no data yet")) << idle.out;
+  EXPECT_FALSE(idle.has("mean 0.0")) << idle.out;
+  EXPECT_TRUE(idle.has("no fault since start-up")) << idle.out;
+
+  ASSERT_EQ(remote(daemon, RemoteKind::start, session_of("free_decay", 30, "halted")).code, 0);
+  const Said halted = remote(daemon, RemoteKind::estop);
+  EXPECT_EQ(halted.code, 0) << halted.out << halted.err;
+  EXPECT_TRUE(halted.has("furuta estop: e-stop: motor commanded to zero, braked; session "))
+      << halted.out;
+  EXPECT_TRUE(halted.has("_halted ended: estop_command")) << halted.out;
+
+  daemon.step_cycles(70);
+  ASSERT_EQ(remote(daemon, RemoteKind::start, session_of("free_decay", 30, "fine")).code, 0);
+  ASSERT_EQ(remote(daemon, RemoteKind::stop).code, 0);
+  const Said later = remote(daemon, RemoteKind::status);
+  EXPECT_TRUE(later.has("last fault: estop_command (20")) << later.out;
+  EXPECT_TRUE(later.has(" UTC, in session ")) << later.out;
+  EXPECT_TRUE(later.has("_halted), 1 session(s) ended well since")) << later.out;
+  EXPECT_TRUE(later.has("last session ")) << later.out;
+  EXPECT_TRUE(later.has("_fine ended stop_command")) << later.out;
+  EXPECT_TRUE(later.has("wake-up latency of the last session (")) << later.out;
+}
+
+// `furuta run` says which rig it drives and why, and which configuration it read, before the
+// session starts: the configuration's default backend is the simulated rig.
+TEST(RunCommand, SaysWhichRigAndWhichConfigurationItUses) {
+  TempDir dir;
+  const fs::path config = dir.path() / "rig.toml";
+  fs::copy_file(FURUTA_SOURCE_DIR "/config/rig.toml", config);
+  RunOptions options = simulated_run(config, dir.path() / "logs", 0.5);
+  std::ostringstream out, err;
+  ASSERT_EQ(run_session_command(options, out, err), 0) << out.str() << err.str();
+  EXPECT_NE(out.str().find("furuta run: configuration " + config.string() + "\n"),
+            std::string::npos)
+      << out.str();
+  EXPECT_NE(out.str().find("furuta run: rig: simulated (--sim): 1065 serial "), std::string::npos)
+      << out.str();
+  EXPECT_LT(out.str().find("furuta run: rig:"), out.str().find("session ended"));
+
+  options.simulated = false;  // the configuration says simulated
+  std::ostringstream out2, err2;
+  ASSERT_EQ(run_session_command(options, out2, err2), 0) << out2.str() << err2.str();
+  EXPECT_NE(out2.str().find("furuta run: rig: simulated ([rig] backend = \"simulated\" in " +
+                            config.string()),
+            std::string::npos)
+      << out2.str();
 }
 
 TEST(RunCommand, ABadConfigurationNamesFileLineAndField) {

@@ -23,6 +23,7 @@
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_status_t.hpp"
+#include "stepped_clock.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::daemon {
@@ -32,49 +33,6 @@ namespace fs = std::filesystem;
 
 using furuta::rig_command_t;
 using furuta::rig_status_t;
-
-// Time that moves when the test says so; a sleeper waits for it. Thread-safe, unlike VirtualClock.
-class SteppedClock final : public bridge::Clock {
- public:
-  explicit SteppedClock(std::int64_t start_ns) : now_(start_ns) {}
-  std::int64_t now_ns() const override { return now_.load(); }
-  void sleep_until_ns(std::int64_t deadline_ns) override {
-    std::unique_lock lock(mutex_);
-    sleeping_until_ = deadline_ns;
-    changed_.notify_all();
-    changed_.wait(lock, [&] { return free_ || now_.load() >= deadline_ns; });
-    sleeping_until_ = kNobody;
-    if (free_ && now_.load() < deadline_ns) now_.store(deadline_ns);
-  }
-  // Waits until the sleeper is blocked, then moves time to its deadline: it wakes exactly on time.
-  // False if nobody came to sleep (a hang guard).
-  bool wake_sleeper_on_time() {
-    std::unique_lock lock(mutex_);
-    const bool blocked = changed_.wait_for(lock, std::chrono::seconds(20), [&] {
-      return sleeping_until_ != kNobody && sleeping_until_ > now_.load();
-    });
-    if (!blocked) return false;
-    now_.store(sleeping_until_);
-    changed_.notify_all();
-    return true;
-  }
-  // From here on, a sleep returns at once with the time moved to its deadline (for shutdown).
-  void run_free() {
-    {
-      std::lock_guard lock(mutex_);
-      free_ = true;
-    }
-    changed_.notify_all();
-  }
-
- private:
-  static constexpr std::int64_t kNobody = std::numeric_limits<std::int64_t>::min();
-  std::atomic<std::int64_t> now_;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::int64_t sleeping_until_ = kNobody;
-  bool free_ = false;
-};
 
 // Status replies (those answering a request) as the daemon's LCM thread delivers them.
 class Inbox {
@@ -113,7 +71,7 @@ class Inbox {
 
 struct CommandRig {
   config::RigConfig config = testing::quiet_rig();
-  SteppedClock clock{1'000'000'000};
+  furuta::testing::SteppedClock clock{1'000'000'000};
   std::unique_ptr<bridge::SimulatedRig> sim;
   std::unique_ptr<bridge::Transport> motor_usb;
   std::unique_ptr<bridge::Transport> encoder_usb;
@@ -451,22 +409,129 @@ TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
 }
 
 // The command thread accepts a start it cannot judge; the loop then refuses it when the pendulum
-// has not hung still for the rest check. The status must say so, or the user sees "accepted" and
-// a rig that never starts.
+// has not hung still for the rest check. The status must say so under the start's request id (the
+// verdict `furuta start` waits for), or the user sees "accepted" and a rig that never starts. A
+// refused start is no fault of the rig: the last fault stays empty.
 TEST(CommandHandling, AStartTheLoopRefusesSaysWhyInTheStatus) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;
   rig.settings.command_limits.max_commands_per_s = 1000;
   rig.start(dir.path());
   rig.step_cycles(20);  // a third of the one-second rest check
-  ASSERT_TRUE(rig.ask(testing::start_command("bang_bang", 0.3, 30.0, "early")).request_accepted);
+  const std::int64_t id = rig.send(testing::start_command("bang_bang", 0.3, 30.0, "early"));
+  ASSERT_TRUE(rig.inbox.reply_to(id).request_accepted);
   rig.step_cycles(2);
   const rig_status_t after =
-      ask_until(rig, [](const rig_status_t& s) { return !s.last_fault.empty(); });
+      ask_until(rig, [&](const rig_status_t& s) { return s.refused_request_id == id; });
+  EXPECT_EQ(after.refused_request_id, id);
+  EXPECT_EQ(after.refused_reason.rfind("the pendulum is not at rest", 0), 0u)
+      << after.refused_reason;
   EXPECT_EQ(after.state, +rig_status_t::STATE_IDLE);
   EXPECT_TRUE(after.session.empty()) << after.session;
-  EXPECT_EQ(after.last_fault.rfind("start_refused: the pendulum is not at rest", 0), 0u)
-      << after.last_fault;
+  EXPECT_TRUE(after.last_session.empty()) << after.last_session;
+  EXPECT_TRUE(after.last_fault.empty()) << after.last_fault;
+}
+
+// A start while a session runs: the command thread knows, so the reply itself is the refusal.
+TEST(CommandHandling, AStartWhileASessionRunsIsRefusedInTheReply) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_limits.max_commands_per_s = 1000;
+  rig.start(dir.path());
+  rig.step_cycles(70);
+  const std::int64_t first = rig.send(testing::start_command("bang_bang", 0.3, 30.0, "first"));
+  ASSERT_TRUE(rig.inbox.reply_to(first).request_accepted);
+  rig.step_cycles(2);
+  const rig_status_t running =
+      ask_until(rig, [](const rig_status_t& s) { return !s.session.empty(); });
+  EXPECT_EQ(running.last_session, running.session);
+  EXPECT_EQ(running.last_session_request_id, first);
+  EXPECT_TRUE(running.last_session_end.empty()) << running.last_session_end;
+
+  const rig_status_t second = rig.ask(testing::start_command("bang_bang", 0.3, 30.0, "second"));
+  EXPECT_FALSE(second.request_accepted);
+  EXPECT_EQ(second.request_reason.rfind("a session is already running: " + running.session, 0), 0u)
+      << second.request_reason;
+}
+
+// The last fault says when and where it happened and how many sessions ended well since; the
+// latest session, how it ended and the request it came from stay after it ended; an idle daemon
+// that has run no session has no latency figures (not zeros).
+TEST(CommandHandling, TheStatusSaysWhenTheLastFaultHappenedAndWhatRanSince) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_limits.max_commands_per_s = 1000;
+  rig.start(dir.path());
+  rig.step_cycles(70);
+  const rig_status_t idle = rig.ask(status_request());
+  EXPECT_EQ(idle.latency_samples, 0);
+  EXPECT_TRUE(idle.last_fault.empty());
+  EXPECT_EQ(idle.last_fault_wall_ns, 0);
+  EXPECT_TRUE(idle.last_session.empty());
+  EXPECT_TRUE(idle.logs_problem.empty()) << idle.logs_problem;
+
+  const auto wall_now = [] {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+               std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  };
+  const std::int64_t before = wall_now();
+  // A free decay (zero duty) keeps the pendulum still for the next session's rest check.
+  ASSERT_TRUE(
+      rig.ask(testing::start_command("free_decay", 0.1, 30.0, "estopped")).request_accepted);
+  rig.step_cycles(5);
+  const rig_status_t first =
+      ask_until(rig, [](const rig_status_t& s) { return !s.session.empty(); });
+  ASSERT_TRUE(rig.ask(testing::simple_command(rig_command_t::KIND_ESTOP)).request_accepted);
+  rig.step_cycles(2);
+  const rig_status_t faulted =
+      ask_until(rig, [](const rig_status_t& s) { return !s.last_session_end.empty(); });
+  const std::int64_t after = wall_now();
+  EXPECT_EQ(faulted.last_fault.rfind("estop_command", 0), 0u) << faulted.last_fault;
+  EXPECT_GE(faulted.last_fault_wall_ns, before);
+  EXPECT_LE(faulted.last_fault_wall_ns, after);
+  EXPECT_EQ(faulted.last_fault_session, first.session);
+  EXPECT_EQ(faulted.sessions_since_fault, 0);
+  EXPECT_EQ(faulted.last_session, first.session);
+  EXPECT_EQ(faulted.last_session_end, "estop_command");
+  EXPECT_GT(faulted.latency_samples, 0);  // the session's cycles
+
+  rig.step_cycles(70);  // the rest check again
+  const std::int64_t id = rig.send(testing::start_command("free_decay", 0.1, 30.0, "fine"));
+  ASSERT_TRUE(rig.inbox.reply_to(id).request_accepted);
+  rig.step_cycles(3);
+  ask_until(rig, [&](const rig_status_t& s) { return s.last_session_request_id == id; });
+  ASSERT_TRUE(rig.ask(testing::simple_command(rig_command_t::KIND_STOP)).request_accepted);
+  rig.step_cycles(2);
+  const rig_status_t later = ask_until(rig, [&](const rig_status_t& s) {
+    return s.last_session_request_id == id && !s.last_session_end.empty();
+  });
+  EXPECT_EQ(later.last_session_end, "stop_command");
+  EXPECT_EQ(later.sessions_since_fault, 1);
+  EXPECT_EQ(later.last_fault, faulted.last_fault);  // still the e-stop, with its time and session
+  EXPECT_EQ(later.last_fault_wall_ns, faulted.last_fault_wall_ns);
+  EXPECT_EQ(later.last_fault_session, first.session);
+}
+
+// A logs directory that cannot be written (here under a regular file, which stops root too) is in
+// the status from the daemon's start, and every start is refused with it.
+TEST(CommandHandling, ALogsDirectoryThatCannotBeWrittenIsInTheStatusAndStartsAreRefused) {
+  testing::TempDir dir("furuta-commands");
+  std::ofstream(dir.path() / "file") << "not a directory";
+  const fs::path logs = dir.path() / "file" / "logs";
+  CommandRig rig;
+  rig.settings.command_limits.max_commands_per_s = 1000;
+  rig.start(logs);
+  const rig_status_t status = rig.ask(status_request());
+  EXPECT_NE(status.logs_problem.find(logs.string()), std::string::npos) << status.logs_problem;
+  EXPECT_NE(status.logs_problem.find("Not a directory"), std::string::npos) << status.logs_problem;
+  rig.step_cycles(70);
+  const rig_status_t start = rig.ask(testing::start_command("bang_bang", 0.3, 30.0));
+  EXPECT_FALSE(start.request_accepted);
+  EXPECT_NE(start.request_reason.find("cannot log a session"), std::string::npos)
+      << start.request_reason;
+  EXPECT_NE(start.request_reason.find("Not a directory"), std::string::npos)
+      << start.request_reason;
 }
 
 }  // namespace

@@ -52,6 +52,7 @@ struct LoopSettings {
 struct SessionRequest {
   std::array<char, kNameChars> session{};  // the log's name
   std::array<char, kNameChars> label{};
+  std::int64_t request_id = 0;  // the command's, so the status can give its verdict
   Excitation excitation;
   // Replay: the arm's zero as the original session recorded it (the replayed traffic starts at the
   // session, after the board's absolute position was already known).
@@ -116,7 +117,7 @@ class ControlLoop {
   bool write_command(double duty, double braking_fraction, RawReport* record);
   void emit(LoopEvent::Kind kind) noexcept;
   void emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
-                  std::int64_t now_ns) noexcept;
+                  std::int64_t now_ns, std::int64_t request_id = 0) noexcept;
   bool queue_has_room(std::size_t events) noexcept;
   // Follows the counts of fresh reports for the stuck-encoder rules (SafetyLimits::stuck_*).
   void watch_encoders(const RigSample& sample) noexcept;

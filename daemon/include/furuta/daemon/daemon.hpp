@@ -60,6 +60,8 @@ class Daemon {
   void on_session_logged(std::function<void(const std::filesystem::path&)> callback);
   // True once the loop runs and the first report of each board is in (furutad's READY=1).
   bool ready() const { return ready_.load(); }
+  // Why a session could not be logged now ("": it can), as of the last status (once a second).
+  std::string logs_problem() const;
   // Advances while the loop cycles (furutad pings the watchdog only while it moves).
   std::int64_t heartbeat() const { return loop_->counters().cycles.load(); }
 
@@ -68,10 +70,16 @@ class Daemon {
   struct StatusSnapshot {
     std::string session;
     std::string last_fault;
+    std::int64_t latency_samples = 0;
     double jitter_mean_us = 0, jitter_p99_us = 0, jitter_max_us = 0;
+    SessionRecorder::History history;
+    std::string logs_problem;  // checked at each periodic status
   };
   furuta::rig_status_t status_message();
   void refresh_snapshot();
+  // Can a session be logged now? On the I/O thread, once a status interval (a probe file and a
+  // statvfs), so `furuta status` says so before a start is refused for it.
+  void check_logs_dir();
   void io_thread_main();
   void lcm_thread_main();
   void on_command(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_command_t* msg);

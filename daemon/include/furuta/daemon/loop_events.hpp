@@ -63,6 +63,7 @@ struct RigSample {
 struct SessionStartEvent {
   std::array<char, kNameChars> session{};
   std::array<char, kNameChars> label{};
+  std::int64_t request_id = 0;  // the start command's (0: a replay)
   ExcitationSpec excitation;
   std::int64_t period_ns = 0;
   std::int64_t monotonic_ns = 0;
@@ -90,6 +91,7 @@ struct FaultEvent {
   std::int64_t seq = 0;  // the sample it concerns
   std::int64_t monotonic_ns = 0;
   bool fatal = false;
+  std::int64_t request_id = 0;  // start_refused, start_cancelled: the start command's
 };
 
 struct LoopEvent {

@@ -57,6 +57,21 @@ class SessionRecorder {
   const LatencyHistogram& session_wake_latency() const { return wake_latency_; }
   const std::string& last_fault() const { return last_fault_; }
 
+  // What the status says about the past, beyond the last fault itself: when it happened and in
+  // which session, how many sessions ended well since, the latest session and the start request
+  // it came from, and the latest start the loop refused after the command was answered.
+  struct History {
+    std::int64_t last_fault_wall_ns = 0;
+    std::string last_fault_session;
+    std::int64_t sessions_since_fault = 0;
+    std::string last_session;
+    std::int64_t last_session_request_id = 0;
+    std::string last_session_end;
+    std::int64_t refused_request_id = 0;
+    std::string refused_reason;
+  };
+  const History& history() const { return history_; }
+
  private:
   void start_session(const SessionStartEvent& start);
   void end_session(const SessionEndEvent& end);
@@ -71,6 +86,8 @@ class SessionRecorder {
   void on_log_status(session_log::LogWriteStatus status);
   // The daemon stops the session (log_error); unless still_logging, nothing more is written.
   void fail_log(const std::string& why, bool still_logging = false);
+  // The status's last fault, stamped now (UTC) with the session it happened in.
+  void note_fault(std::string what);
 
   RecorderSettings settings_;
   lcm::LCM* lcm_;
@@ -84,6 +101,8 @@ class SessionRecorder {
   std::int64_t samples_published_ = 0;
   LatencyHistogram wake_latency_;
   std::string last_fault_;
+  History history_;
+  bool session_faulted_ = false;  // a fault was noted during the running session
   std::vector<std::uint8_t> buffer_;
   furuta::rig_sample_t sample_msg_;
   furuta::rig_usb_report_t usb_msg_;

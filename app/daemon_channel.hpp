@@ -1,0 +1,32 @@
+#pragma once
+// How `furuta start|stop|estop|status` reach the daemon: commands out on RIG_COMMAND, every status
+// the daemon publishes in (its replies to anyone and its periodic one). Over LCM in `furuta`; tests
+// put a daemon of their own, in virtual time, behind it.
+
+#include <chrono>
+#include <optional>
+#include <string>
+
+#include "furuta/rig_command_t.hpp"
+#include "furuta/rig_status_t.hpp"
+
+namespace furuta::app {
+
+class DaemonChannel {
+ public:
+  virtual ~DaemonChannel() = default;
+  virtual void send(const furuta::rig_command_t& command) = 0;
+  // The next status published, or nothing within `wait`.
+  virtual std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) = 0;
+  // Where the daemon is expected, for messages ("udpm://...").
+  virtual std::string where() const = 0;
+};
+
+struct RemoteOptions;
+struct StartOptions;
+enum class RemoteKind;
+// run_remote_command over a given channel.
+int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOptions& remote,
+                       const StartOptions& start, std::ostream& out, std::ostream& err);
+
+}  // namespace furuta::app
