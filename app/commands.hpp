@@ -102,6 +102,8 @@ struct IdentifyCommandOptions {
   // Empty: the configuration carried by the first log. With CSVs it is optional: only duty input
   // needs it (eq. 4's motor data); it also gives the CAD values and [identification]'s filters.
   std::filesystem::path config_path;
+  // Holds this run's files only: replaced whole, refused when it is not a previous run's
+  // (report/run_directory.hpp).
   std::filesystem::path output_dir = "identification";
   // Given here, these override the configuration's [identification].
   std::optional<double> cutoff_hz;
@@ -160,7 +162,7 @@ struct SimulateCommandOptions {
   std::optional<double> relative_pct;  // with the truth: also the truth +- this % as intervals
   std::optional<double> seconds;       // each scenario's duration (default: the paper's 4 s)
   std::size_t pieces = 1;  // tubes per run: 1, or a power of two split at 0.5 s (tighter, slower)
-  std::filesystem::path output_dir = "simulation";
+  std::filesystem::path output_dir = "simulation";  // as IdentifyCommandOptions::output_dir
 };
 // Writes simulate.json, table3.txt and scenario_<n>_<parameters>.svg; prints Table III.
 // 0 on success (whatever the tubes reached: failures are reported in the table), 2 on bad input.

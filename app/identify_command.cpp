@@ -15,6 +15,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/outputs.hpp"
+#include "furuta/report/run_directory.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "terminal_progress.hpp"
@@ -114,6 +115,41 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
   return in;
 }
 
+// A fitted recording whose input never changes gives equations without a scale: LSMI answers
+// every parameter 0 +- 0, which looks like a result. Refused, naming the files and the column.
+bool excited(const std::vector<pipeline::Recording>& fit, const identification::CsvImportSpec& spec,
+             const IdentifyCommandOptions& options, std::ostream& err) {
+  std::vector<std::string> constant;
+  double value = 0;
+  for (const pipeline::Recording& r : fit) {
+    const std::vector<double>& u = r.experiment.input;
+    const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
+    if (lo != u.end() && *lo == *hi) {
+      if (constant.empty()) value = *lo;
+      constant.push_back(r.experiment.name);
+    }
+  }
+  if (constant.empty()) return true;
+  std::string files;
+  for (const std::string& name : constant) files += (files.empty() ? "" : ", ") + name;
+  const std::string column = "the input column '" + spec.input.name + "'";
+  err << "furuta identify: ";
+  if (constant.size() == fit.size()) {
+    err << (fit.size() == 1 ? files + ": " + column + " is "
+                            : "every fitted recording's " + column.substr(4) + " is constant (" +
+                                  files + "); in " + constant.front() + " it is ")
+        << value << " on every row: nothing to identify (without an input that moves the rig "
+        << "every parameter would come out 0 +- 0); check input in " << options.import_spec.string()
+        << " or record with an excitation\n";
+  } else {
+    err << files << ": " << column << " is constant (" << value
+        << " on every row): nothing to identify in " << (constant.size() == 1 ? "it" : "them")
+        << " (its Table I column would be 0 +- 0); leave " << (constant.size() == 1 ? "it" : "them")
+        << " out of --csv, or check input in " << options.import_spec.string() << "\n";
+  }
+  return false;
+}
+
 // CSV recordings, mapped by the import spec. The rig configuration is optional: duty input needs
 // its motor (eq. 4); voltage input has its motor in the spec's [motor], torque input needs none.
 std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& options,
@@ -139,6 +175,7 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
                                                path.filename().string());
   };
   for (const auto& path : options.csvs) in.fit.push_back({load(path), std::nullopt});
+  if (!excited(in.fit, spec, options, err)) return std::nullopt;
   in.files = options.csvs;
   if (!options.validate.empty()) {
     in.held_out = pipeline::Recording{load(options.validate), std::nullopt};
@@ -198,8 +235,11 @@ pipeline::Settings identify_settings(const config::RigConfig& rig,
   return settings;
 }
 
-std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& options,
-                                                std::ostream& err) {
+namespace {
+
+// The command's inputs as a batch, checked; nothing when they are unusable (the reason on err).
+std::optional<pipeline::Batch> checked_batch(const IdentifyCommandOptions& options,
+                                             std::ostream& err) {
   if (options.logs.empty() && options.csvs.empty()) {
     err << "furuta identify: give at least one session log, or --csv FILE with --import-spec "
            "SPEC\n";
@@ -245,10 +285,38 @@ std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& op
     return std::nullopt;
   }
   if (!batch) return std::nullopt;
+  if (options.sivia && !pipeline::has_data_error_bounds(batch->rig.sivia)) {
+    // Zero bounds claim exact data: SIVIA then finds no consistent parameter, an empty set that
+    // reads like a finding about the rig.
+    const std::string where =
+        !options.config_path.empty()
+            ? options.config_path.string() + "'s [sivia]"
+            : (csv_input ? std::string("without --config, [sivia]")
+                         : "the configuration " + options.logs.front().string() +
+                               " carries: its [sivia]");
+    err << "furuta identify: --sivia needs the data's error bounds, and " << where
+        << " has every one at 0 (q2_bound, dq1_bound, dq2_bound, ddq1_bound, ddq2_bound, "
+           "tau_bound): SIVIA would find an empty set. Set them in the [sivia] section of a rig "
+           "configuration (config/rig.toml shows them) and pass it with --config\n";
+    return std::nullopt;
+  }
+  return batch;
+}
+
+pipeline::Run run_batch(const pipeline::Batch& batch, const IdentifyCommandOptions& options) {
   // Progress only on a terminal: logs and CI stay quiet.
   TerminalProgress progress;
   const bool tty = ::isatty(STDERR_FILENO) == 1;
-  return pipeline::run(*batch, identify_settings(batch->rig, options), tty ? &progress : nullptr);
+  return pipeline::run(batch, identify_settings(batch.rig, options), tty ? &progress : nullptr);
+}
+
+}  // namespace
+
+std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& options,
+                                                std::ostream& err) {
+  const std::optional<pipeline::Batch> batch = checked_batch(options, err);
+  if (!batch) return std::nullopt;
+  return run_batch(*batch, options);
 }
 
 void print_identification(std::ostream& out, const pipeline::Run& run,
@@ -260,10 +328,26 @@ void print_identification(std::ostream& out, const pipeline::Run& run,
 
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err) {
-  const std::optional<pipeline::Run> run = run_identification(options, err);
-  if (!run) return 2;
-  report::write_identification(options.output_dir, *run, daemon::kSoftwareVersion);
-  print_identification(out, *run, options.output_dir);
+  const std::optional<pipeline::Batch> batch = checked_batch(options, err);
+  if (!batch) return 2;
+  // Before the fit, which may take long: a directory it may not replace is refused at once.
+  if (const auto problem = report::output_directory_problem(options.output_dir)) {
+    err << "furuta identify: -o " << options.output_dir.string() << ": " << *problem << "\n";
+    return 2;
+  }
+  const pipeline::Run run = run_batch(*batch, options);
+  bool replaced = false;
+  try {
+    report::RunDirectory dir(options.output_dir);
+    report::write_identification(dir.staging(), run, daemon::kSoftwareVersion);
+    replaced = dir.commit();
+  } catch (const report::OutputDirectoryError& e) {
+    err << "furuta identify: -o " << options.output_dir.string() << ": " << e.what() << "\n";
+    return 2;
+  }
+  print_identification(out, run, options.output_dir);
+  if (replaced)
+    out << "(the previous run's files in " << options.output_dir.string() << " were replaced)\n";
   return 0;
 }
 

@@ -149,6 +149,14 @@ std::string trimmed(std::string text) {
   return text;
 }
 
+// The logs directory is the daemon's (or the user's): never created here, where a mistyped name
+// would become an empty tree and a pass that finds nothing to do.
+void require_logs_directory(const fs::path& dir) {
+  const fs::file_status status = fs::status(dir);
+  if (!fs::exists(status)) throw std::runtime_error(dir.string() + ": no such directory");
+  if (!fs::is_directory(status)) throw std::runtime_error(dir.string() + ": not a directory");
+}
+
 // A complete log waiting in the directory, as far as the trigger needs to know it.
 struct PendingLog {
   fs::path path;
@@ -232,6 +240,7 @@ class Processor {
         err_(err) {}
 
   ProcessingPass run() {
+    require_logs_directory(o_.logs_dir);
     fs::create_directories(done_);
     fs::create_directories(failed_);
     fs::create_directories(o_.identifications_dir);
@@ -488,7 +497,7 @@ ProcessingPass process_logs(const LogProcessorOptions& options, std::ostream& ou
 
 void watch_logs(const LogProcessorOptions& options, const std::function<bool()>& keep_going,
                 std::chrono::milliseconds rescan_interval, std::ostream& out, std::ostream& err) {
-  fs::create_directories(options.logs_dir);
+  require_logs_directory(options.logs_dir);
   const FileDescriptor inotify(::inotify_init1(IN_NONBLOCK | IN_CLOEXEC));
   if (inotify.get() < 0) throw system_error_for("inotify for", options.logs_dir);
   if (::inotify_add_watch(inotify.get(), options.logs_dir.c_str(), IN_MOVED_TO | IN_CLOSE_WRITE) <
@@ -525,6 +534,21 @@ int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& ou
                                       ? fs::path(rig.automation.identifications_dir)
                                       : options.identifications_dir;
   processor.automation = rig.automation;
+  // Which directory, and why that one: with no DIR it is the configuration's, which may not be
+  // the one the user thought of.
+  const std::string logs_from =
+      options.logs_dir.empty() ? " (the [daemon] logs_dir of " + options.config_path.string() + ")"
+                               : std::string();
+  const fs::file_status status = fs::status(processor.logs_dir);
+  if (!fs::is_directory(status)) {
+    err << "furuta process-logs: " << processor.logs_dir.string() << logs_from << ": "
+        << (fs::exists(status) ? "not a directory" : "no such directory (nothing was created)")
+        << "; give the directory the daemon writes its logs to"
+        << (options.logs_dir.empty() ? " as DIR, or set logs_dir" : "") << "\n";
+    return 2;
+  }
+  out << "logs in " << processor.logs_dir.string() << logs_from << ", identifications in "
+      << processor.identifications_dir.string() << "\n";
   if (options.watch) {
     g_stop_requested.store(false);
     struct sigaction action {};
@@ -532,8 +556,7 @@ int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& ou
     sigemptyset(&action.sa_mask);
     ::sigaction(SIGINT, &action, nullptr);
     ::sigaction(SIGTERM, &action, nullptr);
-    out << "watching " << processor.logs_dir.string() << " (identifications in "
-        << processor.identifications_dir.string() << "); Ctrl-C stops\n";
+    out << "watching " << processor.logs_dir.string() << "; Ctrl-C stops\n";
     out.flush();
     watch_logs(
         processor, [] { return !g_stop_requested.load(); }, std::chrono::seconds(60), out, err);

@@ -45,7 +45,9 @@ struct ProcessingPass {
 // what a crashed pass left, then moves unreadable, damaged and cut-short logs to failed/ and
 // identifies every complete batch ([automation]), until a listing finds nothing more to do (logs
 // that landed meanwhile are taken too: a trigger may have been lost while this pass ran).
-// Throws std::runtime_error when the directories cannot be created, locked or read.
+// Throws std::runtime_error when the logs directory is not an existing directory (it is never
+// created: done/ and failed/ inside it and the identifications directory are), or when the
+// directories cannot be created, locked or read.
 ProcessingPass process_logs(const LogProcessorOptions& options, std::ostream& out,
                             std::ostream& err);
 

@@ -134,7 +134,9 @@ int main(int argc, char** argv) {
                    "Rig configuration (default: the one the first log carries; with CSVs only "
                    "needed for duty input)")
       ->check(CLI::ExistingFile);
-  identify_cmd->add_option("-o,--output", identify.output_dir, "Directory for results and figures");
+  identify_cmd->add_option("-o,--output", identify.output_dir,
+                           "Directory for results and figures, replaced whole: new, empty or a "
+                           "previous run's (default: identification)");
   identify_cmd->add_option("--cutoff", identify.cutoff_hz,
                            "Low-pass cut-off [Hz] (default: the configuration's; 15 without one)");
   auto* lag_option = identify_cmd->add_option(
@@ -182,7 +184,9 @@ int main(int argc, char** argv) {
   simulate_cmd->add_option("--pieces", simulate.pieces,
                            "Tubes per run: 1 (default), or 2, 4, ... 64: the initial box split "
                            "at 0.5 s, tighter tubes for that many times the work");
-  simulate_cmd->add_option("-o,--output", simulate.output_dir, "Directory for results and figures");
+  simulate_cmd->add_option("-o,--output", simulate.output_dir,
+                           "Directory for results and figures, replaced whole: new, empty or a "
+                           "previous run's (default: simulation)");
 
   furuta::app::ProcessLogsOptions process_logs;
   process_logs.config_path = furuta::config::default_rig_config_path();
@@ -191,7 +195,8 @@ int main(int argc, char** argv) {
       "Identify the complete session logs in a directory as [automation] groups them; move each "
       "to done/ or failed/ (what furuta-identify@.service runs)");
   process_logs_cmd->add_option("DIR", process_logs.logs_dir,
-                               "Logs directory (default: the configuration's [daemon] logs_dir)");
+                               "Logs directory, which must exist (default: the configuration's "
+                               "[daemon] logs_dir)");
   process_logs_cmd->add_option("-c,--config", process_logs.config_path, "Rig configuration (TOML)")
       ->check(CLI::ExistingFile);
   process_logs_cmd->add_option(

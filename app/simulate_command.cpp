@@ -13,6 +13,7 @@
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/outputs.hpp"
+#include "furuta/report/run_directory.hpp"
 #include "furuta/report/tables.hpp"
 #include "terminal_progress.hpp"
 
@@ -161,6 +162,11 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
         << ": expected 1, 2, 4, 8, 16, 32 or 64 (the split is a bisection)\n";
     return 2;
   }
+  // Before the tubes, which may take long: a directory it may not replace is refused at once.
+  if (const auto problem = report::output_directory_problem(options.output_dir)) {
+    err << "furuta simulate: -o " << options.output_dir.string() << ": " << *problem << "\n";
+    return 2;
+  }
   std::vector<validated::Scenario> scenarios;
   for (const int n : options.scenarios) {
     if (n < 1 || n > 4) {
@@ -208,12 +214,23 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
   const pipeline::Simulation simulation =
       pipeline::simulate(scenarios, sets, truth, source, options.pieces,
                          ::isatty(STDERR_FILENO) == 1 ? &progress : nullptr);
-  const std::vector<std::string> figures = report::write_simulation(
-      options.output_dir, simulation, daemon::kSoftwareVersion,
-      options.results.empty() ? std::nullopt : std::optional(options.results.string()));
+  std::vector<std::string> figures;
+  bool replaced = false;
+  try {
+    report::RunDirectory dir(options.output_dir);
+    figures = report::write_simulation(
+        dir.staging(), simulation, daemon::kSoftwareVersion,
+        options.results.empty() ? std::nullopt : std::optional(options.results.string()));
+    replaced = dir.commit();
+  } catch (const report::OutputDirectoryError& e) {
+    err << "furuta simulate: -o " << options.output_dir.string() << ": " << e.what() << "\n";
+    return 2;
+  }
   out << note << report::format_table_three(simulation.results);
   out << "wrote " << (options.output_dir / "simulate.json").string() << ", table3.txt and "
       << figures.size() << " figures in " << options.output_dir.string() << "\n";
+  if (replaced)
+    out << "(the previous run's files in " << options.output_dir.string() << " were replaced)\n";
   return 0;
 }
 

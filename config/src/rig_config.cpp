@@ -3,6 +3,7 @@
 // and identification's sections are read in daemon_sections.cpp and identification_sections.cpp.
 #include "furuta/config/rig_config.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -26,6 +27,12 @@ bool unit_sign(std::int64_t v) {
 bridge::EncoderGeometry read_encoder(Section s, double default_cpr) {
   bridge::EncoderGeometry g;
   g.counts_per_rev = s.number("counts_per_rev", default_cpr, positive, "> 0");
+  // An encoder counts whole steps: a fraction is a typo (or a gear ratio folded in, which
+  // motor_ratio and gear_ratio hold), and would scale every angle the rig reports.
+  if (g.counts_per_rev != std::floor(g.counts_per_rev)) {
+    s.fail("counts_per_rev", s.node("counts_per_rev"),
+           "must be a whole number of counts (e.g. 1024; the gear ratios are [motor]'s)");
+  }
   g.sign = static_cast<int>(s.integer("sign", 1, unit_sign, "1 or -1"));
   g.zero_offset_rad = s.number("zero_offset_deg", 0.0) * kDegToRad;
   s.reject_unknown_keys();

@@ -144,6 +144,11 @@ void read_units(Section& s, CsvImportSpec& spec) {
     }
     if (!cpr) s.fail(key, nullptr, "missing: required when angle_unit = \"counts\"");
     if (*cpr <= 0) s.fail(key, s.node(key), "must be > 0");
+    // A fraction of a count is no resolution an encoder has: most likely a typo or a ratio
+    // folded in, which would scale every angle.
+    if (*cpr != std::floor(*cpr)) {
+      s.fail(key, s.node(key), "must be a whole number of counts (e.g. 4096), not " + exact(*cpr));
+    }
     (std::string_view(key) == "arm_counts_per_rev" ? spec.arm_counts_per_rev
                                                    : spec.pendulum_counts_per_rev) = *cpr;
   }
@@ -223,6 +228,7 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
   spec.has_header = s.boolean("has_header", true);
   read_columns(s, spec);
   read_units(s, spec);
+  spec.time_unit_at = source_name + ":" + std::to_string(s.node("time_unit")->source().begin.line);
   s.reject_unknown_keys();
   spec.voltage_motor = read_motor_table(top, s, spec.input_kind);
   return spec;
@@ -328,9 +334,12 @@ void check_spec(const CsvImportSpec& spec) {
   }
   if (!(spec.time_scale_s > 0) || !std::isfinite(spec.time_scale_s))
     bad("time_scale_s must be > 0");
-  if (spec.angle_unit == AngleUnit::counts &&
-      !(spec.arm_counts_per_rev > 0 && spec.pendulum_counts_per_rev > 0)) {
-    bad("counts per revolution must be > 0 when angle_unit = counts");
+  if (spec.angle_unit == AngleUnit::counts) {
+    for (const double cpr : {spec.arm_counts_per_rev, spec.pendulum_counts_per_rev}) {
+      if (!(cpr > 0) || cpr != std::floor(cpr)) {
+        bad("counts per revolution must be whole numbers > 0 when angle_unit = counts");
+      }
+    }
   }
 }
 
@@ -362,6 +371,62 @@ std::vector<double> interpolate(const std::vector<double>& t, const std::vector<
     out.push_back(x[j] + w * (x[j + 1] - x[j]));
   }
   return out;
+}
+
+std::string duration_text(double seconds) {
+  std::ostringstream out;
+  out << std::setprecision(3);
+  if (seconds >= 7200) {
+    out << seconds / 3600 << " h";
+  } else if (seconds >= 120) {
+    out << seconds / 60 << " min";
+  } else if (seconds >= 1) {
+    out << seconds << " s";
+  } else if (seconds >= 1e-3) {
+    out << seconds * 1e3 << " ms";
+  } else {
+    out << seconds * 1e6 << " us";
+  }
+  return out.str();
+}
+
+// A period outside what a pendulum recording can have is, in practice, a time column read in the
+// wrong unit: refused here, before a filter design fails on it with a message about cut-offs.
+void check_sample_period(const std::string& file, const std::string& column,
+                         const CsvImportSpec& spec, double period, double span) {
+  if (period >= kMinSamplePeriodS && period <= kMaxSamplePeriodS) return;
+  struct Unit {
+    const char* name;
+    double seconds;
+  };
+  constexpr std::array<Unit, 3> units = {{{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}}};
+  // A spec built in code may hold any scale; one read from TOML holds one of the units.
+  std::string problem = "time_scale_s = " + exact(spec.time_scale_s);
+  for (const Unit& u : units) {
+    if (u.seconds == spec.time_scale_s) problem = "time_unit = \"" + std::string(u.name) + "\"";
+  }
+  // The unit that would put the period in range, nearest the daemon's 16 ms when two would.
+  const double step = period / spec.time_scale_s;  // in the column's own numbers
+  const Unit* likely = nullptr;
+  for (const Unit& u : units) {
+    const double p = step * u.seconds;
+    if (u.seconds == spec.time_scale_s || p < kMinSamplePeriodS || p > kMaxSamplePeriodS) continue;
+    if (!likely ||
+        std::abs(std::log(p / 16e-3)) < std::abs(std::log(step * likely->seconds / 16e-3))) {
+      likely = &u;
+    }
+  }
+  if (!spec.time_unit_at.empty()) problem += " (" + spec.time_unit_at + ")";
+  problem += " gives a sample period of " + duration_text(period) + " (the median step; " +
+             duration_text(span) + " in all), outside the " + duration_text(kMinSamplePeriodS) +
+             " to " + duration_text(kMaxSamplePeriodS) + " a pendulum recording has: ";
+  if (likely) {
+    problem += "is the column in " + std::string(likely->name) + "? Then write time_unit = \"" +
+               likely->name + "\" (a period of " + duration_text(step * likely->seconds) + ")";
+  } else {
+    problem += "check the time column and time_unit";
+  }
+  throw CsvImportError(file, 0, column, problem);
 }
 
 }  // namespace
@@ -464,9 +529,14 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
     }
     const std::vector<double>& t = raw[0];
     if (t.size() > 1 && !(t.back() > t[t.size() - 2])) {
+      const std::string before = "line " + std::to_string(row_line.back());
       throw CsvImportError(
           file, line_no, channels[0].label,
-          "time does not increase (" + exact(t.back()) + " after " + exact(t[t.size() - 2]) + ")");
+          "time does not increase: " + (t.back() == t[t.size() - 2]
+                                            ? exact(t.back()) + " repeats the time stamp of " +
+                                                  before + " (a row written twice?)"
+                                            : exact(t.back()) + " after " + exact(t[t.size() - 2]) +
+                                                  " on " + before + " (rows out of order?)"));
     }
     row_line.push_back(line_no);
   }
@@ -505,6 +575,7 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
     if (std::abs(steps[i] - period) > std::abs(steps[worst] - period)) worst = i;
   }
   out.sample_period_s = period;
+  check_sample_period(file, channels[0].label, spec, period, out.t_s.back() - out.t_s.front());
 
   if (std::abs(steps[worst] - period) > kIrregularTolerance * period) {
     const double span = out.t_s.back() - out.t_s.front();
@@ -537,10 +608,6 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
                            " samples from " + std::to_string(n) + " rows)");
   }
 
-  if (period > 0.5 || period < 1e-5) {
-    out.warnings.push_back("sample period " + milliseconds(period) +
-                           " is unusual for a pendulum: is time_unit right?");
-  }
   if (spec.input_kind == InputKind::duty) {
     double peak = 0;
     for (const double u : out.input) peak = std::max(peak, std::abs(u));

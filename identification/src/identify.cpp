@@ -107,6 +107,16 @@ Identification identify(const std::vector<RawExperiment>& experiments,
       torque_with_input_lag(id.processed[i], id.input_lag_s, experiments[i].input_kind, motor,
                             voltage_motor);
     }
+    // Kept, not refused: a lag near zero can come out slightly negative from noise alone, and the
+    // fit with it is still the best the data allow. But a reader must know it is not physical.
+    if (id.input_lag_s < 0) {
+      std::ostringstream w;
+      w << std::setprecision(3) << "the estimated input lag is negative (" << id.input_lag_s * 1e3
+        << " ms): the angles would move before the input that drives them, which no rig does; "
+           "likely the input's sign or scale, the time stamps, or a lag the recording already "
+           "removed is wrong. Check them, or give the lag (--input-lag-ms)";
+      id.warnings.push_back(w.str());
+    }
   }
   for (const JointSeries& s : id.processed) id.per_experiment.push_back(solve_lsmi({&s}, lsmi));
   id.combined = solve_lsmi(all, lsmi);

@@ -2,15 +2,18 @@
 // (another rig, another logger) through the command, and the command's errors for CSV inputs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "furuta/identification/identify.hpp"
@@ -49,8 +52,11 @@ constexpr const char* kSpec =
     "torque_constant_nm_per_a = 0.03\nback_emf_v_s_per_rad = 0.03\n"  // 12-13
     "resistance_ohm = 3\ngear_ratio = 4\nefficiency = 0.9\n";         // 14-16
 
-// 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms, in radians from hanging down.
-fs::path record(const fs::path& dir, const std::string& name, double phase) {
+// 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms, in radians from hanging down. The
+// volts column may be written late by input_delay_s (a logger that stamps the input after the
+// angles it drives).
+fs::path record(const fs::path& dir, const std::string& name, double phase,
+                double input_delay_s = 0) {
   const fs::path path = dir / name;
   std::ofstream out(path);
   out << "t,q1,q2,volts\n" << std::setprecision(10);
@@ -68,7 +74,7 @@ fs::path record(const fs::path& dir, const std::string& name, double phase) {
   for (int step = -4000; step < 20000; ++step) {  // 2 s of settling first
     const double t = step * h;
     if (step >= 0 && step % 20 == 0) {
-      out << t << "," << x.q1 << "," << x.q2 << "," << volts(t) << "\n";
+      out << t << "," << x.q1 << "," << x.q2 << "," << volts(t - input_delay_s) << "\n";
     }
     const double v = volts(t + h / 2);
     x = model::rk4_step(p, x, h, [&](const model::PendulumState& s) {
@@ -88,6 +94,24 @@ std::string read(const fs::path& path) {
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+// The CSV with each data row's cell `column` (0-based) replaced by change(cell).
+void rewrite_column(const fs::path& csv, std::size_t column,
+                    const std::function<std::string(const std::string&)>& change) {
+  std::istringstream in(read(csv));
+  std::string line, text;
+  std::getline(in, line);
+  text = line + "\n";
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    cells.at(column) = change(cells.at(column));
+    for (std::size_t i = 0; i < cells.size(); ++i) text += (i ? "," : "") + cells[i];
+    text += "\n";
+  }
+  write(csv, text);
 }
 
 // The combined estimate of `name` in results.json.
@@ -192,6 +216,158 @@ TEST_F(IdentifyCsv, MistakesInTheCommandAreRefusedClearly) {
   IdentifyCommandOptions bad_csv = options_;
   bad_csv.csvs = {c_};
   refused(bad_csv, "c.csv:2: volts: 'oops' is not a finite number");
+}
+
+// A time column read in the wrong unit is refused before any filtering, naming the file, the
+// time_unit key with its line, and the unit that fits. Before: "cutoff_hz: below 1e-3 of the
+// sample rate, liquid-dsp's ..." (seconds read as ms), or "pass --cutoff below 0.025" (ms read
+// as seconds), which, followed, fitted nonsense with exit 0.
+TEST_F(IdentifyCsv, ATimeUnitThatGivesNoPendulumsSamplePeriodIsNamed) {
+  std::string spec = kSpec;
+  spec.replace(spec.find("time_unit = \"s\""), 15, "time_unit = \"ms\"");
+  write(spec_, spec);
+  EXPECT_EQ(run(), 2);
+  EXPECT_NE(err_.str().find("furuta identify: " + a_.string() + ": t: time_unit = \"ms\" (" +
+                            spec_.string() + ":3) gives a sample period of 10 us"),
+            std::string::npos)
+      << err_.str();
+  EXPECT_NE(err_.str().find("is the column in s?"), std::string::npos) << err_.str();
+  EXPECT_EQ(err_.str().find("cutoff"), std::string::npos) << err_.str();
+
+  write(spec_, kSpec);
+  rewrite_column(a_, 0, [](const std::string& t) { return std::to_string(std::stod(t) * 1e3); });
+  std::ostringstream out, err;
+  EXPECT_EQ(run_identify_command(options_, out, err), 2);
+  EXPECT_NE(err.str().find(a_.string() + ": t: time_unit = \"s\" (" + spec_.string() +
+                           ":3) gives a sample period of 10 s"),
+            std::string::npos)
+      << err.str();
+  EXPECT_NE(err.str().find("is the column in ms? Then write time_unit = \"ms\""), std::string::npos)
+      << err.str();
+  EXPECT_FALSE(fs::exists(options_.output_dir));
+}
+
+// Before: every parameter 0 +- 0 and exit 0.
+TEST_F(IdentifyCsv, AnInputThatNeverChangesIsNothingToIdentify) {
+  rewrite_column(a_, 3, [](const std::string&) { return "0"; });
+  options_.csvs = {a_};
+  EXPECT_EQ(run(), 2);
+  EXPECT_NE(err_.str().find("furuta identify: a.csv: the input column 'volts' is 0 on every row: "
+                            "nothing to identify"),
+            std::string::npos)
+      << err_.str();
+  EXPECT_FALSE(fs::exists(options_.output_dir));
+
+  // One of several: its Table I column would be 0 +- 0.
+  options_.csvs = {a_, b_};
+  std::ostringstream out, err;
+  EXPECT_EQ(run_identify_command(options_, out, err), 2);
+  EXPECT_NE(err.str().find("a.csv: the input column 'volts' is constant (0 on every row): nothing "
+                           "to identify in it"),
+            std::string::npos)
+      << err.str();
+  EXPECT_NE(err.str().find("leave it out of --csv"), std::string::npos) << err.str();
+
+  // All of them, constant but not zero.
+  for (const fs::path& csv : {a_, b_}) {
+    rewrite_column(csv, 3, [](const std::string&) { return "1.5"; });
+  }
+  std::ostringstream out2, err2;
+  EXPECT_EQ(run_identify_command(options_, out2, err2), 2);
+  EXPECT_NE(err2.str().find("every fitted recording's input column 'volts' is constant (a.csv, "
+                            "b.csv); in a.csv it is 1.5 on every row: nothing to identify"),
+            std::string::npos)
+      << err2.str();
+}
+
+// Before: SIVIA ran with every error bound 0 and reported an empty set, exit 0.
+TEST_F(IdentifyCsv, SiviaWithoutErrorBoundsIsRefused) {
+  options_.sivia = true;
+  EXPECT_EQ(run(), 2);
+  EXPECT_NE(err_.str().find("furuta identify: --sivia needs the data's error bounds, and without "
+                            "--config, [sivia] has every one at 0"),
+            std::string::npos)
+      << err_.str();
+  EXPECT_NE(err_.str().find("pass it with --config"), std::string::npos) << err_.str();
+  EXPECT_FALSE(fs::exists(options_.output_dir));
+}
+
+// Before: a negative lag was used without a word.
+TEST_F(IdentifyCsv, ANegativeEstimatedInputLagIsAWarning) {
+  // The volts written 5 ms late: the angles lead the input column.
+  a_ = record(dir_.path(), "a.csv", 0.0, 5e-3);
+  b_ = record(dir_.path(), "b.csv", 1.3, 5e-3);
+  options_.estimate_input_lag = true;
+  ASSERT_EQ(run(), 0) << err_.str();
+  EXPECT_NE(out_.str().find("warning: the estimated input lag is negative (-"), std::string::npos)
+      << out_.str();
+  const std::string json = read(options_.output_dir / "results.json");
+  EXPECT_NE(json.find("the angles would move before the input that drives them"),
+            std::string::npos);
+  const auto lag = json.find("\"input_lag_s\": ");
+  ASSERT_NE(lag, std::string::npos);
+  EXPECT_NEAR(std::strtod(json.c_str() + lag + 15, nullptr), -5e-3, 1e-3);
+}
+
+// Before: a second run into the same directory left the first run's figures beside its files.
+TEST_F(IdentifyCsv, ASecondRunReplacesTheFirstsDirectoryWhole) {
+  options_.validate = c_;
+  ASSERT_EQ(run(), 0) << err_.str();
+  ASSERT_TRUE(fs::exists(options_.output_dir / "torque_validation.svg"));
+  options_.validate.clear();
+  std::ostringstream out, err;
+  ASSERT_EQ(run_identify_command(options_, out, err), 0) << err.str();
+  EXPECT_FALSE(fs::exists(options_.output_dir / "torque_validation.svg"));
+  EXPECT_TRUE(fs::exists(options_.output_dir / "results.json"));
+  EXPECT_NE(out.str().find("the previous run's files in " + options_.output_dir.string() +
+                           " were replaced"),
+            std::string::npos)
+      << out.str();
+  // Nothing left beside it: no staging directory, no old run.
+  std::vector<std::string> beside;
+  for (const auto& entry : fs::directory_iterator(dir_.path())) {
+    beside.push_back(entry.path().filename().string());
+  }
+  EXPECT_EQ(std::count(beside.begin(), beside.end(), "out"), 1);
+  for (const std::string& name : beside) EXPECT_EQ(name.find(".out."), std::string::npos) << name;
+}
+
+TEST_F(IdentifyCsv, ADirectoryThatIsNotAPreviousRunIsRefusedAndLeftAlone) {
+  fs::create_directories(options_.output_dir / "notes");
+  write(options_.output_dir / "results.json", "{}");
+  write(options_.output_dir / "thesis.tex", "mine");
+  EXPECT_EQ(run(), 2);
+  EXPECT_NE(err_.str().find("furuta identify: -o " + options_.output_dir.string() + ": " +
+                            options_.output_dir.string() +
+                            " is not empty and not a previous run's output (it holds"),
+            std::string::npos)
+      << err_.str();
+  EXPECT_NE(err_.str().find("'thesis.tex'"), std::string::npos) << err_.str();
+  EXPECT_EQ(read(options_.output_dir / "thesis.tex"), "mine");
+  EXPECT_EQ(read(options_.output_dir / "results.json"), "{}");
+
+  // The directory the command runs in is never replaced, even when empty.
+  const fs::path here = fs::current_path();
+  fs::create_directories(dir_.path() / "empty");
+  fs::current_path(dir_.path() / "empty");
+  options_.output_dir = ".";
+  std::ostringstream out, err;
+  const int code = run_identify_command(options_, out, err);
+  fs::current_path(here);
+  EXPECT_EQ(code, 2);
+  EXPECT_NE(err.str().find("is the current directory or holds it"), std::string::npos) << err.str();
+}
+
+// Outputs of the commands before the marker file: results.json beside only their own files.
+TEST_F(IdentifyCsv, AnOlderRunsDirectoryIsRecognisedAndReplaced) {
+  fs::create_directories(options_.output_dir);
+  write(options_.output_dir / "results.json", "{}");
+  write(options_.output_dir / "sivia.svg", "<svg/>");
+  write(options_.output_dir / "scenario_1_lsmi.svg", "<svg/>");
+  ASSERT_EQ(run(), 0) << err_.str();
+  EXPECT_FALSE(fs::exists(options_.output_dir / "sivia.svg"));
+  EXPECT_FALSE(fs::exists(options_.output_dir / "scenario_1_lsmi.svg"));
+  EXPECT_NE(read(options_.output_dir / "results.json"), "{}");
 }
 
 }  // namespace

@@ -202,6 +202,59 @@ TEST_F(Trigger, CorruptAndTruncatedLogsGoToFailedWithTheirReason) {
   EXPECT_EQ(run_process_logs_command(command, out_, err_), 1);
 }
 
+// Before: a mistyped directory, or none with the configuration's missing one, was created (exit
+// 0), and a file gave a raw filesystem error.
+TEST_F(Trigger, TheLogsDirectoryMustExistAndIsNeverCreated) {
+  ProcessLogsOptions command;
+  command.config_path = kRigConfig;
+  command.identifications_dir = options_.identifications_dir;
+  const auto refused = [&](const ProcessLogsOptions& c, const std::string& expected) {
+    std::ostringstream out, err;
+    EXPECT_EQ(run_process_logs_command(c, out, err), 2) << expected;
+    EXPECT_NE(err.str().find(expected), std::string::npos) << err.str();
+    return err.str();
+  };
+  command.logs_dir = dir_.path() / "lgos";
+  refused(command, "furuta process-logs: " + command.logs_dir.string() +
+                       ": no such directory (nothing was created)");
+  EXPECT_FALSE(fs::exists(command.logs_dir));
+  command.watch = true;
+  refused(command, "no such directory");
+  EXPECT_FALSE(fs::exists(command.logs_dir));
+  command.watch = false;
+
+  std::ofstream(dir_.path() / "a-file") << "x";
+  command.logs_dir = dir_.path() / "a-file";
+  refused(command, "a-file: not a directory");
+
+  // No DIR: the configuration's [daemon] logs_dir, named with where it came from.
+  const fs::path rig = dir_.path() / "rig.toml";
+  const fs::path missing = dir_.path() / "var" / "lib" / "furuta" / "logs";
+  std::ofstream(rig) << "[daemon]\nlogs_dir = \"" << missing.string() << "\"\n";
+  command.logs_dir.clear();
+  command.config_path = rig;
+  const std::string err = refused(command, missing.string() + " (the [daemon] logs_dir of " +
+                                               rig.string() + "): no such directory");
+  EXPECT_NE(err.find("set logs_dir"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir_.path() / "var"));
+  EXPECT_FALSE(fs::exists(options_.identifications_dir));
+
+  // The library refuses too, whoever calls it.
+  options_.logs_dir = dir_.path() / "lgos";
+  EXPECT_THROW(pass(), std::runtime_error);
+  EXPECT_FALSE(fs::exists(options_.logs_dir));
+
+  // An existing one is used and said: its done/, failed/ and the identifications may be created.
+  command.config_path = kRigConfig;
+  command.logs_dir = dir_.path() / "logs";
+  std::ostringstream out, err2;
+  EXPECT_EQ(run_process_logs_command(command, out, err2), 0) << err2.str();
+  EXPECT_NE(out.str().find("logs in " + command.logs_dir.string() + ", identifications in " +
+                           options_.identifications_dir.string()),
+            std::string::npos)
+      << out.str();
+}
+
 TEST_F(Trigger, ABatchWhoseIdentificationFailsGoesToFailedTogether) {
   land(too_short_);
   land(fits_[0]);

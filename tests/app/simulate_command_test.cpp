@@ -96,6 +96,43 @@ TEST(SimulateCommand, TruthWritesTableJsonAndFigures) {
   EXPECT_NEAR(rows[0].at("parameters").at("fv1")[1].get<double>(), 8.13e-2 * 1.00001, 1e-12);
 }
 
+// Before: a second run into the same directory left the first run's figures beside its own.
+TEST(SimulateCommand, ASecondRunReplacesTheDirectoryWholeAndAForeignOneIsRefused) {
+  TempDir dir;
+  SimulateCommandOptions options;
+  options.scenarios = {1};
+  options.seconds = 0.02;
+  options.relative_pct = 0.001;
+  options.output_dir = dir.path() / "out";
+  std::ostringstream out1, err1;
+  ASSERT_EQ(run_simulate_command(options, out1, err1), 0) << err1.str();
+  ASSERT_TRUE(fs::exists(options.output_dir / "scenario_1_truth_pm0p001pct.svg"));
+  options.relative_pct.reset();
+  std::ostringstream out2, err2;
+  ASSERT_EQ(run_simulate_command(options, out2, err2), 0) << err2.str();
+  EXPECT_FALSE(fs::exists(options.output_dir / "scenario_1_truth_pm0p001pct.svg"));
+  EXPECT_TRUE(fs::exists(options.output_dir / "scenario_1_truth.svg"));
+  EXPECT_NE(out2.str().find("were replaced"), std::string::npos) << out2.str();
+
+  fs::create_directories(dir.path() / "mine");
+  write(dir.path() / "mine" / "simulate.json", "{}");
+  write(dir.path() / "mine" / "plan.md", "keep");
+  options.output_dir = dir.path() / "mine";
+  std::ostringstream out3, err3;
+  EXPECT_EQ(run_simulate_command(options, out3, err3), 2);
+  EXPECT_NE(err3.str().find("furuta simulate: -o " + options.output_dir.string()),
+            std::string::npos)
+      << err3.str();
+  EXPECT_NE(err3.str().find("not a previous run's output (it holds 'plan.md')"), std::string::npos)
+      << err3.str();
+  EXPECT_EQ(read(dir.path() / "mine" / "plan.md"), "keep");
+  write(dir.path() / "file", "x");
+  options.output_dir = dir.path() / "file";
+  std::ostringstream out4, err4;
+  EXPECT_EQ(run_simulate_command(options, out4, err4), 2);
+  EXPECT_NE(err4.str().find("exists and is not a directory"), std::string::npos) << err4.str();
+}
+
 // --pieces 4: each run is split into four tubes (at an eighth of the short duration here), the
 // JSON says so, and the pieces' hull follows the single tube (over 0.2 s both are within a
 // hair of the true set: the gain of splitting shows after seconds, validated/README.md).

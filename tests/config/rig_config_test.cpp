@@ -62,6 +62,20 @@ TEST(RigConfig, ErrorsNameFileLineAndField) {
       << e.what();
 }
 
+TEST(RigConfig, CountsPerRevolutionMustBeAWholeNumber) {
+  const ConfigError e = error_of("[encoders.pendulum]\ncounts_per_rev = 1024.5\n");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.field(), "encoders.pendulum.counts_per_rev");
+  EXPECT_NE(std::string(e.what()).find(
+                "rig.toml:2: encoders.pendulum.counts_per_rev: must be a whole number of counts"),
+            std::string::npos)
+      << e.what();
+  // A whole number written as a float is the same count.
+  EXPECT_DOUBLE_EQ(parse_rig_config("[encoders.arm]\ncounts_per_rev = 2048.0\n", "rig.toml")
+                       .arm_encoder.counts_per_rev,
+                   2048.0);
+}
+
 TEST(RigConfig, UnknownKeysAreRejectedNotIgnored) {
   const ConfigError e = error_of("[motor]\nmotor_ration = 5.2\n");
   EXPECT_EQ(e.line(), 2);

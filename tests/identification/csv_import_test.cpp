@@ -310,8 +310,49 @@ TEST(CsvImport, TimeThatDoesNotIncreaseNamesTheLine) {
   const CsvImportError e = import_error(path, parse_csv_import_spec(spec_text(), "spec.toml"));
   EXPECT_EQ(e.line(), 8);
   EXPECT_EQ(e.field(), "t");
-  EXPECT_THAT(e.what(),
-              HasSubstr(path.string() + ":8: t: time does not increase (0.05 after 0.05)"));
+  EXPECT_THAT(e.what(), HasSubstr(path.string() +
+                                  ":8: t: time does not increase: 0.05 repeats the time stamp of "
+                                  "line 7 (a row written twice?)"));
+  csv.replace(line8, 4, "0.04");
+  const CsvImportError back = import_error(write_file(dir, "back.csv", csv),
+                                           parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_EQ(back.line(), 8);
+  EXPECT_THAT(back.what(), HasSubstr(":8: t: time does not increase: 0.04 after 0.05 on line 7 "
+                                     "(rows out of order?)"));
+}
+
+// A time column read in the wrong unit: before, a 16 ms recording read as seconds went on to the
+// filters, which failed with a cut-off message (or, with the cut-off it suggested, fitted
+// nonsense).
+TEST(CsvImport, ASamplePeriodNoPendulumHasNamesTheTimeUnitAndTheLikelyOne) {
+  testing::TempDir dir;
+  std::string milliseconds = "t,theta,alpha,u\n";
+  for (int k = 0; k < 600; ++k) milliseconds += std::to_string(16 * k) + ",0,0,0.1\n";
+  const auto ms_path = write_file(dir, "ms.csv", milliseconds);
+  const CsvImportError as_s =
+      import_error(ms_path, parse_csv_import_spec(spec_text(), "spec.toml"));
+  EXPECT_EQ(as_s.field(), "t");
+  EXPECT_THAT(as_s.what(), HasSubstr(ms_path.string() +
+                                     ": t: time_unit = \"s\" (spec.toml:6) gives a sample period "
+                                     "of 16 s (the median step; 2.66 h in all), outside the 100 us "
+                                     "to 100 ms a pendulum recording has: is the column in ms? "
+                                     "Then write time_unit = \"ms\" (a period of 16 ms)"));
+
+  std::string spec = spec_text();
+  spec.replace(spec.find("time_unit = \"s\""), 15, "time_unit = \"ms\"");
+  const auto s_path = write_file(dir, "s.csv", simple_csv(20));  // 10 ms in seconds
+  EXPECT_THAT(import_error(s_path, parse_csv_import_spec(spec, "spec.toml")).what(),
+              HasSubstr("time_unit = \"ms\" (spec.toml:6) gives a sample period of 10 us"));
+  EXPECT_THAT(import_error(s_path, parse_csv_import_spec(spec, "spec.toml")).what(),
+              HasSubstr("is the column in s? Then write time_unit = \"s\""));
+
+  // No unit fits: the message says to look at the column itself.
+  std::string days = "t,theta,alpha,u\n";  // 11.6 days a step, or 1000 s, or 1 s
+  for (int k = 0; k < 20; ++k) days += std::to_string(1'000'000 * k) + ",0,0,0.1\n";
+  EXPECT_THAT(import_error(write_file(dir, "days.csv", days),
+                           parse_csv_import_spec(spec_text(), "spec.toml"))
+                  .what(),
+              HasSubstr("check the time column and time_unit"));
 }
 
 TEST(CsvImport, SixteenRowsAtLeast) {
@@ -407,6 +448,16 @@ TEST(CsvImportSpec, CountsNeedCountsPerRevolution) {
   const ConfigError unused = spec_error(spec_text("arm_counts_per_rev = 4096\n"));
   EXPECT_THAT(unused.what(),
               HasSubstr("spec.toml:10: csv.arm_counts_per_rev: only applies when angle_unit"));
+  const ConfigError fraction =
+      spec_error(text + "arm_counts_per_rev = 1024.5\npendulum_counts_per_rev = 2000\n");
+  EXPECT_EQ(fraction.line(), 10);
+  EXPECT_THAT(fraction.what(),
+              HasSubstr("spec.toml:10: csv.arm_counts_per_rev: must be a whole number of counts "
+                        "(e.g. 4096), not 1024.5"));
+  EXPECT_EQ(parse_csv_import_spec(
+                text + "arm_counts_per_rev = 4096.0\npendulum_counts_per_rev = 2000\n", "s")
+                .arm_counts_per_rev,
+            4096.0);
 }
 
 TEST(CsvImportSpec, OtherMistakesAreLocated) {

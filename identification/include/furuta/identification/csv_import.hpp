@@ -45,6 +45,9 @@ struct CsvImportSpec {
   bool has_header = true;
   CsvColumn time, arm_angle, pendulum_angle, input;
   double time_scale_s = 1.0;  // 1 s, 1e-3 ms, 1e-6 us
+  // Where time_unit was read ("import.toml:3"), for import_csv's refusal of an implausible sample
+  // period; empty for a spec built in code.
+  std::string time_unit_at;
   AngleUnit angle_unit = AngleUnit::rad;
   double arm_counts_per_rev = 0, pendulum_counts_per_rev = 0;
   PendulumZero pendulum_zero = PendulumZero::down;
@@ -84,10 +87,15 @@ class CsvImportError : public std::runtime_error {
   std::string field_;
 };
 
+// The sample periods a Furuta pendulum recording can have (docs/csv-import.md says why): outside,
+// time_unit is most likely wrong and import_csv refuses the file.
+inline constexpr double kMinSamplePeriodS = 1e-4;
+inline constexpr double kMaxSamplePeriodS = 0.1;
+
 // Reads a CSV per the spec. Sample period = median time step; when time steps vary by more than 1 %
 // of it, the series is resampled (linear interpolation) onto the uniform grid and a warning says
-// so. Errors (missing column, non-numeric cell, non-increasing time, too few rows) name file, line
-// and column.
+// so. Errors (missing column, non-numeric cell, repeated or decreasing time, too few rows, a sample
+// period outside [kMinSamplePeriodS, kMaxSamplePeriodS]) name file, line and column.
 ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec& spec);
 
 }  // namespace furuta::identification
