@@ -29,6 +29,30 @@ void check_length(const RawExperiment& e, const IdentifyOptions& options) {
   if (!problem.empty()) throw std::invalid_argument(e.name + ": " + problem);
 }
 
+std::string shortest(double value) {
+  std::ostringstream text;
+  text << value;
+  return text.str();
+}
+
+// Equations whose input never moves are homogeneous in the parameters: LSMI answers every one 0 +-
+// 0, which looks like a result. One such experiment among excited ones is harmless.
+void check_excited(const std::vector<RawExperiment>& experiments) {
+  std::string names;
+  for (const RawExperiment& e : experiments) {
+    const auto [lo, hi] = std::minmax_element(e.input.begin(), e.input.end());
+    if (lo != e.input.end() && *lo != *hi) return;
+    names += (names.empty() ? "" : ", ") + e.name + " (" +
+             (lo == e.input.end() ? std::string("no input") : "input " + shortest(*lo)) + ")";
+  }
+  throw std::invalid_argument(
+      "nothing to identify: the input is constant in every fitted "
+      "recording (" +
+      names +
+      "); without an input that moves the rig every parameter would come "
+      "out 0 +- 0. Fit sessions with an excitation (e.g. bang_bang)");
+}
+
 }  // namespace
 
 std::size_t minimum_samples(const IdentifyOptions& options) {
@@ -60,6 +84,7 @@ Identification identify(const std::vector<RawExperiment>& experiments,
                         const VoltageMotor& voltage_motor) {
   if (experiments.empty()) throw std::invalid_argument("identify: no experiment given");
   for (const RawExperiment& e : experiments) check_length(e, options);
+  check_excited(experiments);
   if (validation) check_length(*validation, options);
   Identification id;
   id.raw = experiments;

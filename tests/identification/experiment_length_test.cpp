@@ -3,6 +3,7 @@
 // 7 parameters").
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -54,6 +55,29 @@ TEST(ExperimentLength, AShortFittedOrHeldOutExperimentIsRefusedByName) {
               std::string::npos)
         << e.what();
   }
+}
+
+// A free-decay or zero-duty session gives homogeneous equations: every parameter 0 +- 0.
+TEST(ExperimentInput, AnInputThatNeverMovesInEveryFittedRecordingIsNothingToIdentify) {
+  const IdentifyOptions options;
+  const model::MotorData motor;
+  RawExperiment still = experiment("free-decay", 400);
+  std::fill(still.input.begin(), still.input.end(), 0.0);
+  RawExperiment also_still = experiment("zero-duty", 400);
+  std::fill(also_still.input.begin(), also_still.input.end(), 0.0);
+  try {
+    identify({still, also_still}, std::nullopt, options, motor);
+    FAIL() << "recordings without input were fitted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("nothing to identify: the input is constant in every fitted recording"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("free-decay (input 0"), std::string::npos) << what;
+    EXPECT_NE(what.find("zero-duty (input 0"), std::string::npos) << what;
+  }
+  // Beside an excited one, a still recording is fitted: its equations still hold.
+  EXPECT_NO_THROW(identify({experiment("excited", 400), still}, std::nullopt, options, motor));
 }
 
 }  // namespace
