@@ -141,7 +141,9 @@ int main(int argc, char** argv) {
                            "Low-pass cut-off [Hz] (default: the configuration's; 15 without one)");
   auto* lag_option = identify_cmd->add_option(
       "--input-lag-ms", identify.input_lag_ms,
-      "Input-to-angle lag [ms] (default: the configuration's, else estimated; CSVs: 0)");
+      "Input-to-angle lag [ms], not negative: the angles cannot lead the input (default: the "
+      "configuration's, else estimated; CSVs: 0)");
+  lag_option->check(CLI::NonNegativeNumber);
   identify_cmd
       ->add_flag("--estimate-input-lag", identify.estimate_input_lag,
                  "Estimate the lag from the data (to calibrate the configuration's)")

@@ -34,7 +34,8 @@ IdentificationConfig read_identification(Section s, const DaemonConfig& daemon) 
       "differentiator_taps", ic.differentiator_taps,
       [](std::int64_t v) { return v >= 5 && v <= 201 && v % 2 == 1; }, "odd, in [5, 201]"));
   ic.input_lag_ms = s.optional_number(
-      "input_lag_ms", [](double v) { return std::abs(v) <= 100; }, "in [-100, 100]");
+      "input_lag_ms", [](double v) { return v >= 0 && v <= 100; },
+      "in [0, 100] (the angles cannot lead the input)");
   s.reject_unknown_keys();
   return ic;
 }

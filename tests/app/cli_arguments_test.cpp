@@ -75,6 +75,8 @@ TEST(CliArguments, FurutaRejectsMalformedArgumentsBeforeDoingAnything) {
       {std::string(FURUTA_CLI) + " --no-such-option", "A subcommand is required"},
       {std::string(FURUTA_CLI) + " no-such-command", "A subcommand is required"},
       {std::string(FURUTA_CLI) + " status --no-such-option", "--no-such-option"},
+      {std::string(FURUTA_CLI) + " identify --input-lag-ms -2 " FURUTA_SOURCE_DIR "/README.md",
+       "--input-lag-ms"},
   };
   for (const auto& [line, mention] : cases) {
     const Outcome o = run(line);

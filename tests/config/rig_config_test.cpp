@@ -62,6 +62,19 @@ TEST(RigConfig, ErrorsNameFileLineAndField) {
       << e.what();
 }
 
+// The torque is formed from the input input_lag_ms earlier: a negative lag would have the angles
+// lead the input.
+TEST(RigConfig, ANegativeInputLagIsRefused) {
+  const ConfigError e = error_of("[identification]\ninput_lag_ms = -3\n");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_NE(std::string(e.what()).find("identification.input_lag_ms: must be in [0, 100]"),
+            std::string::npos)
+      << e.what();
+  EXPECT_EQ(*parse_rig_config("[identification]\ninput_lag_ms = 0\n", "rig.toml")
+                 .identification.input_lag_ms,
+            0.0);
+}
+
 TEST(RigConfig, CountsPerRevolutionMustBeAWholeNumber) {
   const ConfigError e = error_of("[encoders.pendulum]\ncounts_per_rev = 1024.5\n");
   EXPECT_EQ(e.line(), 2);
