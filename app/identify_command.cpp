@@ -15,6 +15,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/outputs.hpp"
+#include "furuta/report/tables.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "terminal_progress.hpp"
 
@@ -45,6 +46,11 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
                ? config::parse_rig_config(logs.front().start->rig_config_toml,
                                           options.logs.front().string() + " (rig configuration)")
                : config::load_rig_config(options.config_path);
+  if (options.config_path.empty()) {
+    in.config_carried_by = options.logs.front();
+  } else {
+    in.config_file = options.config_path;
+  }
   for (const auto& log : logs) in.fit.push_back(pipeline::log_recording(log, pipeline::Role::fit));
   in.files = options.logs;
   if (!options.validate.empty()) {
@@ -68,6 +74,7 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   in.kind = pipeline::InputKind::csv_recordings;
   if (!options.config_path.empty()) {
     in.rig = config::load_rig_config(options.config_path);
+    in.config_file = options.config_path;
     in.nominal = in.rig.nominal;  // no truth: the simulation is not where the CSVs came from
   } else if (spec.input_kind == identification::InputKind::duty) {
     err << "furuta identify: " << options.import_spec.string()
@@ -112,6 +119,33 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   return in;
 }
 
+// Table I the moment LSMI is done (SIVIA and the scenarios can take minutes), then the terminal's
+// progress lines, if any.
+class IdentifyProgress : public pipeline::Progress {
+ public:
+  IdentifyProgress(std::ostream* table_one, pipeline::Progress* terminal)
+      : table_one_(table_one), terminal_(terminal) {}
+  void lsmi_done(const identification::Identification& id) override {
+    if (table_one_ != nullptr) *table_one_ << report::format_table_one(id) << std::flush;
+  }
+  void sivia(std::size_t tested, std::size_t pending) override {
+    if (terminal_ != nullptr) terminal_->sivia(tested, pending);
+  }
+  void sivia_done() override {
+    if (terminal_ != nullptr) terminal_->sivia_done();
+  }
+  void scenario(const validated::Scenario& scenario, const std::string& set) override {
+    if (terminal_ != nullptr) terminal_->scenario(scenario, set);
+  }
+  void scenarios_done() override {
+    if (terminal_ != nullptr) terminal_->scenarios_done();
+  }
+
+ private:
+  std::ostream* table_one_;
+  pipeline::Progress* terminal_;
+};
+
 }  // namespace
 
 identification::IdentifyOptions identify_options_for(const config::RigConfig& rig,
@@ -143,7 +177,7 @@ pipeline::Settings identify_settings(const config::RigConfig& rig,
 }
 
 std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& options,
-                                                std::ostream& err) {
+                                                std::ostream& err, std::ostream* table_one) {
   if (options.logs.empty() && options.csvs.empty()) {
     err << "furuta identify: give at least one session log, or --csv FILE with --import-spec "
            "SPEC\n";
@@ -190,24 +224,25 @@ std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& op
   }
   if (!batch) return std::nullopt;
   // Progress only on a terminal: logs and CI stay quiet.
-  TerminalProgress progress;
+  TerminalProgress terminal;
   const bool tty = ::isatty(STDERR_FILENO) == 1;
-  return pipeline::run(*batch, identify_settings(batch->rig, options), tty ? &progress : nullptr);
+  IdentifyProgress progress(table_one, tty ? &terminal : nullptr);
+  return pipeline::run(*batch, identify_settings(batch->rig, options), &progress);
 }
 
 void print_identification(std::ostream& out, const pipeline::Run& run,
-                          const std::filesystem::path& dir) {
-  out << report::terminal_text(run);
+                          const std::filesystem::path& dir, bool table_one_printed) {
+  out << (table_one_printed ? report::terminal_text_after_lsmi(run) : report::terminal_text(run));
   out << "wrote " << (dir / "results.json").string() << " and figures in " << dir.string() << "\n";
   out << "report: " << (dir / "report.html").string() << "\n";
 }
 
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err) {
-  const std::optional<pipeline::Run> run = run_identification(options, err);
+  const std::optional<pipeline::Run> run = run_identification(options, err, &out);
   if (!run) return 2;
   report::write_identification(options.output_dir, *run, daemon::kSoftwareVersion);
-  print_identification(out, *run, options.output_dir);
+  print_identification(out, *run, options.output_dir, true);
   return 0;
 }
 
