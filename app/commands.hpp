@@ -141,13 +141,15 @@ pipeline::Settings identify_settings(const config::RigConfig& rig,
                                      const IdentifyCommandOptions& options);
 // The command's inputs as a batch, then pipeline::run (progress on stderr when it is a terminal).
 // Nothing when the inputs are unusable (the reason on err: bad arguments, unreadable or foreign
-// files, a bad configuration); what the fit itself throws passes through.
+// files, a bad configuration); what the fit itself throws passes through. With `table_one`,
+// Table I is written there as soon as LSMI is done, before SIVIA and the scenarios run.
 std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& options,
-                                                std::ostream& err);
-// What `furuta identify` prints of a run whose files are in dir: Table I, the SIVIA and
-// simulation summaries, where the files are.
+                                                std::ostream& err,
+                                                std::ostream* table_one = nullptr);
+// What `furuta identify` prints of a run whose files are in dir: Table I (unless printed
+// already), the SIVIA and simulation summaries, where the files are.
 void print_identification(std::ostream& out, const pipeline::Run& run,
-                          const std::filesystem::path& dir);
+                          const std::filesystem::path& dir, bool table_one_printed = false);
 // run_identification, then every file (report::write_identification) and print_identification.
 // 0, or 2 for unusable inputs (a log not intact without use_intact_part, one too short to fit).
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,

@@ -16,6 +16,7 @@
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/outputs.hpp"
 #include "furuta/report/run_directory.hpp"
+#include "furuta/report/tables.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "terminal_progress.hpp"
@@ -71,6 +72,11 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
                ? config::parse_rig_config(logs.front().start->rig_config_toml,
                                           options.logs.front().string() + " (rig configuration)")
                : config::load_rig_config(options.config_path);
+  if (options.config_path.empty()) {
+    in.config_carried_by = options.logs.front();
+  } else {
+    in.config_file = options.config_path;
+  }
   const identification::IdentifyOptions identify = identify_options_for(in.rig, options);
   const std::size_t min_samples = identification::minimum_samples(identify);
   // Each log as one recording, or as its intact parts; nothing when it cannot be used.
@@ -160,6 +166,7 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   in.kind = pipeline::InputKind::csv_recordings;
   if (!options.config_path.empty()) {
     in.rig = config::load_rig_config(options.config_path);
+    in.config_file = options.config_path;
     in.nominal = in.rig.nominal;  // no truth: the simulation is not where the CSVs came from
   } else if (spec.input_kind == identification::InputKind::duty) {
     err << "furuta identify: " << options.import_spec.string()
@@ -204,6 +211,33 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   }
   return in;
 }
+
+// Table I the moment LSMI is done (SIVIA and the scenarios can take minutes), then the terminal's
+// progress lines, if any.
+class IdentifyProgress : public pipeline::Progress {
+ public:
+  IdentifyProgress(std::ostream* table_one, pipeline::Progress* terminal)
+      : table_one_(table_one), terminal_(terminal) {}
+  void lsmi_done(const identification::Identification& id) override {
+    if (table_one_ != nullptr) *table_one_ << report::format_table_one(id) << std::flush;
+  }
+  void sivia(std::size_t tested, std::size_t pending) override {
+    if (terminal_ != nullptr) terminal_->sivia(tested, pending);
+  }
+  void sivia_done() override {
+    if (terminal_ != nullptr) terminal_->sivia_done();
+  }
+  void scenario(const validated::Scenario& scenario, const std::string& set) override {
+    if (terminal_ != nullptr) terminal_->scenario(scenario, set);
+  }
+  void scenarios_done() override {
+    if (terminal_ != nullptr) terminal_->scenarios_done();
+  }
+
+ private:
+  std::ostream* table_one_;
+  pipeline::Progress* terminal_;
+};
 
 }  // namespace
 
@@ -303,25 +337,27 @@ std::optional<pipeline::Batch> checked_batch(const IdentifyCommandOptions& optio
   return batch;
 }
 
-pipeline::Run run_batch(const pipeline::Batch& batch, const IdentifyCommandOptions& options) {
+pipeline::Run run_batch(const pipeline::Batch& batch, const IdentifyCommandOptions& options,
+                        std::ostream* table_one) {
   // Progress only on a terminal: logs and CI stay quiet.
-  TerminalProgress progress;
+  TerminalProgress terminal;
   const bool tty = ::isatty(STDERR_FILENO) == 1;
-  return pipeline::run(batch, identify_settings(batch.rig, options), tty ? &progress : nullptr);
+  IdentifyProgress progress(table_one, tty ? &terminal : nullptr);
+  return pipeline::run(batch, identify_settings(batch.rig, options), &progress);
 }
 
 }  // namespace
 
 std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& options,
-                                                std::ostream& err) {
+                                                std::ostream& err, std::ostream* table_one) {
   const std::optional<pipeline::Batch> batch = checked_batch(options, err);
   if (!batch) return std::nullopt;
-  return run_batch(*batch, options);
+  return run_batch(*batch, options, table_one);
 }
 
 void print_identification(std::ostream& out, const pipeline::Run& run,
-                          const std::filesystem::path& dir) {
-  out << report::terminal_text(run);
+                          const std::filesystem::path& dir, bool table_one_printed) {
+  out << (table_one_printed ? report::terminal_text_after_lsmi(run) : report::terminal_text(run));
   out << "wrote " << (dir / "results.json").string() << " and figures in " << dir.string() << "\n";
   out << "report: " << (dir / "report.html").string() << "\n";
 }
@@ -335,7 +371,7 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
     err << "furuta identify: -o " << options.output_dir.string() << ": " << *problem << "\n";
     return 2;
   }
-  const pipeline::Run run = run_batch(*batch, options);
+  const pipeline::Run run = run_batch(*batch, options, &out);
   bool replaced = false;
   try {
     report::RunDirectory dir(options.output_dir);
@@ -345,7 +381,7 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
     err << "furuta identify: -o " << options.output_dir.string() << ": " << e.what() << "\n";
     return 2;
   }
-  print_identification(out, run, options.output_dir);
+  print_identification(out, run, options.output_dir, true);
   if (replaced)
     out << "(the previous run's files in " << options.output_dir.string() << " were replaced)\n";
   return 0;

@@ -352,7 +352,14 @@ class Processor {
     std::optional<pipeline::Run> run;
     try {
       run = run_identification(options, problems);
-      if (run) report::write_identification(temp, *run, daemon::kSoftwareVersion);
+      if (run) {
+        // The report and results.json name the logs where they will be: the batch moves to
+        // done/ as a whole once its files are in place.
+        for (auto& input : run->inputs) {
+          input.path = (done_ / fs::path(input.path).filename()).string();
+        }
+        report::write_identification(temp, *run, daemon::kSoftwareVersion);
+      }
     } catch (const std::exception& e) {
       run.reset();
       problems << e.what() << "\n";

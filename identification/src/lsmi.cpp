@@ -3,9 +3,24 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace furuta::identification {
+
+namespace {
+
+// A number in a warning as a person writes it ("10", "2.35e+05"), not std::to_string's
+// "10.000000".
+std::string short_text(double v, int significant) {
+  std::ostringstream s;
+  s.precision(significant);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
 
 LsmiResult solve_lsmi(const std::vector<const JointSeries*>& experiments,
                       const LsmiOptions& options) {
@@ -79,14 +94,14 @@ LsmiResult solve_lsmi(const std::vector<const JointSeries*>& experiments,
   }
   if (result.condition_number > options.condition_warning) {
     result.warnings.push_back("W is ill-conditioned (condition number " +
-                              std::to_string(result.condition_number) +
+                              short_text(result.condition_number, 3) +
                               "): the excitation is too poor for a reliable estimate");
   }
   if (!result.poorly_excited.empty()) {
     std::string names;
     for (const auto& n : result.poorly_excited) names += (names.empty() ? "" : ", ") + n;
     result.warnings.push_back("poorly excited (relative standard deviation above " +
-                              std::to_string(options.poorly_excited_relative_sd * 100) +
+                              short_text(options.poorly_excited_relative_sd * 100, 6) +
                               " %): " + names);
   }
   return result;

@@ -148,6 +148,8 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
   out.kind = batch.kind;
   out.settings = settings;
   out.rig_name = batch.rig.name;
+  out.config_file = batch.config_file;
+  out.config_carried_by = batch.config_carried_by;
   out.simulated_rig = batch.truth.has_value();
   out.angle_resolution_rad = batch.angle_resolution_rad;
   if (has_data_error_bounds(settings.sivia.config)) {
@@ -171,6 +173,7 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
     out.inputs.push_back({path.string(), identification::sha256_file(path.string())});
   }
   out.warnings = identification_warnings(out.identification);
+  if (progress != nullptr) progress->lsmi_done(out.identification);
 
   if (settings.sivia.run) {
     out.sivia = run_guaranteed(settings.sivia, out.identification, settings.identify, progress);

@@ -14,7 +14,7 @@ namespace furuta::report {
 namespace {
 
 constexpr const char* kStyle = R"(
-body { font-family: sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em; color: #222;
+body { font-family: sans-serif; max-width: 1200px; margin: 2em auto; padding: 0 1em; color: #222;
        line-height: 1.4; }
 h1 { margin-bottom: 0.2em; }
 h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
@@ -22,11 +22,14 @@ h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
 nav ol { columns: 2; }
 table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
 caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
-th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; white-space: nowrap; }
-td:last-child { white-space: normal; }
+th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }
 .table { overflow-x: auto; }
 thead th { background: #f0f0f0; }
-tbody th { text-align: left; font-weight: normal; }
+tbody th { text-align: left; font-weight: normal; overflow-wrap: break-word; }
+code { overflow-wrap: anywhere; }
+#sessions tbody th { overflow-wrap: anywhere; min-width: 12em; }
+.keys { font-size: 0.9em; margin-top: -0.5em; }
+.keys li { overflow-wrap: anywhere; }
 figure { margin: 1em 0; }
 figure svg { max-width: 100%; height: auto; border: 1px solid #eee; }
 figcaption { font-size: 0.9em; color: #444; }
@@ -50,8 +53,9 @@ std::string pretty_unit(const std::string& unit) {
   return out;
 }
 
+// "1.0845e-03 ± 2.0e-05", which a narrow column breaks before the "±" only.
 std::string plus_minus(const std::string& value, const std::string& sd) {
-  return value + " \u00b1 " + sd;
+  return value + " \u00b1\u00a0" + sd;
 }
 
 std::string table_three_cell(const validated::Coverage& c) {
@@ -163,9 +167,11 @@ void section_warnings(Html& h, const ReportInput& in) {
 }
 
 // Table I: one column per experiment, all together, CAD and truth; each estimate +- its sd.
+// Long session names would widen every column: they head it as E1, E2, ... and are listed below.
 void table_one(Html& h, const ReportInput& in) {
+  const ColumnHeads heads = column_heads(in.experiment_names, 16);
   std::vector<std::string> header = {"parameter", "unit"};
-  for (const auto& name : in.experiment_names) header.push_back(name);
+  for (const auto& head : heads.heads) header.push_back(head);
   header.push_back("all experiments");
   if (in.nominal) header.push_back("CAD");
   if (in.truth) header.push_back("truth");
@@ -183,6 +189,16 @@ void table_one(Html& h, const ReportInput& in) {
     rows.push_back(std::move(row));
   }
   h.table("table-1", "Table I: LSMI estimates \u00b1 one standard deviation", header, rows);
+  if (heads.legend) {
+    h.raw("<ul class=\"keys\" id=\"table-1-keys\">\n");
+    for (std::size_t i = 0; i < in.experiment_names.size(); ++i) {
+      h.raw("<li>");
+      h.element("strong", heads.heads[i]);
+      h.text(": " + in.experiment_names[i]);
+      h.raw("</li>\n");
+    }
+    h.raw("</ul>\n");
+  }
 }
 
 // One row of the LSMI diagnostics.
@@ -234,8 +250,10 @@ void section_data(Html& h, const ReportInput& in) {
     const std::string name = i < in.experiment_names.size() ? in.experiment_names[i] : "";
     h.figure(figure_id("fig-signals", i + 1), in.signals_svg[i],
              "Fig. " + std::to_string(i + 2) + " (" + name +
-                 "): the measured angles, the filtered velocities and accelerations and the "
-                 "motor torque (eq. 4) over time [s]; " +
+                 "): the measured angles, the filtered velocities and accelerations of the arm "
+                 "(left) and the pendulum (right), and the motor torque " +
+                 (in.torque_source.empty() ? std::string() : "(" + in.torque_source + ") ") +
+                 "over time t [s], each on an axis of its own; " +
                  (in.signals_bands.empty() ? std::string("the shaded bands are the data's "
                                                          "uncertainty")
                                            : in.signals_bands) +
@@ -256,8 +274,10 @@ void section_validation(Html& h, const ReportInput& in) {
                 dash_sci(v.rmse_nm, 3) + " N m, " + dash_fixed(v.rmse_percent_of_range, 2) +
                 " % of the torque range (eq. 12; the paper: 6.4 % with LSMI).");
     h.figure("fig-5", v.svg,
-             "Fig. 5: measured (black) and LSMI-predicted (red) motor torque [N m] over time [s] "
-             "on a session not used for the fit; RMSE " +
+             "Fig. 5: measured (black" +
+                 (in.torque_source.empty() ? std::string() : ", " + in.torque_source) +
+                 ") and LSMI-predicted (red) motor torque [N m] over time t [s] on a session not "
+                 "used for the fit; RMSE " +
                  dash_fixed(v.rmse_percent_of_range, 2) + " % of the range.");
   } else {
     h.paragraph(
@@ -321,7 +341,8 @@ void table_three(Html& h, const std::vector<validated::ScenarioResult>& results)
          std::to_string(r.steps), table_three_cell(r.q2_step), table_three_cell(r.q2_interpolated),
          dash_fixed(100 * r.q1_step.rate(), 1), dash_fixed(100 * r.q1_interpolated.rate(), 1),
          dash_fixed(r.q2_mean_width_rad * 180 / 3.14159265358979323846, 3),
-         std::string(validated::to_string(r.status)) + (r.reason.empty() ? "" : ": " + r.reason)});
+         std::string(validated::to_string(r.status)) +
+             (r.reason.empty() ? "" : ": " + readable_numbers(r.reason))});
   }
   h.table("table-3", "Table III: coverage of the measurements by the tubes [%]",
           {"scenario", "parameters", "reached / duration [s]", "steps", "q2 step, all (reached)",
@@ -336,7 +357,7 @@ void figures_six(Html& h, const std::vector<validated::ScenarioResult>& results)
     const bool early = r.t_reached_s + 1e-9 < r.scenario.duration_s;
     h.figure(figure_id("fig-6", ++n), svg_scenario(r),
              "Fig. 6 " + scenario_label(r.scenario) + ", " + r.parameters.name +
-                 " parameters: the tube of the pendulum angle q2 [deg] over time [s] (shaded) "
+                 " parameters: the tube of the pendulum angle q2 [deg] over time t [s] (shaded) "
                  "and the measured q2 (points; red where outside the tube); q2 step coverage " +
                  dash_fixed(100 * r.q2_step.rate(), 1) + " %" +
                  (early ? ", the tube ended at " + dash_fixed(r.t_reached_s, 3) + " s" : "") + ".");

@@ -15,8 +15,22 @@ std::string escape_html(const std::string& text) {
   return text::xml_escape(text);
 }
 
+std::string torque_source(identification::InputKind input, bool csv) {
+  switch (input) {
+    case identification::InputKind::voltage:
+      return "from the recorded voltage via the import spec's [motor] (a DC motor)";
+    case identification::InputKind::torque:
+      return "as recorded";
+    case identification::InputKind::duty:
+      break;
+  }
+  return csv ? "by eq. 4 from the recorded duty cycle (the configuration's motor)"
+             : "by eq. 4 from the logged duty cycle";
+}
+
 ReportInput report_input(const identification::Identification& id) {
   ReportInput r;
+  if (!id.raw.empty()) r.torque_source = torque_source(id.raw.front().input_kind, false);
   for (const auto& s : id.processed) r.experiment_names.push_back(s.name);
   r.per_experiment = id.per_experiment;
   r.combined = id.combined;
@@ -54,9 +68,21 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
     s << v << " " << unit;
     return s.str();
   };
-  page.rig = {{"configuration", run.rig_name.empty() ? "-" : run.rig_name},
-              {"inputs",
-               run.kind == pipeline::InputKind::csv_recordings ? "CSV recordings" : "session logs"},
+  const bool csv = run.kind == pipeline::InputKind::csv_recordings;
+  if (!id.raw.empty()) page.torque_source = torque_source(id.raw.front().input_kind, csv);
+  // Where the configuration came from, not only its name (every shipped one is "furuta").
+  const std::string named = run.rig_name.empty() ? "" : " (named \"" + run.rig_name + "\")";
+  std::string configuration = "none (the import spec gives the fit all it needs)";
+  if (!run.config_file.empty()) {
+    configuration = run.config_file.string() + named;
+  } else if (!run.config_carried_by.empty()) {
+    configuration = "carried by " + run.config_carried_by.filename().string() + named;
+  } else if (!run.rig_name.empty() && !csv) {
+    configuration = run.rig_name;
+  }
+  page.rig = {{"configuration", configuration},
+              {"inputs", csv ? "CSV recordings" : "session logs"},
+              {"torque", page.torque_source},
               {"sample period", number(id.processed.front().sample_period_s * 1e3, "ms")},
               {"low-pass cut-off", number(run.settings.identify.preprocess.cutoff_hz, "Hz")}};
   if (run.simulated_rig) page.rig.push_back({"rig", "simulated (its true parameters are known)"});
@@ -164,12 +190,12 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
           r.status == validated::IntegrationResult::Status::ok) {
         continue;
       }
-      out.push_back({"simulation", "scenario " + scenario_label(r.scenario) + ", " +
-                                       r.parameters.name + ": the tube ended early, at " +
-                                       dash_fixed(r.t_reached_s, 3) + " s of " +
-                                       dash_fixed(r.scenario.duration_s, 1) + " s (" +
-                                       validated::to_string(r.status) +
-                                       (r.reason.empty() ? "" : ": " + r.reason) + ")"});
+      out.push_back(
+          {"simulation", "scenario " + scenario_label(r.scenario) + ", " + r.parameters.name +
+                             ": the tube ended early, at " + dash_fixed(r.t_reached_s, 3) +
+                             " s of " + dash_fixed(r.scenario.duration_s, 1) + " s (" +
+                             validated::to_string(r.status) +
+                             (r.reason.empty() ? "" : ": " + readable_numbers(r.reason)) + ")"});
     }
   }
   return out;

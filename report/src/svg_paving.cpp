@@ -2,7 +2,9 @@
 #include <algorithm>
 #include <iomanip>
 #include <sstream>
+#include <string>
 
+#include "furuta/report/axis.hpp"
 #include "furuta/report/svg.hpp"
 
 namespace furuta::report {
@@ -33,6 +35,13 @@ std::string svg_paving(const identification::GuaranteedResult& r, int xp, int yp
     << " inner, " << p.boundary.size() << " boundary, " << p.outer_count << " outer boxes ("
     << p.boxes_tested << " tested, " << std::setprecision(3) << p.seconds << " s)</text>\n"
     << std::setprecision(6);
+  // Axes at nice ticks, named with their units; the grid under the boxes.
+  const auto name = [](int k) {
+    return std::string(model::kParameterNames[static_cast<std::size_t>(k)]) + " [" +
+           model::kParameterUnits[static_cast<std::size_t>(k)] + "]";
+  };
+  s << svg_axes(PlotArea{left, top, pw, ph}, nice_ticks(x_lo, x_hi, 4), nice_ticks(y_lo, y_hi, 4),
+                name(xp), name(yp));
   s << "<clipPath id=\"plot\"><rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << pw
     << "\" height=\"" << ph << "\"/></clipPath>\n<g clip-path=\"url(#plot)\">\n";
   const auto draw = [&](const std::vector<interval::Box>& boxes, const char* fill,
@@ -58,23 +67,6 @@ std::string svg_paving(const identification::GuaranteedResult& r, int xp, int yp
   }
   s << "</g>\n<rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << pw << "\" height=\"" << ph
     << "\" fill=\"none\" stroke=\"#000\"/>\n";
-  // Axes: ticks at the ends and the middle, names with units.
-  for (int i = 0; i <= 4; ++i) {
-    const double fx = x_lo + (x_hi - x_lo) * i / 4.0, fy = y_lo + (y_hi - y_lo) * i / 4.0;
-    s << "<text x=\"" << X(fx) << "\" y=\"" << top + ph + 16
-      << "\" font-size=\"10\" text-anchor=\"middle\">" << std::setprecision(4) << fx << "</text>\n";
-    s << "<text x=\"" << left - 4 << "\" y=\"" << Y(fy) + 4
-      << "\" font-size=\"10\" text-anchor=\"end\">" << fy << "</text>\n"
-      << std::setprecision(6);
-  }
-  s << "<text x=\"" << left + pw / 2 << "\" y=\"" << top + ph + 36
-    << "\" font-size=\"12\" text-anchor=\"middle\">"
-    << model::kParameterNames[static_cast<std::size_t>(xp)] << " ["
-    << model::kParameterUnits[static_cast<std::size_t>(xp)] << "]</text>\n";
-  s << "<text x=\"16\" y=\"" << top + ph / 2 << "\" font-size=\"12\" transform=\"rotate(-90 16 "
-    << top + ph / 2 << ")\" text-anchor=\"middle\">"
-    << model::kParameterNames[static_cast<std::size_t>(yp)] << " ["
-    << model::kParameterUnits[static_cast<std::size_t>(yp)] << "]</text>\n";
   s << "<text x=\"" << left << "\" y=\"" << H - 10
     << "\" font-size=\"11\"><tspan fill=\"#e06666\">inner</tspan>  <tspan "
        "fill=\"#b8860b\">boundary</tspan>  <tspan fill=\"#6fa8dc\">outer</tspan>"

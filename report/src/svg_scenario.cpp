@@ -8,6 +8,7 @@
 
 #include "format.hpp"
 #include "furuta/common/text_format.hpp"
+#include "furuta/report/axis.hpp"
 #include "furuta/report/svg.hpp"
 #include "furuta/report/tables.hpp"
 
@@ -37,9 +38,11 @@ std::string svg_scenario(const validated::ScenarioResult& r) {
     y_hi = y_lo + 20;
   }
   const double margin = std::max(5.0, 0.1 * (y_hi - y_lo));
-  y_lo -= margin;
-  y_hi += margin;
-  const auto px = [&](double t) { return left + plot_w * t / t_max; };
+  const Ticks time = nice_ticks(0, t_max, 5);
+  const Ticks angle = nice_ticks(y_lo - margin, y_hi + margin, 5, true);
+  y_lo = angle.lo;
+  y_hi = angle.hi;
+  const auto px = [&](double t) { return left + plot_w * (t - time.lo) / (time.hi - time.lo); };
   const auto py = [&](double deg) {
     const double clipped = std::clamp(deg, y_lo, y_hi);
     return top + plot_h * (y_hi - clipped) / (y_hi - y_lo);
@@ -55,40 +58,8 @@ std::string svg_scenario(const validated::ScenarioResult& r) {
     << text::xml_escape("Scenario " + scenario_label(r.scenario) + ": " +
                         scenario_description(r.scenario) + ", " + r.parameters.name + " parameters")
     << "</text>\n";
-
-  // Axes, ticks and grid.
-  s << "<g stroke=\"#ccc\" stroke-width=\"0.5\">\n";
-  const double t_tick = t_max > 2 ? 0.5 : (t_max > 0.5 ? 0.1 : 0.05);
-  for (double t = 0; t <= t_max + 1e-9; t += t_tick) {
-    s << "<line x1=\"" << px(t) << "\" y1=\"" << top << "\" x2=\"" << px(t) << "\" y2=\""
-      << top + plot_h << "\"/>\n";
-  }
-  const double span = y_hi - y_lo;
-  const double raw_step = span / 8;
-  const double magnitude = std::pow(10.0, std::floor(std::log10(raw_step)));
-  const double y_tick = raw_step / magnitude < 2   ? 2 * magnitude
-                        : raw_step / magnitude < 5 ? 5 * magnitude
-                                                   : 10 * magnitude;
-  for (double y = std::ceil(y_lo / y_tick) * y_tick; y <= y_hi; y += y_tick) {
-    s << "<line x1=\"" << left << "\" y1=\"" << py(y) << "\" x2=\"" << left + plot_w << "\" y2=\""
-      << py(y) << "\"/>\n";
-  }
-  s << "</g>\n<g font-size=\"11\">\n";
-  for (double t = 0; t <= t_max + 1e-9; t += t_tick) {
-    s << "<text x=\"" << px(t) << "\" y=\"" << top + plot_h + 15 << "\" text-anchor=\"middle\">"
-      << short_number(std::round(t * 1000) / 1000) << "</text>\n";
-  }
-  for (double y = std::ceil(y_lo / y_tick) * y_tick; y <= y_hi; y += y_tick) {
-    s << "<text x=\"" << left - 6 << "\" y=\"" << py(y) + 4 << "\" text-anchor=\"end\">"
-      << short_number(std::round(y * 1e6) / 1e6) << "</text>\n";
-  }
-  s << "</g>\n";
-  s << "<rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << plot_w << "\" height=\""
-    << plot_h << "\" fill=\"none\" stroke=\"black\"/>\n";
-  s << "<text x=\"" << left + plot_w / 2 << "\" y=\"" << top + plot_h + 34
-    << "\" text-anchor=\"middle\">time t [s]</text>\n";
-  s << "<text transform=\"translate(18," << top + plot_h / 2
-    << ") rotate(-90)\" text-anchor=\"middle\">pendulum angle q2 [deg]</text>\n";
+  s << svg_axes(PlotArea{left, top, plot_w, plot_h}, time, angle, "t [s]",
+                "pendulum angle q2 [deg]");
 
   // The tube: step boxes, merged within a pixel column (a 4 s run has over a thousand steps).
   s << "<g class=\"tube\" fill=\"#6fa8dc\" fill-opacity=\"0.55\" stroke=\"none\">\n";

@@ -29,11 +29,16 @@ std::string scenario_description(const validated::Scenario& s) {
 std::string format_table_one(const identification::Identification& id) {
   std::ostringstream out;
   const int w = 26;
-  out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
-  for (const identification::JointSeries& s : id.processed) {
-    std::string name = s.name.size() > 24 ? s.name.substr(s.name.size() - 24) : s.name;
-    out << std::setw(w) << name;
+  std::vector<std::string> names;
+  for (const identification::JointSeries& s : id.processed) names.push_back(s.name);
+  const ColumnHeads heads = column_heads(names, w - 2);
+  if (heads.legend) {
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      out << heads.heads[i] << ": " << names[i] << "\n";
+    }
   }
+  out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
+  for (const std::string& head : heads.heads) out << std::setw(w) << head;
   out << std::setw(w) << "all experiments";
   if (id.nominal) out << std::setw(13) << "CAD";
   if (id.truth) out << std::setw(13) << "truth";
@@ -76,8 +81,9 @@ std::string sivia_summary_text(const identification::GuaranteedResult& r,
   std::ostringstream s;
   s << "\nSIVIA (" << r.samples << " samples, q = " << r.q << "): " << r.paving.inner.size()
     << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
-    << " outer boxes; " << r.paving.boxes_tested << " tested in " << r.paving.seconds << " s"
-    << (r.paving.truncated ? " (truncated)" : "") << "\n";
+    << " outer boxes; " << r.paving.boxes_tested << " tested in "
+    << short_number(r.paving.seconds, 3) << " s" << (r.paving.truncated ? " (truncated)" : "")
+    << "\n";
   if (r.empty) {
     s << r.finding << "\n";
     return s.str();
@@ -85,7 +91,8 @@ std::string sivia_summary_text(const identification::GuaranteedResult& r,
   const interval::Box hull = r.paving.outer_hull();
   for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (!r.unknown[k]) continue;
-    s << "  " << model::kParameterNames[k] << " in " << hull[k] << " " << model::kParameterUnits[k];
+    s << "  " << model::kParameterNames[k] << " in " << interval_text(hull[k].lo(), hull[k].hi())
+      << " " << model::kParameterUnits[k];
     if (truth) {
       s << (hull[k].contains((*truth)[k]) ? "  (contains the truth)" : "  (misses the truth)");
     }
@@ -124,7 +131,7 @@ std::string format_table_three(const std::vector<validated::ScenarioResult>& res
         << std::setw(9) << fixed(100 * r.q1_step.rate(), 1) << std::setw(9)
         << fixed(100 * r.q1_interpolated.rate(), 1) << std::setw(13)
         << fixed(r.q2_mean_width_rad * kDegPerRad, 3) << "  " << validated::to_string(r.status);
-    if (!r.reason.empty()) out << ": " << r.reason;
+    if (!r.reason.empty()) out << ": " << readable_numbers(r.reason);
     out << "\n";
   }
   return out.str();
@@ -153,7 +160,11 @@ std::string measurement_source_text(const pipeline::MeasurementSource& source) {
 }
 
 std::string terminal_text(const pipeline::Run& run) {
-  std::string text = format_table_one(run.identification);
+  return format_table_one(run.identification) + terminal_text_after_lsmi(run);
+}
+
+std::string terminal_text_after_lsmi(const pipeline::Run& run) {
+  std::string text;
   if (run.sivia) text += sivia_summary_text(run.sivia->result, run.identification.truth);
   if (run.simulation) {
     text += simulation_summary_text(measurement_source_text(run.simulation->source),

@@ -37,9 +37,10 @@ std::string read_text(const fs::path& path) {
   return text.str();
 }
 
-// Session names carry the wall-clock time they ran at (Table I cuts them from the left, so the
-// pattern takes any tail of the date), and a "-2" when two sessions of one label started in the
-// same second. Runs of blanks are one: a table's columns may shift with the names' lengths.
+// Session names carry the wall-clock time they ran at (Table I lists them whole above its E1, E2
+// columns; the pattern still takes any tail of the date), and a "-2" when two sessions of one
+// label started in the same second. Runs of blanks are one: a table's columns may shift with the
+// names' lengths.
 std::string without_times(const std::string& text) {
   static const std::regex stamp(
       R"([0-9-]*T[0-9]{2}-[0-9]{2}-[0-9]{2}Z_([A-Za-z]+(-[A-Za-z]+)*)(-[0-9]+)?)");

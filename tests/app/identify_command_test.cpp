@@ -128,6 +128,25 @@ TEST_F(SimulatedTruth, TheCommandWritesTableResultsAndFigures) {
   EXPECT_NE(text.str().find(identification::sha256_file(sessions_[0].string())), std::string::npos);
 }
 
+// The report's configuration row names the file --config gave, not only the name inside it.
+TEST_F(SimulatedTruth, TheReportNamesTheConfigurationFileGiven) {
+  TempDir out_dir;
+  IdentifyCommandOptions options;
+  options.logs = {sessions_[0], sessions_[1]};
+  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  options.output_dir = out_dir.path();
+  std::ostringstream out, err;
+  ASSERT_EQ(run_identify_command(options, out, err), 0) << err.str();
+  std::ifstream in(out_dir.path() / "report.html");
+  std::stringstream html;
+  html << in.rdbuf();
+  EXPECT_NE(html.str().find("<th scope=\"row\">configuration</th><td>" +
+                            options.config_path.string() + " (named &quot;"),
+            std::string::npos);
+  // Table I once, then where the files are.
+  EXPECT_EQ(out.str().find("p     unit"), out.str().rfind("p     unit")) << out.str();
+}
+
 TEST(IdentifyCommand, AMissingOrForeignFileIsAClearError) {
   TempDir dir;
   std::ofstream(dir.path() / "junk.lcmlog") << "not a log";

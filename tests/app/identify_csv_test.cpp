@@ -166,6 +166,18 @@ TEST_F(IdentifyCsv, VoltageRigWithoutAConfigurationWritesTableResultsAndFigures)
   }
 }
 
+// A voltage-driven rig's torque is not eq. 4's, and it came with no configuration: the report says
+// both.
+TEST_F(IdentifyCsv, TheReportSaysTheTorqueCameFromTheVoltageAndThereIsNoConfiguration) {
+  ASSERT_EQ(run(), 0) << err_.str();
+  const std::string html = read(options_.output_dir / "report.html");
+  EXPECT_NE(html.find("the motor torque (from the recorded voltage via the import spec&#39;s "
+                      "[motor]"),
+            std::string::npos);
+  EXPECT_EQ(html.find("eq. 4"), std::string::npos);
+  EXPECT_NE(html.find("<th scope=\"row\">configuration</th><td>none"), std::string::npos);
+}
+
 TEST_F(IdentifyCsv, SpecWithoutResistanceNamesFileLineAndField) {
   std::string spec = kSpec;
   spec.erase(spec.find("resistance_ohm = 3\n"), 19);

@@ -158,6 +158,28 @@ TEST_F(Trigger, SeveralLogsLandingAtOnceAreAllIdentifiedInOnePass) {
   EXPECT_EQ(identifications_in(options_.identifications_dir).size(), 2u);
 }
 
+// The report is read after the logs moved: it names them where they are, and says the
+// configuration is the one the first log carried (the trigger gives no --config).
+TEST_F(Trigger, TheReportNamesTheLogsWhereTheyWentAndWhereTheConfigurationCameFrom) {
+  land(fits_[0]);
+  land(fits_[1]);
+  land(validations_[0]);
+  const ProcessingPass p = pass();
+  ASSERT_EQ(p.identifications.size(), 1u) << out_.str() << err_.str();
+  const fs::path id = p.identifications.front();
+  const auto results = nlohmann::json::parse(read_file(id / "results.json"));
+  const std::string html = read_file(id / "report.html");
+  ASSERT_EQ(results["inputs"].size(), 3u);
+  for (const auto& input : results["inputs"]) {
+    const fs::path path = input["path"].get<std::string>();
+    EXPECT_TRUE(fs::exists(path)) << path << ": the report names a log that is not there";
+    EXPECT_EQ(path.parent_path(), options_.logs_dir / "done") << path;
+    EXPECT_NE(html.find("<code>" + path.string() + "</code>"), std::string::npos) << path;
+  }
+  EXPECT_NE(html.find("<td>carried by " + fits_[0].filename().string() + " (named &quot;"),
+            std::string::npos);
+}
+
 TEST_F(Trigger, ASecondPassFindsNothingToDoAndChangesNothing) {
   land(fits_[0]);
   land(fits_[1]);

@@ -28,14 +28,32 @@ constexpr std::array<double, model::kParameterCount> kAchievableRelativeError = 
 
 class CountingProgress : public Progress {
  public:
-  void sivia(std::size_t, std::size_t) override { ++sivia_generations; }
-  void sivia_done() override { ++sivia_ends; }
+  void lsmi_done(const identification::Identification& id) override {
+    events.push_back("lsmi");
+    lsmi_experiments = id.per_experiment.size();
+    lsmi_had_truth = id.truth.has_value();
+  }
+  void sivia(std::size_t, std::size_t) override {
+    ++sivia_generations;
+    if (events.back() != "sivia") events.push_back("sivia");
+  }
+  void sivia_done() override {
+    ++sivia_ends;
+    events.push_back("sivia done");
+  }
   void scenario(const validated::Scenario&, const std::string& set) override {
     scenario_sets.push_back(set);
+    if (events.back() != "scenario") events.push_back("scenario");
   }
-  void scenarios_done() override { ++scenario_ends; }
+  void scenarios_done() override {
+    ++scenario_ends;
+    events.push_back("scenarios done");
+  }
   int sivia_generations = 0, sivia_ends = 0, scenario_ends = 0;
   std::vector<std::string> scenario_sets;
+  std::vector<std::string> events{"start"};
+  std::size_t lsmi_experiments = 0;
+  bool lsmi_had_truth = false;
 };
 
 // Every string a Run holds, with where it is.
@@ -181,6 +199,14 @@ TEST_F(PipelineOnSimulatedSessions, ScenariosRunWithSiviasHullAndLsmiAndKeepThei
   }
   EXPECT_EQ(progress_->scenario_sets.size(), s.results.size());
   EXPECT_EQ(progress_->scenario_ends, 1);
+}
+
+// Table I can be shown the moment LSMI is done, before SIVIA and the scenarios take their time.
+TEST_F(PipelineOnSimulatedSessions, LsmiIsReportedDoneBeforeSiviaAndTheScenariosRun) {
+  EXPECT_EQ(progress_->events, (std::vector<std::string>{"start", "lsmi", "sivia", "sivia done",
+                                                         "scenario", "scenarios done"}));
+  EXPECT_EQ(progress_->lsmi_experiments, 2u);
+  EXPECT_TRUE(progress_->lsmi_had_truth) << "Table I's truth column is there at once";
 }
 
 TEST_F(PipelineOnSimulatedSessions, NothingInTheRunIsFormattedText) {

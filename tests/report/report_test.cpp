@@ -16,6 +16,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "furuta/report/tables.hpp"
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
@@ -212,6 +213,95 @@ TEST(ReportTableTwo, WithoutSiviaTheIntervalsItWouldStartFrom) {
   EXPECT_FALSE(rows[5].outer_hull);
 }
 
+// --- what a person reads in the tables: names whole, numbers short ---
+
+identification::Identification two_sessions(const std::string& a, const std::string& b) {
+  identification::Identification id;
+  id.processed.resize(2);
+  id.processed[0].name = a;
+  id.processed[1].name = b;
+  id.per_experiment.resize(2);
+  for (auto& r : id.per_experiment) r.estimate = {1e-3, 2e-3, 8e-4, 1.2e-3, 7e-2, 8e-2, 6e-4};
+  id.combined = id.per_experiment[0];
+  return id;
+}
+
+TEST(ReportTables, TableOneKeysLongSessionNamesInsteadOfCuttingThem) {
+  const std::string a = "2026-11-25T08-02-00Z_bang-bang", b = "2026-11-25T08-02-00Z_bang-bang-2";
+  const std::string table = format_table_one(two_sessions(a, b));
+  // Before: the heads were the names' last 24 characters, "1-25T08-02-00Z_bang-bang".
+  EXPECT_EQ(table.find("1-25T08-02-00Z_bang-bang "), std::string::npos) << table;
+  EXPECT_EQ(table.rfind("E1: " + a + "\nE2: " + b + "\n", 0), 0u) << table;
+  const std::string header = table.substr(table.find("p     unit"));
+  EXPECT_EQ(header.substr(0, header.find('\n')).find("E1"), 19u) << header;
+  EXPECT_NE(header.substr(0, header.find('\n')).find("E2"), std::string::npos) << header;
+  // Names that fit head their columns themselves.
+  const std::string short_names = format_table_one(two_sessions("run1", "run2"));
+  EXPECT_EQ(short_names.rfind("p     unit         run1", 0), 0u) << short_names;
+  EXPECT_EQ(short_names.find("E1"), std::string::npos);
+  // The page keys them alike and lists the names under the table.
+  ReportInput in = report_input(two_sessions(a, b));
+  const std::string html = render_html(in);
+  EXPECT_NE(html.find("<th scope=\"col\">E1</th><th scope=\"col\">E2</th>"), std::string::npos);
+  EXPECT_NE(html.find("<li><strong>E2</strong>: " + b + "</li>"), std::string::npos);
+}
+
+TEST(ReportTables, TableThreeStatusAndSiviaBoundsHaveAFewDigits) {
+  validated::ScenarioResult r;
+  r.scenario = validated::paper_scenario(1);
+  r.parameters.name = "SIVIA";
+  r.status = validated::IntegrationResult::Status::width_exceeded;
+  r.reason =
+      "enclosure width 6.7367745165386133 > max_width 6.2831853071795862 at t = "
+      "0.058721594480886791";
+  r.t_reached_s = 0.058721594480886791;
+  const std::string short_reason = "enclosure width 6.737 > max_width 6.283 at t = 0.05872";
+  const std::string table = format_table_three({r});
+  EXPECT_NE(table.find("width_exceeded: " + short_reason), std::string::npos) << table;
+  EXPECT_EQ(table.find("6.7367745"), std::string::npos) << table;
+  ReportInput in = minimal_input();
+  in.simulation = SimulationSummary{"the truth", {r}};
+  const std::string html = render_html(in);
+  EXPECT_NE(html.find("<td>width_exceeded: enclosure width 6.737 &gt; max_width 6.283 at t = "
+                      "0.05872</td>"),
+            std::string::npos);
+  EXPECT_EQ(html.find("6.7367745"), std::string::npos) << "nor in the warnings";
+
+  // SIVIA's hull: 6 digits, rounded outward (it still holds what the interval holds).
+  identification::GuaranteedResult g;
+  g.unknown.fill(false);
+  g.unknown[5] = g.unknown[6] = true;
+  interval::Box box(model::kParameterCount, interval::Interval(1.0, 2.0));
+  box[5] = interval::Interval(0.079512345678901234, 0.080545678901234567);
+  box[6] = interval::Interval(-1.0000000000000002e-05, 6.4200000000000004e-04);
+  g.paving.prior = box;
+  g.paving.inner = {box};
+  const std::string sivia = sivia_summary_text(g, std::nullopt);
+  // (0.000642 reads back as the very double of the bound, so it is not widened.)
+  EXPECT_NE(sivia.find("fv1 in [0.0795123, 0.0805457] N m s"), std::string::npos) << sivia;
+  EXPECT_NE(sivia.find("fv2 in [-1.00001e-05, 0.000642] N m s"), std::string::npos) << sivia;
+}
+
+TEST(ReportTorque, TheCaptionsSayHowTheTorqueWasHad) {
+  for (const auto& [kind, csv, says] :
+       {std::tuple{identification::InputKind::duty, false, "by eq. 4 from the logged duty cycle"},
+        std::tuple{identification::InputKind::duty, true, "by eq. 4 from the recorded duty"},
+        std::tuple{identification::InputKind::voltage, true,
+                   "from the recorded voltage via the import spec's [motor]"},
+        std::tuple{identification::InputKind::torque, true, "as recorded"}}) {
+    EXPECT_NE(torque_source(kind, csv).find(says), std::string::npos) << says;
+  }
+  identification::Identification id = two_sessions("a.csv", "b.csv");
+  id.raw.resize(2);
+  id.raw[0].input_kind = identification::InputKind::voltage;
+  ReportInput in = report_input(id);
+  in.signals_svg = {"<svg xmlns=\"http://www.w3.org/2000/svg\"></svg>"};
+  const std::string html = render_html(in);
+  EXPECT_NE(html.find("motor torque (from the recorded voltage via the import spec&#39;s [motor]"),
+            std::string::npos);
+  EXPECT_EQ(html.find("eq. 4"), std::string::npos) << "a voltage rig has no eq. 4";
+}
+
 // --- the report of a real identification, in a real browser ---
 
 // A session of the simulated rig (the configuration's bang-bang), in virtual time.
@@ -229,16 +319,26 @@ constexpr const char* kCheckScript = R"(<script>
     return {id: f.id, svg: !!svg, width: box ? box.width : 0, height: box ? box.height : 0,
             shown_width: shown ? shown.width : 0, shown_height: shown ? shown.height : 0,
             elements: svg ? svg.querySelectorAll('*').length : 0,
-            caption: f.querySelector('figcaption') ? f.querySelector('figcaption').textContent : ''};
+            caption: f.querySelector('figcaption') ? f.querySelector('figcaption').textContent : '',
+            axes: svg ? Array.from(svg.querySelectorAll('g.axis')).map(function (a) {
+              const label = a.querySelector('.axis-label');
+              return {kind: a.classList.contains('x') ? 'x' : 'y',
+                      ticks: a.querySelectorAll('text.tick').length,
+                      label: label ? label.textContent : ''};
+            }) : []};
   });
   const tables = Array.from(document.querySelectorAll('table')).map(function (t) {
     return {id: t.id, rows: t.tBodies.length ? t.tBodies[0].rows.length : 0,
-            columns: t.tHead ? t.tHead.rows[0].cells.length : 0};
+            columns: t.tHead ? t.tHead.rows[0].cells.length : 0,
+            width: t.scrollWidth, room: t.parentElement.clientWidth,
+            scrolls: t.parentElement.scrollWidth > t.parentElement.clientWidth};
   });
   const out = document.createElement('pre');
   out.id = 'report-check';
   out.textContent = JSON.stringify({figures: figures, tables: tables,
-                                    sections: document.querySelectorAll('section').length});
+                                    sections: document.querySelectorAll('section').length,
+                                    viewport: window.innerWidth,
+                                    page_width: document.documentElement.scrollWidth});
   document.body.appendChild(out);
 })();
 </script>
@@ -300,6 +400,14 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
   ASSERT_TRUE(fs::exists(report));
   const std::string html = read_text(report);
   expect_self_contained(html);
+  // The terminal: Table I once, before SIVIA's summary; no "10.000000 %", no 17-digit bounds.
+  const std::string printed = out.str();
+  EXPECT_EQ(count(printed, "p     unit"), 1u) << printed;
+  EXPECT_LT(printed.find("p     unit"), printed.find("\nSIVIA (")) << printed;
+  EXPECT_EQ(printed.find("10.000000"), std::string::npos) << printed;
+  EXPECT_FALSE(std::regex_search(printed, std::regex(R"([0-9]\.[0-9]{9,})"))) << printed;
+  // The configuration came from the first log; its name alone ("furuta") would not say so.
+  EXPECT_NE(html.find("<td>carried by " + fit1.filename().string()), std::string::npos);
 
   const nlohmann::json results =
       nlohmann::json::parse(read_text(options.output_dir / "results.json"));
@@ -313,9 +421,11 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
   with_script.insert(with_script.rfind("</body>"), kCheckScript);
   write_text(checked, with_script);
   const fs::path dom = dir.path() / "dom.html";
+  // Measured at the width of a common laptop screen.
   const int rc =
-      run_chromium(chromium, dir.path() / "profile", "--dump-dom 'file://" + checked.string() + "'",
-                   dom, dir.path() / "chromium.log");
+      run_chromium(chromium, dir.path() / "profile",
+                   "--window-size=1280,4000 --dump-dom 'file://" + checked.string() + "'", dom,
+                   dir.path() / "chromium.log");
   ASSERT_EQ(rc, 0) << "chromium --dump-dom failed: " << read_text(dir.path() / "chromium.log");
   const std::string dumped = read_text(dom);
   const std::string open = "<pre id=\"report-check\">";
@@ -342,6 +452,38 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
     fig5 = fig5 || id == "fig-5";
   }
   EXPECT_EQ(signals, 2u);
+  // Every time series has a labelled time axis and value axes with ticks beyond min and max; the
+  // paving's axes have ticks too.
+  for (const auto& f : check["figures"]) {
+    const std::string id = f["id"];
+    const bool time_series =
+        id.rfind("fig-signals-", 0) == 0 || id == "fig-5" || id.rfind("fig-6-", 0) == 0;
+    std::size_t time_axes = 0, value_axes = 0;
+    for (const auto& a : f["axes"]) {
+      EXPECT_GE(a["ticks"].get<int>(), 3) << id << ": " << a.dump();
+      EXPECT_FALSE(a["label"].get<std::string>().empty()) << id << ": " << a.dump();
+      if (a["kind"] == "x" && a["label"] == "t [s]") ++time_axes;
+      if (a["kind"] == "y") ++value_axes;
+    }
+    if (time_series) {
+      EXPECT_GE(time_axes, 1u) << id << ": no time axis labelled t [s]";
+      EXPECT_GE(value_axes, 1u) << id;
+    }
+    if (id.rfind("fig-signals-", 0) == 0) {
+      EXPECT_EQ(value_axes, 7u) << id << ": q1, q2, dq1, dq2, ddq1, ddq2, tau on their own axes";
+    }
+    if (id == "fig-4") {
+      EXPECT_EQ(f["axes"].size(), 2u);
+    }
+  }
+  // No table wider than a 1280 px window, nor wider than the room the page gives it.
+  EXPECT_EQ(check["viewport"].get<int>(), 1280);
+  EXPECT_LE(check["page_width"].get<int>(), 1280);
+  for (const auto& t : check["tables"]) {
+    EXPECT_LE(t["width"].get<int>(), 1280) << t.dump();
+    EXPECT_LE(t["width"].get<int>(), t["room"].get<int>()) << t.dump();
+    EXPECT_FALSE(t["scrolls"].get<bool>()) << t.dump();
+  }
   EXPECT_TRUE(fig4);
   EXPECT_TRUE(fig5);
   EXPECT_EQ(fig6, scenario_rows);

@@ -40,7 +40,7 @@ TEST_F(ScenarioOutputs, FigureSix) {
   EXPECT_NE(svg.find("Scenario (a): x0 = [0, 0, -100 deg, 0], u = 0 N m, LSMI"), std::string::npos);
   EXPECT_NE(svg.find("class=\"tube\""), std::string::npos);
   EXPECT_NE(svg.find("class=\"measured\""), std::string::npos);
-  EXPECT_NE(svg.find("time t [s]"), std::string::npos);
+  EXPECT_NE(svg.find(">t [s]</text>"), std::string::npos);
   EXPECT_NE(svg.find("q2 [deg]"), std::string::npos);
   const std::regex circle("<circle cx=");
   const auto circles =

@@ -85,6 +85,9 @@ struct Batch {
   // them with their SHA-256.
   std::vector<std::filesystem::path> files;
   config::RigConfig rig;  // [identification], [sivia], the motor for eq. 4, the simulated rig
+  // Where `rig` came from: the file given (--config), or the log whose start record carried it;
+  // neither for CSV recordings identified without a configuration.
+  std::filesystem::path config_file, config_carried_by;
   std::optional<model::Parameters<double>> nominal;  // CAD values
   std::optional<model::Parameters<double>> truth;    // simulated sessions: the rig's parameters
   identification::VoltageMotor voltage_motor;        // CSV recordings with voltage input
@@ -121,6 +124,9 @@ bool has_data_error_bounds(const config::SiviaConfig& sivia);
 class Progress {
  public:
   virtual ~Progress() = default;
+  // LSMI is done (Table I is ready; SIVIA and the scenarios may take minutes yet). `id` has the
+  // CAD values and the truth filled in, as Run::identification will.
+  virtual void lsmi_done(const identification::Identification& /*id*/) {}
   virtual void sivia(std::size_t /*tested*/, std::size_t /*pending*/) {}  // per generation
   virtual void sivia_done() {}
   virtual void scenario(const validated::Scenario& /*scenario*/,
@@ -181,10 +187,11 @@ struct Warning {
 
 struct Run {
   InputKind kind = InputKind::session_logs;
-  std::vector<identification::InputFile> inputs;  // Batch::files with their SHA-256
-  std::vector<SessionSummary> sessions;           // session logs: fitted, then held out
-  std::string rig_name;                           // the configuration's name
-  bool simulated_rig = false;                     // the sessions' true parameters are known
+  std::vector<identification::InputFile> inputs;         // Batch::files with their SHA-256
+  std::vector<SessionSummary> sessions;                  // session logs: fitted, then held out
+  std::string rig_name;                                  // the configuration's name
+  std::filesystem::path config_file, config_carried_by;  // Batch's: where the rig came from
+  bool simulated_rig = false;                            // the sessions' true parameters are known
   double angle_resolution_rad = 0;
   std::optional<identification::DataErrorBounds> data_bounds;  // when [sivia] gives them
   Settings settings;                                           // as used

@@ -83,6 +83,8 @@ struct ReportInput {
   std::optional<model::Parameters<double>> nominal, truth;
   double input_lag_s = 0;
 
+  // How the torque of Fig. 2/3/5 was had: "by eq. 4 from the logged duty cycle", "as recorded".
+  std::string torque_source;
   std::vector<std::string> signals_svg;  // Fig. 2/3, one per experiment (svg_signals)
   std::string signals_bands;             // what the bands in them are
 
@@ -97,12 +99,18 @@ struct ReportInput {
   std::vector<Warning> warnings;
 };
 
-// Table I, the validation and identification's warnings (LSMI's as "excitation", the data's as
-// "session") from an identification.
+// Table I, the validation, how the torque was had and identification's warnings (LSMI's as
+// "excitation", the data's as "session") from an identification.
 ReportInput report_input(const identification::Identification& id);
 
-// The whole page of a run: report_input, the rig and the settings, the sessions and input files,
-// the figures given (Fig. 2/3 per experiment, Fig. 4), Table II, SIVIA's summary and the scenarios.
+// How the torque was formed from a recording's input, for the captions: eq. 4 for duty (a log's
+// or a CSV's), the import spec's [motor] for voltage, nothing for recorded torque.
+std::string torque_source(identification::InputKind input, bool csv);
+
+// The whole page of a run: report_input, the rig (the configuration file given, or the log that
+// carried it) and the settings, the sessions and input files (where Run::inputs says they are),
+// the figures given (Fig. 2/3 per experiment, Fig. 4), Table II, SIVIA's summary and the
+// scenarios.
 ReportInput report_page(const pipeline::Run& run, const std::string& software_version,
                         const std::vector<std::string>& signals_svg, const std::string& paving_svg);
 

@@ -21,16 +21,18 @@ std::string scenario_description(const validated::Scenario& scenario);
 
 // Table I: parameter, unit, one column per experiment, all, (CAD), (truth), each +- its standard
 // deviation; condition numbers, residuals, the input lag, the held-out RMSE and the warnings.
+// Experiments whose names do not fit a column are headed E1, E2, ..., named in a legend above.
 std::string format_table_one(const identification::Identification& id);
 
-// "\nSIVIA (n samples, q = ..): counts ..." and each unknown's hull (with whether it holds the
-// truth, when there is one), or the finding when the set is empty.
+// "\nSIVIA (n samples, q = ..): counts ..." and each unknown's hull (6 digits, rounded outward)
+// (with whether it holds the truth, when there is one), or the finding when the set is empty.
 std::string sivia_summary_text(const identification::GuaranteedResult& result,
                                const std::optional<model::Parameters<double>>& truth);
 
 // Table III: per scenario and parameter set, time reached, steps, coverage of q2 (both modes,
 // over all samples and over those reached) and q1, the q2 tube's mean width, the status; with
-// the paper's figures for comparison.
+// the paper's figures for comparison. The integrator's reason for an early end has its numbers
+// cut to 4 digits (tubes.json and results.json keep them whole).
 std::string format_table_three(const std::vector<validated::ScenarioResult>& results);
 
 // Where the scenarios' measurements came from, as a sentence's part: "the simulated sessions'
@@ -45,5 +47,8 @@ std::string simulation_summary_text(const std::string& measurement_source, bool 
 // What `furuta identify` prints: Table I, then the SIVIA summary and the simulation summary when
 // they ran.
 std::string terminal_text(const pipeline::Run& run);
+// terminal_text less Table I: what follows it once SIVIA and the scenarios are done (`furuta
+// identify` prints Table I as soon as LSMI is done, pipeline::Progress::lsmi_done).
+std::string terminal_text_after_lsmi(const pipeline::Run& run);
 
 }  // namespace furuta::report
