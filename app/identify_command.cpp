@@ -33,6 +33,37 @@ bool is_csv(const std::filesystem::path& path) {
   return extension == ".csv";
 }
 
+// Every log fitted as one rig with the first log's configuration: its motor (the torque, eq. 4) and
+// encoders. A log that ran with other values would be fitted with the wrong ones, and nothing would
+// show it. With --config the user names the rig for all of them.
+bool same_rig_as_first(const std::vector<session_log::SessionLog>& logs,
+                       const std::optional<session_log::SessionLog>& held_out,
+                       const config::RigConfig& first, std::ostream& err) {
+  std::vector<const session_log::SessionLog*> others;
+  for (std::size_t i = 1; i < logs.size(); ++i) others.push_back(&logs[i]);
+  if (held_out) others.push_back(&*held_out);
+  bool same = true;
+  for (const session_log::SessionLog* log : others) {
+    if (!log->start) continue;  // refused elsewhere as not a session log
+    const config::RigConfig rig =
+        config::parse_rig_config(log->start->rig_config_toml, log->path.string());
+    std::string differs;
+    const auto differ = [&](bool equal, const char* section) {
+      if (!equal) differs += (differs.empty() ? "" : ", ") + std::string(section);
+    };
+    differ(rig.motor == first.motor, "[motor]");
+    differ(rig.arm_encoder == first.arm_encoder, "[encoders.arm]");
+    differ(rig.pendulum_encoder == first.pendulum_encoder, "[encoders.pendulum]");
+    if (differs.empty()) continue;
+    err << "furuta identify: " << log->path.string() << " ran with another rig configuration than "
+        << logs.front().path.string() << ": " << differs
+        << " differ. Fitted together, every log would be read with the first's; identify them "
+           "separately, or pass --config to name the rig for all\n";
+    same = false;
+  }
+  return same;
+}
+
 // Session logs: the rig is the one the first log carries, unless --config gives one. A log that
 // is not intact is refused (or, with --use-intact-part, cut at its gaps); one too short for the
 // filters is refused, naming the file and the length needed.
@@ -74,6 +105,7 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
                : config::load_rig_config(options.config_path);
   if (options.config_path.empty()) {
     in.config_carried_by = options.logs.front();
+    if (!same_rig_as_first(logs, held_out_log, in.rig, err)) return std::nullopt;
   } else {
     in.config_file = options.config_path;
   }

@@ -147,6 +147,52 @@ TEST_F(SimulatedTruth, TheReportNamesTheConfigurationFileGiven) {
   EXPECT_EQ(out.str().find("p     unit"), out.str().rfind("p     unit")) << out.str();
 }
 
+// A log that ran with another motor or encoder set-up would be fitted with the first log's, and
+// nothing would show it: refused unless --config names the rig for all.
+TEST_F(SimulatedTruth, LogsFromAnotherRigConfigurationAreNotFittedTogether) {
+  TempDir dir;
+  std::ifstream shipped(FURUTA_SOURCE_DIR "/config/rig.toml");
+  std::stringstream text;
+  text << shipped.rdbuf();
+  std::string other = text.str();
+  const std::string speed = "no_load_speed_rpm = 11700";
+  ASSERT_NE(other.find(speed), std::string::npos);
+  other.replace(other.find(speed), speed.size(), "no_load_speed_rpm = 9000");
+  std::ofstream(dir.path() / "other.toml") << other;
+  RunOptions run;
+  run.config_path = dir.path() / "other.toml";
+  run.simulated = run.virtual_time = true;
+  run.logs_dir = dir.path() / "logs";
+  run.lcm_url = "memq://";
+  run.session.label = "other-motor";
+  std::ostringstream run_out, run_err;
+  ASSERT_EQ(run_session_command(run, run_out, run_err), 0) << run_err.str();
+  fs::path other_log;
+  for (const auto& entry : fs::directory_iterator(dir.path() / "logs")) {
+    if (entry.path().extension() == ".lcmlog") other_log = entry.path();
+  }
+  ASSERT_FALSE(other_log.empty());
+
+  IdentifyCommandOptions options;
+  options.logs = {sessions_[0], other_log};
+  options.output_dir = dir.path() / "out";
+  std::ostringstream out, err;
+  EXPECT_EQ(run_identify_command(options, out, err), 2);
+  EXPECT_NE(err.str().find(other_log.string() + " ran with another rig configuration than " +
+                           sessions_[0].string() + ": [motor] differ"),
+            std::string::npos)
+      << err.str();
+  EXPECT_FALSE(fs::exists(options.output_dir));
+  // Held out counts as much as fitted.
+  options.logs = {sessions_[0], sessions_[1]};
+  options.validate = other_log;
+  EXPECT_EQ(run_identify_command(options, out, err), 2);
+  // Naming the rig for all is the user's decision.
+  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  std::ostringstream out2, err2;
+  EXPECT_EQ(run_identify_command(options, out2, err2), 0) << err2.str();
+}
+
 TEST(IdentifyCommand, AMissingOrForeignFileIsAClearError) {
   TempDir dir;
   std::ofstream(dir.path() / "junk.lcmlog") << "not a log";

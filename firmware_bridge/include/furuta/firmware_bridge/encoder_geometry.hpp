@@ -12,6 +12,7 @@ struct EncoderGeometry {
   double zero_offset_rad = 0.0;  // joint angle subtracted after scaling
 
   double counts_per_joint_rev() const { return counts_per_rev * gear_ratio; }
+  bool operator==(const EncoderGeometry&) const = default;
 };
 
 // sign * 2 pi * counts / (counts_per_rev * gear_ratio) - zero_offset_rad

@@ -15,6 +15,7 @@ struct MotorData {
   double nominal_voltage_v = 12.0;                    // supply at which omega0 holds
 
   double total_ratio() const { return motor_ratio * gear_ratio; }
+  bool operator==(const MotorData&) const = default;
   // Paper eq. 4: torque at the arm for PWM duty d in [-1, 1] and arm speed dq1 [rad/s].
   double arm_torque_nm(double duty, double dq1_rad_s) const;
   // Motor current for a torque at the arm (torque constant from omega0 and the nominal voltage).
