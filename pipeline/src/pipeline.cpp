@@ -4,6 +4,8 @@
 #include <set>
 #include <utility>
 
+#include "furuta/identification/physical.hpp"
+
 namespace furuta::pipeline {
 
 namespace {
@@ -99,6 +101,33 @@ std::vector<Warning> identification_warnings(const identification::Identificatio
   return out;
 }
 
+// LSMI is unconstrained (the paper's reference), so its answer may be no rig at all: the combined
+// estimate is checked, and each experiment's when that one is clearly outside while the combined
+// is not (one recording of several made differently). Returns the combined estimate's check.
+identification::PhysicalCheck check_physical(identification::Identification& id, InputKind kind,
+                                             std::vector<Warning>& warnings) {
+  using namespace identification;
+  const RecordingSource source =
+      kind == InputKind::csv_recordings ? RecordingSource::csv : RecordingSource::session_log;
+  const auto add = [&](const std::string& text) {
+    if (text.empty()) return;
+    id.warnings.push_back(text);
+    warnings.push_back({Warning::Stage::physical, text});
+  };
+  const PhysicalCheck combined =
+      identification::check_physical(id.combined.estimate, id.combined.std_dev, id.nominal);
+  add(physical_warning(combined, source, "the LSMI estimate of all experiments"));
+  if (combined.consistent() && combined.cause == LikelyCause::none) {
+    for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
+      const LsmiResult& r = id.per_experiment[i];
+      const PhysicalCheck one = identification::check_physical(r.estimate, r.std_dev, id.nominal);
+      if (one.clear())
+        add(physical_warning(one, source, "the LSMI estimate of " + id.processed[i].name));
+    }
+  }
+  return combined;
+}
+
 }  // namespace
 
 Recording log_recording(const session_log::SessionLog& log, Role role) {
@@ -173,6 +202,7 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
     out.inputs.push_back({path.string(), identification::sha256_file(path.string())});
   }
   out.warnings = identification_warnings(out.identification);
+  out.physical = check_physical(out.identification, batch.kind, out.warnings);
   if (progress != nullptr) progress->lsmi_done(out.identification);
 
   if (settings.sivia.run) {

@@ -37,6 +37,8 @@ figcaption { font-size: 0.9em; color: #444; }
 .topic { display: inline-block; min-width: 6em; font-weight: bold; color: #8a4b00; }
 .absent { color: #666; font-style: italic; }
 .none { color: #2a6e2a; }
+.physical { border: 3px solid #b00020; background: #fff0f0; padding: 0.2em 1em; margin: 1em 0; }
+.physical h2 { color: #b00020; border: none; margin-top: 0.5em; }
 )";
 
 // The units as a reader writes them, not as a terminal must.
@@ -387,11 +389,29 @@ void section_simulation(Html& h, const ReportInput& in) {
   h.raw("</section>\n");
 }
 
+// An LSMI estimate no rig can have: above everything else, since every number below inherits
+// the recording mistake it most likely comes from.
+void section_physical(Html& h, const ReportInput& in) {
+  std::vector<const Warning*> physical;
+  for (const Warning& w : in.warnings) {
+    if (w.topic == "physical") physical.push_back(&w);
+  }
+  if (physical.empty()) return;
+  h.raw("<section id=\"physical\" class=\"physical\" role=\"alert\">\n");
+  h.element("h2", "The LSMI estimate is not physical");
+  for (const Warning* w : physical) h.paragraph(w->text);
+  h.paragraph(
+      "LSMI is reported unconstrained, as the paper's reference; the numbers below are what the "
+      "recordings give as read, not a rig's parameters.");
+  h.raw("</section>\n");
+}
+
 }  // namespace
 
 std::string render_html(const ReportInput& in) {
   Html h;
   page_head(h, in);
+  section_physical(h, in);
   contents(h);
   section_rig_and_sessions(h, in);
   section_warnings(h, in);

@@ -5,6 +5,7 @@
 
 #include "format.hpp"
 #include "furuta/common/text_format.hpp"
+#include "furuta/identification/physical.hpp"
 #include "furuta/report/report.hpp"
 #include "furuta/report/svg.hpp"
 #include "furuta/report/tables.hpp"
@@ -52,7 +53,11 @@ ReportInput report_input(const identification::Identification& id) {
   }
   for (const auto& w : id.combined.warnings) excitation.insert("all experiments: " + w);
   for (const auto& w : id.warnings) {
-    r.warnings.push_back({excitation.contains(w) ? "excitation" : "session", w});
+    const bool physical = w.starts_with(identification::kPhysicalWarningPrefix);
+    r.warnings.push_back({physical                 ? "physical"
+                          : excitation.contains(w) ? "excitation"
+                                                   : "session",
+                          w});
   }
   return r;
 }

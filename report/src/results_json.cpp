@@ -1,6 +1,8 @@
 // results.json and its parts: LSMI, the SIVIA paving, the scenarios.
 #include <algorithm>
+#include <cmath>
 
+#include "furuta/identification/physical.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/outputs.hpp"
 #include "furuta/report/tables.hpp"
@@ -195,6 +197,34 @@ Json results_json(const pipeline::Run& run, const std::string& software_version)
     more["sivia"]["paving_file"] = "paving.json";
   }
   if (run.simulation) more["simulation"] = simulation_json(*run.simulation);
+  // Only when there is something to say: a consistent fit's results.json stays as it was.
+  const identification::PhysicalCheck& physical = run.physical;
+  if (!physical.consistent() || physical.cause != identification::LikelyCause::none) {
+    Json violations = Json::array();
+    for (const auto& v : physical.violations) {
+      violations.push_back(
+          Json{{"condition", identification::condition_text(v.condition)},
+               {"margin", v.margin},
+               {"margin_sd", v.margin_sd},
+               {"sigmas", std::isfinite(v.sigmas) ? Json(v.sigmas) : Json(nullptr)},
+               {"within_noise", v.within_noise}});
+    }
+    Json candidates = Json::array();
+    for (const auto c : physical.candidates) candidates.push_back(identification::cause_name(c));
+    more["physical"] =
+        Json{{"consistent", physical.consistent()},
+             {"violations", violations},
+             {"likely_cause", identification::cause_name(physical.cause)},
+             {"candidates", candidates},
+             {"reference",
+              physical.reference == identification::MagnitudeReference::cad ? "cad" : "internal"}};
+    if (physical.inertia_ratio_to_cad) {
+      more["physical"]["inertia_ratio_to_cad"] = *physical.inertia_ratio_to_cad;
+    }
+    if (physical.pendulum_frequency_rad_s) {
+      more["physical"]["pendulum_frequency_rad_s"] = *physical.pendulum_frequency_rad_s;
+    }
+  }
   return results_json(run.identification, run.inputs, software_version, more);
 }
 

@@ -21,6 +21,7 @@
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/identification/physical.hpp"
 #include "furuta/interval/box.hpp"
 #include "furuta/model/model.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -180,7 +181,9 @@ struct Simulation {
 
 // Something that happened that a reader should know of, beyond the numbers.
 struct Warning {
-  enum class Stage { data, lsmi, sivia, simulation };
+  // physical: the LSMI estimate is outside the physical region (docs/model.md), or its
+  // magnitudes are no rig's; the text names the likely recording mistake.
+  enum class Stage { data, lsmi, physical, sivia, simulation };
   Stage stage = Stage::data;
   std::string text;
 };
@@ -196,8 +199,11 @@ struct Run {
   std::optional<identification::DataErrorBounds> data_bounds;  // when [sivia] gives them
   Settings settings;                                           // as used
   identification::Identification identification;  // LSMI per experiment and combined, validation
-  std::optional<Guaranteed> sivia;                // settings.sivia.run
-  std::optional<Simulation> simulation;           // settings.simulation.run
+  // The combined LSMI estimate against the physical region, with the likely cause; its warning
+  // (Stage::physical) is also in identification.warnings, so it reaches every output.
+  identification::PhysicalCheck physical;
+  std::optional<Guaranteed> sivia;       // settings.sivia.run
+  std::optional<Simulation> simulation;  // settings.simulation.run
   std::vector<Warning> warnings;
 };
 

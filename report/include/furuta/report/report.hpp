@@ -31,7 +31,8 @@ using pipeline::SessionSummary;
 using pipeline::summarize_session;
 
 struct Warning {
-  std::string topic;  // "excitation", "session", "SIVIA", "simulation"
+  // "physical" (also shown above everything), "excitation", "session", "SIVIA", "simulation"
+  std::string topic;
   std::string text;
 };
 

@@ -1,0 +1,203 @@
+// `furuta identify --csv` on recordings made with a sign, zero or unit wrong: LSMI still reports
+// (it is the paper's reference, exit 0), and a loud warning on the terminal, in results.json and in
+// the report names the condition violated and the likely cause. The patterns printed here are the
+// table of docs/csv-import.md, "When a fit is not physical".
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include "commands.hpp"
+#include "furuta/model/model.hpp"
+#include "temp_dir.hpp"
+
+namespace furuta::app {
+namespace {
+
+namespace fs = std::filesystem;
+using furuta::testing::TempDir;
+using nlohmann::json;
+constexpr double kPi = std::numbers::pi;
+
+// The voltage-driven rig of identify_csv_test.cpp (tests/identification/voltage_rig_test.cpp).
+model::Parameters<double> truth() {
+  return {3.0e-3, 2.56e-3, 1.2e-3, 1.32e-3, 7.4e-2, 1.5e-2, 6.4e-4};
+}
+constexpr double kTorquePerVolt = 4.0 * 0.9 * 0.03 / 3.0;
+constexpr double kBackEmfDamping = 4.0 * 4.0 * 0.9 * 0.03 * 0.03 / 3.0;
+
+constexpr const char* kSpec =
+    "[csv]\n"
+    "time = \"t\"\ntime_unit = \"s\"\n"
+    "arm_angle = \"q1\"\npendulum_angle = \"q2\"\n"
+    "angle_unit = \"rad\"\npendulum_zero = \"down\"\n"
+    "input = \"volts\"\ninput_kind = \"voltage\"\n"
+    "\n[motor]\n"
+    "torque_constant_nm_per_a = 0.03\nback_emf_v_s_per_rad = 0.03\n"
+    "resistance_ohm = 3\ngear_ratio = 4\nefficiency = 0.9\n";
+
+// How a recording went wrong: applied to each row's (q1, q2, volts) in the model's conventions.
+struct Mistake {
+  std::function<double(double)> q1 = [](double q) { return q; };
+  std::function<double(double)> q2 = [](double q) { return q; };
+  std::function<double(double)> volts = [](double v) { return v; };
+};
+
+// 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms, as identify_csv_test.cpp records
+// it, each column passed through the mistake.
+fs::path record(const fs::path& path, double phase, const Mistake& mistake) {
+  std::ofstream out(path);
+  out << "t,q1,q2,volts\n" << std::setprecision(12);
+  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
+  const auto volts = [&](double t) {
+    double sum = 0;
+    for (std::size_t i = 0; i < hz.size(); ++i) {
+      sum += std::sin(2 * kPi * hz[i] * t + phase * static_cast<double>(i + 1));
+    }
+    return 3.5 * sum / std::sqrt(6.0);
+  };
+  const model::Parameters<double> p = truth();
+  model::PendulumState x;
+  const double h = 5e-4;
+  for (int step = -4000; step < 20000; ++step) {
+    const double t = step * h;
+    if (step >= 0 && step % 20 == 0) {
+      out << t << "," << mistake.q1(x.q1) << "," << mistake.q2(x.q2) << ","
+          << mistake.volts(volts(t)) << "\n";
+    }
+    const double v = volts(t + h / 2);
+    x = model::rk4_step(p, x, h, [&](const model::PendulumState& s) {
+      return kTorquePerVolt * v - kBackEmfDamping * s.dq1;
+    });
+  }
+  return path;
+}
+
+std::string read(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+struct Outcome {
+  int code = -1;
+  std::string out, err;
+  json results;
+  std::string html;
+};
+
+Outcome identify(const fs::path& dir, const Mistake& mistake) {
+  const fs::path spec = dir / "import.toml";
+  std::ofstream(spec) << kSpec;
+  IdentifyCommandOptions options;
+  options.csvs = {record(dir / "a.csv", 0.0, mistake), record(dir / "b.csv", 1.3, mistake)};
+  options.import_spec = spec;
+  options.output_dir = dir / "out";
+  Outcome o;
+  std::ostringstream out, err;
+  o.code = run_identify_command(options, out, err);
+  o.out = out.str();
+  o.err = err.str();
+  if (fs::exists(options.output_dir / "results.json")) {
+    o.results = json::parse(read(options.output_dir / "results.json"));
+    o.html = read(options.output_dir / "report.html");
+  }
+  return o;
+}
+
+// The combined LSMI estimate, relative to the truth, as the measured pattern.
+void print_pattern(const std::string& name, const json& results) {
+  std::printf("[ measured ] %-24s", name.c_str());
+  const model::Parameters<double> p = truth();
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const double estimate = results["combined"]["estimate"][model::kParameterNames[k]];
+    std::printf(" %s %+.3g", model::kParameterNames[k], estimate / p[k]);
+  }
+  std::printf("\n");
+}
+
+class IdentifyPhysical : public ::testing::Test {
+ protected:
+  // Exit 0, the pattern printed, and the warning naming `cause` on the terminal, in results.json
+  // (its warnings and its "physical" section) and at the top of the report.
+  void expect_warning(const std::string& name, const Mistake& mistake, const std::string& cause,
+                      const std::string& key) {
+    const Outcome o = identify(dir_.path(), mistake);
+    ASSERT_EQ(o.code, 0) << o.err;
+    print_pattern(name, o.results);
+    const auto at = o.out.find("warning: not physical: ");
+    ASSERT_NE(at, std::string::npos) << o.out;
+    const std::string line = o.out.substr(at, o.out.find('\n', at) - at);
+    std::printf("[ warning  ] %s\n", line.c_str());
+    EXPECT_NE(line.find(key), std::string::npos) << line;
+    ASSERT_TRUE(o.results.contains("physical")) << o.results.dump();
+    EXPECT_EQ(o.results["physical"]["likely_cause"], cause) << o.results["physical"].dump();
+    bool in_warnings = false;
+    for (const auto& w : o.results["warnings"]) {
+      in_warnings = in_warnings || w.get<std::string>().starts_with("not physical: ");
+    }
+    EXPECT_TRUE(in_warnings) << o.results["warnings"].dump();
+    const auto banner = o.html.find("<section id=\"physical\"");
+    EXPECT_NE(banner, std::string::npos);
+    EXPECT_LT(banner, o.html.find("<nav>"));
+  }
+
+  TempDir dir_;
+};
+
+TEST_F(IdentifyPhysical, ACorrectRecordingGivesNoWarning) {
+  const Outcome o = identify(dir_.path(), {});
+  ASSERT_EQ(o.code, 0) << o.err;
+  print_pattern("correct", o.results);
+  EXPECT_EQ(o.out.find("not physical"), std::string::npos) << o.out;
+  EXPECT_FALSE(o.results.contains("physical"));
+  EXPECT_EQ(o.html.find("id=\"physical\""), std::string::npos);
+}
+
+TEST_F(IdentifyPhysical, PendulumSignFlipped) {
+  Mistake m;
+  m.q2 = [](double q) { return -q; };
+  expect_warning("pendulum sign flipped", m, "pendulum sign", "pendulum_angle_scale");
+}
+
+TEST_F(IdentifyPhysical, PendulumZeroAtTheTop) {
+  Mistake m;
+  m.q2 = [](double q) { return q - kPi; };  // recorded from upright, imported as from hanging
+  expect_warning("zero at the top", m, "pendulum zero", "pendulum_zero");
+}
+
+TEST_F(IdentifyPhysical, PendulumZeroAtTheTopAndSignFlipped) {
+  Mistake m;
+  m.q2 = [](double q) { return kPi - q; };
+  expect_warning("zero at the top, flipped", m, "pendulum zero and sign", "pendulum_zero");
+}
+
+TEST_F(IdentifyPhysical, DegreesReadAsRadians) {
+  Mistake m;
+  m.q1 = m.q2 = [](double q) { return q * 180 / kPi; };
+  expect_warning("degrees read as radians", m, "angle unit", "angle_unit");
+}
+
+TEST_F(IdentifyPhysical, ArmSignFlipped) {
+  Mistake m;
+  m.q1 = [](double q) { return -q; };
+  expect_warning("arm sign flipped", m, "arm sign", "arm_angle_scale");
+}
+
+TEST_F(IdentifyPhysical, InputSignFlipped) {
+  Mistake m;
+  m.volts = [](double v) { return -v; };
+  expect_warning("input sign flipped", m, "input sign", "input_scale");
+}
+
+}  // namespace
+}  // namespace furuta::app
