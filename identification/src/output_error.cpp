@@ -65,11 +65,13 @@ std::array<double, model::kParameterCount> theta_from_natural(
   }
   const double limit = std::sqrt(p.mu1 * p.mu4);
   double ratio = p.mu3 / limit;
-  if (!(std::abs(ratio) < 0.99)) {
+  if (!(std::abs(ratio) < 1.0)) {
+    // Not at the boundary: there det M nearly vanishes at q2 = 0, the arm's time constant shrinks
+    // with it and the fixed RK4 step diverges. 0.7 is the paper's rig.
     warnings.push_back(
         "output error: the start's mass matrix is not positive definite (mu1 mu4 <= mu3^2); "
-        "started from |mu3| = 0.99 sqrt(mu1 mu4)");
-    ratio = std::copysign(0.99, ratio);
+        "started from |mu3| = 0.7 sqrt(mu1 mu4)");
+    ratio = std::copysign(0.7, ratio);
   }
   for (std::size_t i : {5u, 6u}) {
     if (!(p[i] >= 0)) {
@@ -220,12 +222,20 @@ struct SegmentCost {
     r[1] = (end.dq1 - x1[1]) / continuity_sigma[1];
     r[2] = (end.q2 - x1[2]) / continuity_sigma[2];
     r[3] = (end.dq2 - x1[3]) / continuity_sigma[3];
-    return true;
+    return finite(r - (segment.end - segment.first), residual_count());
   }
   template <class T>
   bool operator()(const T* theta, const T* aux, const T* gain, const T* x0, T* r) const {
     State<T> end;
     angles(theta, aux, gain, x0, r, end);
+    return finite(r, residual_count());
+  }
+  // A trial step whose simulation diverged is a failed evaluation: Ceres shrinks its trust region.
+  template <class T>
+  static bool finite(const T* r, int n) {
+    for (int i = 0; i < n; ++i) {
+      if (!std::isfinite(scalar_of(r[i]))) return false;
+    }
     return true;
   }
 };
