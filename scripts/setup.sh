@@ -13,6 +13,8 @@ packages=(
   libusb-1.0-0-dev libhidapi-dev
   # numerics
   libeigen3-dev libboost-dev libliquid-dev libmpfr-dev libgmp-dev libtbb-dev
+  # output-error refinement: nonlinear least squares with automatic differentiation
+  libceres-dev
   # configuration, CLI, service
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libsystemd-dev systemd
   # tests: network namespaces for LCM over UDP multicast

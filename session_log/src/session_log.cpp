@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string_view>
 
+#include "furuta/firmware_bridge/codec_1065.hpp"
+
 namespace furuta::session_log {
 
 namespace {
@@ -96,6 +98,22 @@ SessionLog load_session_log(const std::filesystem::path& path) {
   }
   log.read_stats = reader.stats();
   return log;
+}
+
+std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log) {
+  std::vector<MotorCommandWrite> out;
+  for (const furuta::rig_usb_report_t& r : log.usb_reports) {
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
+        r.kind != furuta::rig_usb_report_t::KIND_OUTPUT) {
+      continue;
+    }
+    bridge::MotorOutput1065 o;
+    if (bridge::decode_output_1065(r.bytes, o) != bridge::CodecStatus::ok) continue;
+    out.push_back({r.time_ns, o.duty_cycle(), o.acceleration_pct_per_s(), o.braking_fraction()});
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const auto& a, const auto& b) { return a.time_ns < b.time_ns; });
+  return out;
 }
 
 bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board) {

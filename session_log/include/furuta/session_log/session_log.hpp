@@ -47,6 +47,19 @@ struct SessionLog {
 // Throws std::runtime_error only when the file cannot be opened; damage is counted, not thrown.
 SessionLog load_session_log(const std::filesystem::path& path);
 
+// A command the host wrote to the 1065 (an OUTPUT report of the log), decoded: the board ramps its
+// applied duty towards `duty` at `acceleration_pct_per_s` from `time_ns` (the write's host time).
+struct MotorCommandWrite {
+  std::int64_t time_ns = 0;
+  double duty = 0.0;  // [-1, 1], n/255
+  double acceleration_pct_per_s = 0.0;
+  double braking_fraction = 0.0;  // [0, 1], what duty 0 does
+};
+
+// Every command written to the 1065 that the transport accepted, in time order; reports too short
+// to decode are skipped.
+std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log);
+
 // The raw USB reports of one board, as a trace the replay backend can play (the device line from
 // the session start record).
 bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board);

@@ -1,0 +1,140 @@
+#pragma once
+// Output-error refinement (issue 19): the model simulated with the input as the board applied it,
+// fitted to the measured angles at their own times by multiple shooting (Bock 1981), starting from
+// LSMI. No accelerations are formed, so the 16 ms sampling's differentiation bias is gone. The fit
+// stays in the physical region (docs/model.md) by its parametrisation.
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "furuta/config/rig_config.hpp"
+#include "furuta/identification/csv_import.hpp"
+#include "furuta/identification/preprocessing.hpp"
+#include "furuta/model/model.hpp"
+#include "furuta/session_log/session_log.hpp"
+
+namespace furuta::identification {
+
+// One measured angle: joint 0 is q1 (arm), 1 is q2 (pendulum).
+struct OeObservation {
+  double t_s = 0;  // when the host got it: the state's time plus the data path's lag
+  int joint = 0;
+  double angle_rad = 0;
+};
+
+// One experiment as the output-error fit needs it: the angles at their own times and the input
+// the actuator applied, as a piecewise-linear function of time on the same clock.
+struct OeExperiment {
+  std::string name;
+  std::vector<OeObservation> observations;  // time order
+  // The applied input at the breakpoints (linear between, held outside): duty, volts or N m.
+  std::vector<double> input_t_s, input;
+  // Duty only, per breakpoint (in force from it to the next): what an applied duty of exactly 0
+  // does, as a fraction of eq. 4's braking at zero duty (0: the motor coasts).
+  std::vector<double> braking_fraction;
+  InputKind input_kind = InputKind::duty;
+  double supply_scale = 1.0;  // duty: effective duty = duty * supply voltage / nominal voltage
+  VoltageMotor voltage_motor;
+  // The input's gain is fitted around 1 with this relative standard deviation as its prior (the
+  // uncertainty of the supply reading or of a recorded voltage's scale); 0 holds it at 1. The 1065
+  // reports its supply in steps of 80/2048 V, 0.33 % of 12 V, and every inertia scales with the
+  // gain, so without it the standard deviations would ignore the largest error there is.
+  double input_gain_sigma = 0.0;
+  // Standard deviation of each joint's angle noise [rad]: one count / sqrt(12) for a quantising
+  // encoder.
+  std::array<double, 2> angle_sigma_rad = {0, 0};
+  std::vector<std::string> warnings;
+};
+
+// From a session log: the arm angle of the newest 1065 report of each cycle at its host time, the
+// pendulum's likewise from the 1047; the input rebuilt from every command written to the 1065
+// (session_log::motor_command_writes) and the board's ramp towards it, scaled by the median logged
+// supply voltage. `rig` gives the encoders' resolutions, the motor's nominal voltage and the
+// braking before the first command (the log's carried configuration, or the one the user named).
+OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
+                                    const config::RigConfig& rig);
+
+// From a recording (a CSV, or any RawExperiment): both angles at each sample time, the input as
+// recorded, held from one sample to the next (`hold_input`, a logger that records what it wrote)
+// or linear between samples. `angle_sigma_rad` as in OeExperiment (one count / sqrt(12)).
+OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,
+                                    bool hold_input, const VoltageMotor& voltage_motor = {});
+
+struct OutputErrorOptions {
+  // Multiple shooting: each experiment is cut into segments of about this length, each with its
+  // own initial state. 0.5 s: about half a pendulum period (0.84 s), short enough that the LSMI
+  // start (a few % off) keeps each segment's simulation in phase with the data and that the
+  // upright region's divergence (time constant about 0.13 s) cannot grow by more than e^4 within
+  // one; long enough that the 4 state unknowns are few against the segment's ~60 angles.
+  double segment_s = 0.5;
+  // Fixed RK4 substeps at most this long between observations; the arm's time constant is 4.4 ms.
+  double substep_s = 1e-3;
+  // The data path's lag (host time of an angle minus the time of the state it shows, relative to
+  // the command writes' times): estimated (>= 0) from `input_lag_s` as start, or held at it.
+  bool estimate_lag = true;
+  double input_lag_s = 1e-3;
+  // The pendulum's zero: an offset added to every measured q2 (a quantising encoder reads half a
+  // count low on average; a rig zeroed slightly off its rest). Estimated, or held at 0.
+  bool estimate_q2_offset = true;
+  // Continuity between consecutive segments as residuals: the state defect over
+  // (angle sigma / continuity_weight), velocities over the same per 10 ms, so that at the optimum
+  // the trajectory is one continuous simulation to well within the angle noise.
+  double continuity_weight = 30.0;
+  int max_iterations = 50;
+  int num_threads = 2;
+};
+
+struct OutputErrorResult {
+  model::Parameters<double> estimate{};
+  // Local standard deviations: sqrt(diag(J^T J)^-1) at the optimum, J the Jacobian of the residuals
+  // weighted by the assumed angle noise, scaled by the residuals' estimated sigma (the weighted
+  // RMS over degrees of freedom) and carried to the natural parameters by the chain rule. They
+  // assume independent angle errors; quantisation of a slow angle is correlated, so they can be
+  // optimistic.
+  model::Parameters<double> std_dev{};
+  double input_lag_s = 0, input_lag_std_s = 0;
+  double q2_offset_rad = 0;
+  std::vector<double> input_gain;                // per experiment (1 when held)
+  std::array<double, 2> angle_rms_rad = {0, 0};  // fitted minus measured, per joint
+  double continuity_rms = 0;  // the weighted continuity defects' RMS (<< 1: continuous)
+  double residual_sigma = 0;  // estimated sigma of the weighted angle residuals (1: as assumed)
+  std::size_t segments = 0;
+  std::size_t observations = 0;
+  int iterations = 0;
+  bool converged = false;
+  std::string message;                // Ceres' summary line
+  std::vector<std::string> warnings;  // e.g. the start moved into the physical region
+};
+
+// Throws std::invalid_argument for an experiment without observations or input, or a start that is
+// not finite.
+OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experiments,
+                                      const model::Parameters<double>& start,
+                                      const model::MotorData& motor,
+                                      const OutputErrorOptions& options = {});
+
+// A free-run simulation of a whole experiment (no re-shooting): the initial state is fitted to the
+// first `options.segment_s` with the parameters held, then the model runs to the end.
+struct FreeRun {
+  std::vector<double> t_s;       // the observations' times
+  std::vector<int> joint;        // per observation
+  std::vector<double> measured;  // angle_rad (+ the q2 offset for the pendulum)
+  std::vector<double> simulated;
+  std::array<double, 2> rmse_rad = {0, 0};  // per joint
+};
+FreeRun simulate_free_run(const OeExperiment& experiment, const model::Parameters<double>& p,
+                          const model::MotorData& motor, double input_lag_s, double q2_offset_rad,
+                          double input_gain = 1.0, const OutputErrorOptions& options = {});
+
+// Eq. 4 (duty) over any scalar, as model::MotorData::arm_torque_nm.
+template <class T>
+T duty_arm_torque(const model::MotorData& m, const T& duty, const T& dq1_rad_s) {
+  constexpr double kRadPerSToRpm = 9.549296585513720;  // 60 / (2 pi)
+  const double k =
+      m.total_ratio() * m.motor_efficiency * m.gear_efficiency / m.speed_torque_gradient_rpm_per_nm;
+  return k * (duty * m.no_load_speed_rpm - m.total_ratio() * kRadPerSToRpm * dq1_rad_s);
+}
+
+}  // namespace furuta::identification

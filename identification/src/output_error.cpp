@@ -1,0 +1,678 @@
+#include "furuta/identification/output_error.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+
+namespace furuta::identification {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// The continuity defect of a velocity is weighed as that of an angle over this time: an angle
+// error of sigma grows from a velocity error of sigma / 10 ms within a few samples.
+constexpr double kVelocityDefectTime_s = 0.01;
+// How far from a segment's start the observations are that give its starting state.
+constexpr double kStartFitHalfWidth_s = 0.04;
+// The 1065 reports its supply voltage in steps of 80 / 2048 V.
+constexpr double kSupplyStep_v = 80.0 / 2048.0;
+
+double scalar_of(double x) {
+  return x;
+}
+template <class T, int N>
+double scalar_of(const ceres::Jet<T, N>& x) {
+  return x.a;
+}
+
+template <class T>
+struct State {
+  T q1{}, dq1{}, q2{}, dq2{};
+};
+
+// p from the unconstrained coordinates: mu1, mu2, mu4, mug = exp(theta), mu3 = sqrt(mu1 mu4)
+// tanh(theta_2), so that mu1 mu4 > mu3^2 for every theta; fv1, fv2 are bounded at 0 in the solver.
+template <class T>
+model::Parameters<T> natural_from_theta(const T* theta) {
+  using std::exp;
+  using std::sqrt;
+  using std::tanh;
+  model::Parameters<T> p;
+  p.mu1 = exp(theta[0]);
+  p.mu2 = exp(theta[1]);
+  p.mu4 = exp(theta[3]);
+  p.mu3 = sqrt(p.mu1 * p.mu4) * tanh(theta[2]);
+  p.mug = exp(theta[4]);
+  p.fv1 = theta[5];
+  p.fv2 = theta[6];
+  return p;
+}
+
+// The start moved into the physical region (LSMI is unconstrained): what was moved is reported.
+std::array<double, model::kParameterCount> theta_from_natural(
+    const model::Parameters<double>& start, std::vector<std::string>& warnings) {
+  model::Parameters<double> p = start;
+  for (std::size_t i : {0u, 1u, 3u, 4u}) {
+    if (!(p[i] > 0)) {
+      warnings.push_back(std::string("output error: the start's ") + model::kParameterNames[i] +
+                         " is not positive; started from its magnitude");
+      p[i] = std::max(std::abs(p[i]), 1e-12);
+    }
+  }
+  const double limit = std::sqrt(p.mu1 * p.mu4);
+  double ratio = p.mu3 / limit;
+  if (!(std::abs(ratio) < 1.0)) {
+    // Not at the boundary: there det M nearly vanishes at q2 = 0, the arm's time constant shrinks
+    // with it and the fixed RK4 step diverges. 0.7 is the paper's rig.
+    warnings.push_back(
+        "output error: the start's mass matrix is not positive definite (mu1 mu4 <= mu3^2); "
+        "started from |mu3| = 0.7 sqrt(mu1 mu4)");
+    ratio = std::copysign(0.7, ratio);
+  }
+  for (std::size_t i : {5u, 6u}) {
+    if (!(p[i] >= 0)) {
+      warnings.push_back(std::string("output error: the start's ") + model::kParameterNames[i] +
+                         " is negative; started from 0");
+      p[i] = 0;
+    }
+  }
+  return {std::log(p.mu1),
+          std::log(p.mu2),
+          std::atanh(ratio),
+          std::log(p.mu4),
+          std::log(p.mug),
+          p.fv1,
+          p.fv2};
+}
+
+// The applied input at time t (the state's clock): piecewise linear between the breakpoints.
+template <class T>
+T arm_torque(const OeExperiment& e, const model::MotorData& motor, const T& t, const T& dq1,
+             const T& gain) {
+  const double ts = scalar_of(t);
+  const auto& bt = e.input_t_s;
+  const std::size_t n = bt.size();
+  const std::size_t upper =
+      static_cast<std::size_t>(std::upper_bound(bt.begin(), bt.end(), ts) - bt.begin());
+  T value;
+  bool exactly_zero = false;
+  double braking = 0;
+  if (upper == 0) {
+    value = T(e.input.front());
+    exactly_zero = e.input.front() == 0.0;
+    braking = e.braking_fraction.empty() ? 0.0 : e.braking_fraction.front();
+  } else if (upper >= n) {
+    value = T(e.input.back());
+    exactly_zero = e.input.back() == 0.0;
+    braking = e.braking_fraction.empty() ? 0.0 : e.braking_fraction.back();
+  } else {
+    const std::size_t j = upper - 1;
+    const double a = e.input[j], b = e.input[j + 1];
+    value = T(a) + (b - a) * (t - bt[j]) / (bt[j + 1] - bt[j]);
+    exactly_zero = a == 0.0 && b == 0.0;
+    braking = e.braking_fraction.empty() ? 0.0 : e.braking_fraction[j];
+  }
+  switch (e.input_kind) {
+    case InputKind::duty:
+      if (exactly_zero) return braking * duty_arm_torque(motor, T(0.0), dq1);
+      return duty_arm_torque(motor, value * gain * e.supply_scale, dq1);
+    case InputKind::voltage: {
+      const VoltageMotor& v = e.voltage_motor;
+      return v.gear_ratio * v.efficiency * v.torque_constant_nm_per_a *
+             (gain * value - v.back_emf_v_s_per_rad * v.gear_ratio * dq1) / v.resistance_ohm;
+    }
+    case InputKind::torque:
+      return gain * value;
+  }
+  return value;
+}
+
+template <class T>
+State<T> derivative(const OeExperiment& e, const model::MotorData& motor,
+                    const model::Parameters<T>& p, const T& gain, const T& t, const State<T>& x) {
+  const T tau = arm_torque(e, motor, t, x.dq1, gain);
+  const model::JointAccelerations<T> a = model::accelerations(p, x.q2, x.dq1, x.dq2, tau);
+  return {x.dq1, a.ddq1, x.dq2, a.ddq2};
+}
+
+template <class T>
+State<T> axpy(const State<T>& x, const State<T>& d, const T& h) {
+  return {x.q1 + h * d.q1, x.dq1 + h * d.dq1, x.q2 + h * d.q2, x.dq2 + h * d.dq2};
+}
+
+// RK4 from t0 to t1 in equal substeps of at most max_step_s. The input's time is t - lag.
+template <class T>
+State<T> integrate(const OeExperiment& e, const model::MotorData& motor,
+                   const model::Parameters<T>& p, const T& lag, const T& gain, State<T> x,
+                   double t0, double t1, double max_step_s) {
+  if (!(t1 > t0)) return x;
+  const int n = std::max(1, static_cast<int>(std::ceil((t1 - t0) / max_step_s - 1e-9)));
+  const double h = (t1 - t0) / n;
+  const T hT(h), half(h / 2);
+  for (int k = 0; k < n; ++k) {
+    const T t = T(t0 + k * h) - lag;
+    const State<T> k1 = derivative(e, motor, p, gain, t, x);
+    const State<T> k2 = derivative(e, motor, p, gain, t + half, axpy(x, k1, half));
+    const State<T> k3 = derivative(e, motor, p, gain, t + half, axpy(x, k2, half));
+    const State<T> k4 = derivative(e, motor, p, gain, t + hT, axpy(x, k3, hT));
+    const T w = hT / 6.0;
+    x.q1 += w * (k1.q1 + 2.0 * k2.q1 + 2.0 * k3.q1 + k4.q1);
+    x.dq1 += w * (k1.dq1 + 2.0 * k2.dq1 + 2.0 * k3.dq1 + k4.dq1);
+    x.q2 += w * (k1.q2 + 2.0 * k2.q2 + 2.0 * k3.q2 + k4.q2);
+    x.dq2 += w * (k1.dq2 + 2.0 * k2.dq2 + 2.0 * k3.dq2 + k4.dq2);
+  }
+  return x;
+}
+
+// Observations [first, end) of one experiment, simulated from the state x0 at the first one's time.
+struct Segment {
+  std::size_t experiment = 0;
+  std::size_t first = 0, end = 0;
+  double t_start_s = 0;
+  double t_next_s = -1;  // the next segment's start (continuity), or < 0 for the last one
+};
+
+struct SegmentCost {
+  const OeExperiment* experiment;
+  const model::MotorData* motor;
+  Segment segment;
+  double substep_s;
+  std::array<double, 4> continuity_sigma;
+
+  int residual_count() const {
+    return static_cast<int>(segment.end - segment.first) + (segment.t_next_s >= 0 ? 4 : 0);
+  }
+
+  // Residuals of the angles; the state at the next segment's start into `end_state`.
+  template <class T>
+  void angles(const T* theta, const T* aux, const T* gain_ptr, const T* x0, T* r,
+              State<T>& end_state) const {
+    const T& gain = *gain_ptr;
+    const model::Parameters<T> p = natural_from_theta(theta);
+    const T& lag = aux[0];
+    const T& q2_offset = aux[1];
+    State<T> x{x0[0], x0[1], x0[2], x0[3]};
+    double t = segment.t_start_s;
+    const auto& obs = experiment->observations;
+    for (std::size_t i = segment.first; i < segment.end; ++i) {
+      const OeObservation& o = obs[i];
+      x = integrate(*experiment, *motor, p, lag, gain, x, t, o.t_s, substep_s);
+      t = std::max(t, o.t_s);
+      const double sigma = experiment->angle_sigma_rad[o.joint];
+      *r++ =
+          o.joint == 0 ? (x.q1 - o.angle_rad) / sigma : (x.q2 - (o.angle_rad + q2_offset)) / sigma;
+    }
+    if (segment.t_next_s >= 0) {
+      x = integrate(*experiment, *motor, p, lag, gain, x, t, segment.t_next_s, substep_s);
+    }
+    end_state = x;
+  }
+
+  template <class T>
+  bool operator()(const T* theta, const T* aux, const T* gain, const T* x0, const T* x1,
+                  T* r) const {
+    State<T> end;
+    angles(theta, aux, gain, x0, r, end);
+    r += segment.end - segment.first;
+    r[0] = (end.q1 - x1[0]) / continuity_sigma[0];
+    r[1] = (end.dq1 - x1[1]) / continuity_sigma[1];
+    r[2] = (end.q2 - x1[2]) / continuity_sigma[2];
+    r[3] = (end.dq2 - x1[3]) / continuity_sigma[3];
+    return finite(r - (segment.end - segment.first), residual_count());
+  }
+  template <class T>
+  bool operator()(const T* theta, const T* aux, const T* gain, const T* x0, T* r) const {
+    State<T> end;
+    angles(theta, aux, gain, x0, r, end);
+    return finite(r, residual_count());
+  }
+  // A trial step whose simulation diverged is a failed evaluation: Ceres shrinks its trust region.
+  template <class T>
+  static bool finite(const T* r, int n) {
+    for (int i = 0; i < n; ++i) {
+      if (!std::isfinite(scalar_of(r[i]))) return false;
+    }
+    return true;
+  }
+};
+
+// The prior on an input's gain: (gain - 1) / sigma.
+struct GainPrior {
+  double sigma;
+  template <class T>
+  bool operator()(const T* gain, T* r) const {
+    r[0] = (gain[0] - 1.0) / sigma;
+    return true;
+  }
+};
+
+// A starting state at t from the observations nearby: a quadratic through each joint's angles
+// within kStartFitHalfWidth_s, least squares, its value and slope at t.
+std::array<double, 4> start_state(const OeExperiment& e, double t) {
+  std::array<double, 4> x{};
+  for (int joint = 0; joint < 2; ++joint) {
+    // Normal equations of a + b u + c u^2, u = time from t.
+    double s[5] = {0, 0, 0, 0, 0}, y[3] = {0, 0, 0};
+    double nearest = 0, nearest_dt = 1e300;
+    for (const OeObservation& o : e.observations) {
+      if (o.joint != joint) continue;
+      const double u = o.t_s - t;
+      if (std::abs(u) < nearest_dt) {
+        nearest_dt = std::abs(u);
+        nearest = o.angle_rad;
+      }
+      if (std::abs(u) > kStartFitHalfWidth_s) continue;
+      double pw = 1;
+      for (double& sk : s) {
+        sk += pw;
+        pw *= u;
+      }
+      y[0] += o.angle_rad;
+      y[1] += o.angle_rad * u;
+      y[2] += o.angle_rad * u * u;
+    }
+    double value = nearest, slope = 0;
+    if (s[0] >= 4) {
+      Eigen::Matrix3d a;
+      a << s[0], s[1], s[2], s[1], s[2], s[3], s[2], s[3], s[4];
+      const Eigen::Vector3d c = a.ldlt().solve(Eigen::Vector3d(y[0], y[1], y[2]));
+      if (c.allFinite()) {
+        value = c[0];
+        slope = c[1];
+      }
+    }
+    x[2 * joint] = value;
+    x[2 * joint + 1] = slope;
+  }
+  return x;
+}
+
+std::vector<Segment> cut_segments(const OeExperiment& e, std::size_t index, double segment_s) {
+  std::vector<Segment> out;
+  const auto& obs = e.observations;
+  std::size_t first = 0;
+  while (first < obs.size()) {
+    const double boundary = obs[first].t_s + segment_s;
+    std::size_t end = first;
+    while (end < obs.size() && obs[end].t_s < boundary) ++end;
+    // A short tail joins the segment before it rather than making one with too few angles.
+    if (end < obs.size() && obs.back().t_s < boundary + segment_s / 2) end = obs.size();
+    out.push_back({index, first, end, obs[first].t_s, -1});
+    first = end;
+  }
+  for (std::size_t k = 0; k + 1 < out.size(); ++k) out[k].t_next_s = out[k + 1].t_start_s;
+  return out;
+}
+
+void check_experiment(const OeExperiment& e) {
+  if (e.observations.empty() || e.input.empty() || e.input.size() != e.input_t_s.size()) {
+    throw std::invalid_argument(e.name + ": output error needs angles and an input");
+  }
+  if (!(e.angle_sigma_rad[0] > 0) || !(e.angle_sigma_rad[1] > 0)) {
+    throw std::invalid_argument(e.name + ": output error needs each angle's noise sigma (> 0)");
+  }
+}
+
+ceres::Solver::Options solver_options(int max_iterations, int threads) {
+  ceres::Solver::Options o;
+  o.linear_solver_type = ceres::DENSE_QR;
+  o.max_num_iterations = max_iterations;
+  o.num_threads = std::max(1, threads);
+  o.function_tolerance = 1e-9;
+  o.parameter_tolerance = 1e-10;
+  o.logging_type = ceres::SILENT;
+  return o;
+}
+
+}  // namespace
+
+OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
+                                    const config::RigConfig& rig) {
+  OeExperiment e;
+  e.name = log.start ? log.start->session : log.path.filename().string();
+  e.input_kind = InputKind::duty;
+  if (log.samples.empty()) throw std::invalid_argument(e.name + ": no samples");
+  const std::int64_t t0 = log.samples.front().monotonic_ns;
+  const auto seconds = [t0](std::int64_t ns) { return static_cast<double>(ns - t0) * 1e-9; };
+
+  std::array<double, 2> last_t = {-1e300, -1e300};
+  std::vector<double> supply_v;
+  for (const auto& s : log.samples) {
+    if (s.n_motor_reports > 0) {
+      const double t = seconds(s.motor_report_host_ns[s.n_motor_reports - 1]);
+      if (t > last_t[0]) e.observations.push_back({t, 0, s.arm_angle_rad});
+      last_t[0] = std::max(last_t[0], t);
+      supply_v.push_back(s.supply_voltage_v);
+    }
+    if (s.n_encoder_reports > 0) {
+      const double t = seconds(s.encoder_report_host_ns[s.n_encoder_reports - 1]);
+      if (t > last_t[1]) e.observations.push_back({t, 1, s.pendulum_angle_rad});
+      last_t[1] = std::max(last_t[1], t);
+    }
+  }
+  std::stable_sort(e.observations.begin(), e.observations.end(),
+                   [](const OeObservation& a, const OeObservation& b) { return a.t_s < b.t_s; });
+  if (e.observations.empty()) throw std::invalid_argument(e.name + ": no board reports");
+
+  if (!supply_v.empty()) {
+    std::nth_element(supply_v.begin(), supply_v.begin() + supply_v.size() / 2, supply_v.end());
+    const double median = supply_v[supply_v.size() / 2];
+    if (median > 0) {
+      e.supply_scale = median / rig.motor.nominal_voltage_v;
+      // The reading's quantisation (docs/phidget-protocol.md), uniform over one step.
+      e.input_gain_sigma = kSupplyStep_v / std::sqrt(12.0) / median;
+    }
+  }
+
+  // The board ramps its applied duty towards the newest command at the command's rate, from the
+  // moment the command is written (docs/model.md; firmware_bridge's simulated rig does the same).
+  const std::vector<session_log::MotorCommandWrite> writes = session_log::motor_command_writes(log);
+  double t =
+      std::min(e.observations.front().t_s, writes.empty() ? 0.0 : seconds(writes[0].time_ns));
+  double applied = log.samples.front().applied_duty;
+  double target = applied;
+  double rate_per_s = 1.0;
+  double braking = rig.safety.stop_braking_fraction;
+  const auto add = [&](double at, double value, double brake) {
+    if (!e.input_t_s.empty() && at <= e.input_t_s.back()) {
+      e.input.back() = value;
+      e.braking_fraction.back() = brake;
+      return;
+    }
+    e.input_t_s.push_back(at);
+    e.input.push_back(value);
+    e.braking_fraction.push_back(brake);
+  };
+  add(t - 1.0, applied, braking);
+  const auto ramp_until = [&](double until) {
+    const double reach = t + std::abs(target - applied) / rate_per_s;
+    if (reach < until) {
+      if (applied != target) add(reach, target, braking);
+      applied = target;
+    } else {
+      applied += std::copysign(rate_per_s * (until - t), target - applied);
+    }
+    t = until;
+  };
+  for (const auto& w : writes) {
+    const double at = seconds(w.time_ns);
+    if (at < t) continue;
+    ramp_until(at);
+    target = w.duty;
+    braking = w.braking_fraction;
+    // Raw acceleration 0 is never sent; taken as the slowest ramp the wire can express.
+    rate_per_s = std::max(w.acceleration_pct_per_s, 6250.0 / 255.0) / 100.0;
+    add(at, applied, braking);
+  }
+  ramp_until(std::max(t, e.observations.back().t_s) + 1.0);
+  add(t, applied, braking);
+
+  const double arm_counts = rig.arm_encoder.counts_per_joint_rev();
+  const double pendulum_counts = rig.pendulum_encoder.counts_per_joint_rev();
+  if (!(arm_counts > 0) || !(pendulum_counts > 0)) {
+    throw std::invalid_argument(e.name + ": the configuration's encoders have no counts");
+  }
+  e.angle_sigma_rad = {kTwoPi / arm_counts / std::sqrt(12.0),
+                       kTwoPi / pendulum_counts / std::sqrt(12.0)};
+  e.warnings = {};
+  if (writes.empty()) {
+    e.warnings.push_back(e.name + ": no motor commands in the log; the input is the first echo");
+  }
+  return e;
+}
+
+OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,
+                                    bool hold_input, const VoltageMotor& voltage_motor) {
+  OeExperiment e;
+  e.name = raw.name;
+  e.input_kind = raw.input_kind;
+  e.voltage_motor = voltage_motor;
+  e.angle_sigma_rad = angle_sigma_rad;
+  e.warnings = raw.warnings;
+  const std::size_t n = raw.t_s.size();
+  if (n == 0 || raw.q1.size() != n || raw.q2.size() != n || raw.input.size() != n) {
+    throw std::invalid_argument(raw.name + ": angles, input and times differ in length");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    e.observations.push_back({raw.t_s[i], 0, raw.q1[i]});
+    e.observations.push_back({raw.t_s[i], 1, raw.q2[i]});
+    if (hold_input && i > 0) {
+      // A step: the previous value up to (just before) this sample.
+      e.input_t_s.push_back(std::nextafter(raw.t_s[i], -1e300));
+      e.input.push_back(raw.input[i - 1]);
+    }
+    e.input_t_s.push_back(raw.t_s[i]);
+    e.input.push_back(raw.input[i]);
+  }
+  // Braking at zero: a recorded duty of 0 is taken as eq. 4 at zero duty (the board braking).
+  e.braking_fraction.assign(e.input.size(), 1.0);
+  return e;
+}
+
+OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experiments,
+                                      const model::Parameters<double>& start,
+                                      const model::MotorData& motor,
+                                      const OutputErrorOptions& options) {
+  if (experiments.empty()) throw std::invalid_argument("output error: no experiments");
+  for (const auto& e : experiments) check_experiment(e);
+  for (double v : start) {
+    if (!std::isfinite(v)) throw std::invalid_argument("output error: the start is not finite");
+  }
+  OutputErrorResult result;
+  std::array<double, model::kParameterCount> theta = theta_from_natural(start, result.warnings);
+  std::array<double, 2> aux = {options.input_lag_s, 0.0};
+
+  std::vector<Segment> segments;
+  for (std::size_t i = 0; i < experiments.size(); ++i) {
+    const std::vector<Segment> s = cut_segments(experiments[i], i, options.segment_s);
+    segments.insert(segments.end(), s.begin(), s.end());
+    result.observations += experiments[i].observations.size();
+  }
+  std::vector<double> gains(experiments.size(), 1.0);
+  std::vector<std::array<double, 4>> states(segments.size());
+  for (std::size_t k = 0; k < segments.size(); ++k) {
+    states[k] = start_state(experiments[segments[k].experiment], segments[k].t_start_s);
+  }
+
+  ceres::Problem problem;
+  problem.AddParameterBlock(theta.data(), model::kParameterCount);
+  problem.SetParameterLowerBound(theta.data(), 5, 0.0);
+  problem.SetParameterLowerBound(theta.data(), 6, 0.0);
+  problem.AddParameterBlock(aux.data(), 2);
+  std::vector<int> held;
+  if (!options.estimate_lag) held.push_back(0);
+  if (!options.estimate_q2_offset) held.push_back(1);
+  if (held.size() == 2) {
+    problem.SetParameterBlockConstant(aux.data());
+  } else if (!held.empty()) {
+    problem.SetManifold(aux.data(), new ceres::SubsetManifold(2, held));
+  }
+  if (options.estimate_lag) {
+    problem.SetParameterLowerBound(aux.data(), 0, 0.0);
+    problem.SetParameterUpperBound(aux.data(), 0, 0.05);
+  }
+  for (std::size_t i = 0; i < experiments.size(); ++i) {
+    problem.AddParameterBlock(&gains[i], 1);
+    if (experiments[i].input_gain_sigma > 0) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GainPrior, 1, 1>(
+                                   new GainPrior{experiments[i].input_gain_sigma}),
+                               nullptr, &gains[i]);
+    } else {
+      problem.SetParameterBlockConstant(&gains[i]);
+    }
+  }
+  for (std::size_t k = 0; k < segments.size(); ++k) {
+    const OeExperiment& e = experiments[segments[k].experiment];
+    double* gain = &gains[segments[k].experiment];
+    const double w = options.continuity_weight;
+    SegmentCost cost{&e,
+                     &motor,
+                     segments[k],
+                     options.substep_s,
+                     {e.angle_sigma_rad[0] / w, e.angle_sigma_rad[0] / w / kVelocityDefectTime_s,
+                      e.angle_sigma_rad[1] / w, e.angle_sigma_rad[1] / w / kVelocityDefectTime_s}};
+    const int residuals = cost.residual_count();
+    if (segments[k].t_next_s >= 0) {
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<SegmentCost, ceres::DYNAMIC, 7, 2, 1, 4, 4>(
+              new SegmentCost(cost), residuals),
+          nullptr, theta.data(), aux.data(), gain, states[k].data(), states[k + 1].data());
+    } else {
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<SegmentCost, ceres::DYNAMIC, 7, 2, 1, 4>(
+              new SegmentCost(cost), residuals),
+          nullptr, theta.data(), aux.data(), gain, states[k].data());
+    }
+  }
+
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options(options.max_iterations, options.num_threads), &problem, &summary);
+  result.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.message = summary.BriefReport();
+  result.segments = segments.size();
+  result.estimate = natural_from_theta(theta.data());
+  result.input_lag_s = aux[0];
+  result.q2_offset_rad = aux[1];
+  result.input_gain = gains;
+
+  // Residuals at the optimum: angle RMS per joint (unweighted), continuity defects (weighted).
+  {
+    std::array<double, 2> sum = {0, 0};
+    std::array<std::size_t, 2> count = {0, 0};
+    double continuity = 0;
+    std::size_t continuity_count = 0;
+    for (std::size_t k = 0; k < segments.size(); ++k) {
+      const OeExperiment& e = experiments[segments[k].experiment];
+      const double w = options.continuity_weight;
+      SegmentCost cost{
+          &e,
+          &motor,
+          segments[k],
+          options.substep_s,
+          {e.angle_sigma_rad[0] / w, e.angle_sigma_rad[0] / w / kVelocityDefectTime_s,
+           e.angle_sigma_rad[1] / w, e.angle_sigma_rad[1] / w / kVelocityDefectTime_s}};
+      std::vector<double> r(static_cast<std::size_t>(cost.residual_count()));
+      if (segments[k].t_next_s >= 0) {
+        cost(theta.data(), aux.data(), &gains[segments[k].experiment], states[k].data(),
+             states[k + 1].data(), r.data());
+      } else {
+        cost(theta.data(), aux.data(), &gains[segments[k].experiment], states[k].data(), r.data());
+      }
+      for (std::size_t i = segments[k].first; i < segments[k].end; ++i) {
+        const int j = e.observations[i].joint;
+        const double rad = r[i - segments[k].first] * e.angle_sigma_rad[j];
+        sum[j] += rad * rad;
+        ++count[j];
+      }
+      for (std::size_t i = segments[k].end - segments[k].first; i < r.size(); ++i) {
+        continuity += r[i] * r[i];
+        ++continuity_count;
+      }
+    }
+    for (int j = 0; j < 2; ++j) {
+      result.angle_rms_rad[j] = count[j] ? std::sqrt(sum[j] / static_cast<double>(count[j])) : 0;
+    }
+    result.continuity_rms =
+        continuity_count ? std::sqrt(continuity / static_cast<double>(continuity_count)) : 0;
+  }
+
+  // Every residual (angles and continuity) against every free parameter: the continuity rows
+  // tie consecutive states, so the degrees of freedom are those of one state per experiment.
+  const double dof = static_cast<double>(summary.num_residuals - summary.num_effective_parameters);
+  result.residual_sigma = dof > 0 ? std::sqrt(2.0 * summary.final_cost / dof) : 0.0;
+
+  ceres::Covariance::Options covariance_options;
+  covariance_options.algorithm_type = ceres::DENSE_SVD;
+  covariance_options.null_space_rank = -1;
+  covariance_options.num_threads = std::max(1, options.num_threads);
+  ceres::Covariance covariance(covariance_options);
+  std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()},
+                                                                 {aux.data(), aux.data()}};
+  if (covariance.Compute(blocks, &problem)) {
+    Eigen::Matrix<double, 7, 7, Eigen::RowMajor> c;
+    covariance.GetCovarianceBlock(theta.data(), theta.data(), c.data());
+    std::array<double, 4> c_aux{};
+    covariance.GetCovarianceBlock(aux.data(), aux.data(), c_aux.data());
+    // The chain rule: d p / d theta at the optimum, by the same automatic differentiation.
+    using Jet = ceres::Jet<double, 7>;
+    std::array<Jet, 7> theta_jet;
+    for (int i = 0; i < 7; ++i) theta_jet[i] = Jet(theta[i], i);
+    const model::Parameters<Jet> p = natural_from_theta(theta_jet.data());
+    Eigen::Matrix<double, 7, 7> jac;
+    for (int i = 0; i < 7; ++i) jac.row(i) = p[static_cast<std::size_t>(i)].v.transpose();
+    const Eigen::Matrix<double, 7, 7> natural = jac * c * jac.transpose();
+    const double s2 = result.residual_sigma * result.residual_sigma;
+    for (std::size_t i = 0; i < 7; ++i) {
+      result.std_dev[i] =
+          std::sqrt(std::max(0.0, natural(static_cast<int>(i), static_cast<int>(i))) * s2);
+    }
+    result.input_lag_std_s = std::sqrt(std::max(0.0, c_aux[0]) * s2);
+  } else {
+    result.warnings.push_back(
+        "output error: the covariance could not be computed (rank deficient)");
+    for (double& v : result.std_dev) v = std::numeric_limits<double>::quiet_NaN();
+  }
+  if (!result.converged) {
+    result.warnings.push_back("output error: no convergence: " + result.message);
+  }
+  return result;
+}
+
+FreeRun simulate_free_run(const OeExperiment& e, const model::Parameters<double>& p,
+                          const model::MotorData& motor, double input_lag_s, double q2_offset_rad,
+                          double input_gain, const OutputErrorOptions& options) {
+  check_experiment(e);
+  std::vector<std::string> unused;
+  std::array<double, model::kParameterCount> theta = theta_from_natural(p, unused);
+  std::array<double, 2> aux = {input_lag_s, q2_offset_rad};
+  const std::vector<Segment> segments = cut_segments(e, 0, options.segment_s);
+  std::array<double, 4> x0 = start_state(e, segments.front().t_start_s);
+  {
+    // The first state fitted with the parameters held, so that both parameter sets compared start
+    // from the state that suits them.
+    Segment first = segments.front();
+    first.t_next_s = -1;
+    SegmentCost cost{&e, &motor, first, options.substep_s, {1, 1, 1, 1}};
+    ceres::Problem problem;
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<SegmentCost, ceres::DYNAMIC, 7, 2, 1, 4>(
+            new SegmentCost(cost), cost.residual_count()),
+        nullptr, theta.data(), aux.data(), &input_gain, x0.data());
+    problem.SetParameterBlockConstant(theta.data());
+    problem.SetParameterBlockConstant(aux.data());
+    problem.SetParameterBlockConstant(&input_gain);
+    ceres::Solver::Summary summary;
+    ceres::Solve(solver_options(options.max_iterations, 1), &problem, &summary);
+  }
+  // The whole experiment as one segment from that state, with the input's own model.
+  Segment all{0, 0, e.observations.size(), e.observations.front().t_s, -1};
+  const model::Parameters<double> natural = natural_from_theta(theta.data());
+  State<double> x{x0[0], x0[1], x0[2], x0[3]};
+  double t = all.t_start_s;
+  FreeRun run;
+  std::array<double, 2> sum = {0, 0};
+  std::array<std::size_t, 2> count = {0, 0};
+  for (const OeObservation& o : e.observations) {
+    x = integrate(e, motor, natural, input_lag_s, input_gain, x, t, o.t_s, options.substep_s);
+    t = std::max(t, o.t_s);
+    const double measured = o.joint == 0 ? o.angle_rad : o.angle_rad + q2_offset_rad;
+    const double simulated = o.joint == 0 ? x.q1 : x.q2;
+    run.t_s.push_back(o.t_s);
+    run.joint.push_back(o.joint);
+    run.measured.push_back(measured);
+    run.simulated.push_back(simulated);
+    sum[o.joint] += (simulated - measured) * (simulated - measured);
+    ++count[o.joint];
+  }
+  for (int j = 0; j < 2; ++j) {
+    run.rmse_rad[j] = count[j] ? std::sqrt(sum[j] / static_cast<double>(count[j])) : 0.0;
+  }
+  return run;
+}
+
+}  // namespace furuta::identification
