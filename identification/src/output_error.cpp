@@ -118,8 +118,8 @@ T arm_torque(const OeExperiment& e, const model::MotorData& motor, const T& t, c
   }
   switch (e.input_kind) {
     case InputKind::duty:
-      if (exactly_zero) return braking * duty_arm_torque(motor, T(0.0), dq1);
-      return duty_arm_torque(motor, value * gain * e.supply_scale, dq1);
+      if (exactly_zero) return braking * motor.arm_torque(T(0.0), dq1);
+      return motor.arm_torque(T(value * gain * e.supply_scale), dq1);
     case InputKind::voltage: {
       const VoltageMotor& v = e.voltage_motor;
       return v.gear_ratio * v.efficiency * v.torque_constant_nm_per_a *

@@ -13,12 +13,6 @@ Parameters<double> paper_run1() {
   return {1.04082e-3, 2.56211e-3, 8.21e-4, 1.31781e-3, 7.4175e-2, 8.13e-2, 6.42e-4};
 }
 
-double MotorData::arm_torque_nm(double duty, double dq1_rad_s) const {
-  const double motor_speed_rpm = total_ratio() * dq1_rad_s * kRadPerSToRpm;
-  return total_ratio() * motor_efficiency * gear_efficiency *
-         (duty * no_load_speed_rpm - motor_speed_rpm) / speed_torque_gradient_rpm_per_nm;
-}
-
 double MotorData::motor_current_a(double arm_torque_nm) const {
   // Derived, not from the datasheet: an ideal DC motor reaches omega0 at the nominal voltage when
   // its back-EMF equals that voltage, so k_e = V / omega0 [V s/rad], and in SI units k_t = k_e [N

@@ -251,15 +251,6 @@ TEST_F(OutputErrorSim, AHeldWrongLagShowsInTheResiduals) {
   EXPECT_GT(wrong.oe.residual_sigma, 1.3 * right.oe.residual_sigma);
 }
 
-TEST(OutputError, DutyTorqueIsEquationFour) {
-  const model::MotorData motor;
-  for (double duty : {-0.7, 0.0, 0.3}) {
-    for (double dq1 : {-5.0, 0.0, 2.0}) {
-      EXPECT_NEAR(duty_arm_torque(motor, duty, dq1), motor.arm_torque_nm(duty, dq1), 1e-12);
-    }
-  }
-}
-
 TEST(OutputError, RefusesAnExperimentWithoutAngles) {
   OeExperiment e;
   e.name = "empty";

@@ -128,13 +128,4 @@ FreeRun simulate_free_run(const OeExperiment& experiment, const model::Parameter
                           const model::MotorData& motor, double input_lag_s, double q2_offset_rad,
                           double input_gain = 1.0, const OutputErrorOptions& options = {});
 
-// Eq. 4 (duty) over any scalar, as model::MotorData::arm_torque_nm.
-template <class T>
-T duty_arm_torque(const model::MotorData& m, const T& duty, const T& dq1_rad_s) {
-  constexpr double kRadPerSToRpm = 9.549296585513720;  // 60 / (2 pi)
-  const double k =
-      m.total_ratio() * m.motor_efficiency * m.gear_efficiency / m.speed_torque_gradient_rpm_per_nm;
-  return k * (duty * m.no_load_speed_rpm - m.total_ratio() * kRadPerSToRpm * dq1_rad_s);
-}
-
 }  // namespace furuta::identification

@@ -16,8 +16,16 @@ struct MotorData {
 
   double total_ratio() const { return motor_ratio * gear_ratio; }
   bool operator==(const MotorData&) const = default;
-  // Paper eq. 4: torque at the arm for PWM duty d in [-1, 1] and arm speed dq1 [rad/s].
-  double arm_torque_nm(double duty, double dq1_rad_s) const;
+  // Paper eq. 4: torque at the arm for PWM duty d in [-1, 1] and arm speed dq1 [rad/s], over any
+  // scalar (automatic differentiation passes its Jets through).
+  template <class T>
+  T arm_torque(const T& duty, const T& dq1_rad_s) const {
+    constexpr double kRadPerSToRpm = 9.549296585513720;  // 60 / (2 pi)
+    const T motor_speed_rpm = total_ratio() * kRadPerSToRpm * dq1_rad_s;
+    return total_ratio() * motor_efficiency * gear_efficiency *
+           (duty * no_load_speed_rpm - motor_speed_rpm) / speed_torque_gradient_rpm_per_nm;
+  }
+  double arm_torque_nm(double duty, double dq1_rad_s) const { return arm_torque(duty, dq1_rad_s); }
   // Motor current for a torque at the arm (torque constant from omega0 and the nominal voltage).
   double motor_current_a(double arm_torque_nm) const;
 };
