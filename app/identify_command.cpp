@@ -115,7 +115,8 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
   const auto recordings = [&](const session_log::SessionLog& log, pipeline::Role role) {
     std::vector<pipeline::Recording> out;
     if (options.use_intact_part && !session_log::integrity_problems(log).empty()) {
-      pipeline::IntactParts parts = pipeline::intact_part_recordings(log, role, min_samples);
+      pipeline::IntactParts parts =
+          pipeline::intact_part_recordings(log, role, min_samples, in.rig);
       if (parts.recordings.empty()) {
         err << "furuta identify: " << parts.account << "\n";
         refused = true;

@@ -176,8 +176,8 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
   const auto usable = [&](const Recording& r) { return !logs || r.oe.has_value(); };
   if (!std::all_of(fitted.begin(), fitted.end(), [&](const Recording* r) { return usable(*r); })) {
     warn(
-        "skipped: a fitted log was used as its intact parts, whose raw reports and command "
-        "writes are not cut with them; the refined parameters are not available");
+        "skipped: a fitted log's recording has no output-error experiment (angles at their "
+        "report times, the commands written)");
     return std::nullopt;
   }
   // A recording mistake (a sign, a zero, a unit) makes the model wrong for the data: a fit kept
@@ -233,7 +233,7 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
       warn(std::string("no held-out free run: ") + e.what());
     }
   } else if (batch.held_out) {
-    warn("no held-out free run: the held-out log was used as its intact parts");
+    warn("no held-out free run: the held-out log's recording has no output-error experiment");
   }
   return out;
 }

@@ -63,8 +63,8 @@ struct Recording {
   identification::RawExperiment experiment;
   std::optional<SessionSummary> session;  // session logs only
   // The angles at their own times and the input as the board applied it (session logs, from their
-  // raw reports and command writes); absent for CSVs (run() makes it from `experiment`) and for
-  // the intact parts of a log (the refinement is then skipped with a warning).
+  // raw reports and command writes, an intact part's cut to its time); absent for CSVs (run()
+  // makes it from `experiment`).
   std::optional<identification::OeExperiment> oe;
 };
 // A session log as a recording (its samples resampled, its summary, its OeExperiment read with
@@ -76,13 +76,14 @@ Recording log_recording(const session_log::SessionLog& log, Role role,
 // cut at every gap (session_log::contiguous_sample_runs), each run a recording of its own, so that
 // nothing is filtered or differentiated across a gap. Runs shorter than min_samples (the fit's
 // identification::minimum_samples) are dropped; held out, only the longest run is kept. The first
-// recording carries the session summary and, as a warning, `account`.
+// recording carries the session summary and, as a warning, `account`. Each has its OeExperiment
+// (read with `rig`), with the commands written within its time.
 struct IntactParts {
   std::vector<Recording> recordings;  // empty: no run is long enough
   std::string account;  // what was used and what was dropped, naming the file and the samples
 };
 IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role,
-                                   std::size_t min_samples);
+                                   std::size_t min_samples, const config::RigConfig& rig);
 
 enum class InputKind { session_logs, csv_recordings };
 
