@@ -112,7 +112,9 @@ struct IdentifyCommandOptions {
   std::optional<double> input_lag_ms;
   bool estimate_input_lag = false;  // estimate it even when the configuration gives it
   bool sivia = false;               // guaranteed identification after the LSMI ([sivia])
-  std::optional<int> threads;       // SIVIA threads (default: the configuration's)
+  // Skip the output-error refinement the configuration's [output_error] enables.
+  bool no_output_error = false;
+  std::optional<int> threads;  // SIVIA threads (default: the configuration's)
   // The paper's scenarios after the fit (Table III, Fig. 6), with the LSMI estimate and, with
   // --sivia, SIVIA's hull; measured on the simulated rig (its truth, or the configuration's
   // simulated-rig parameters). Each scenario's duration, if given (else the paper's 4 s).

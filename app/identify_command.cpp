@@ -115,7 +115,8 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
   const auto recordings = [&](const session_log::SessionLog& log, pipeline::Role role) {
     std::vector<pipeline::Recording> out;
     if (options.use_intact_part && !session_log::integrity_problems(log).empty()) {
-      pipeline::IntactParts parts = pipeline::intact_part_recordings(log, role, min_samples);
+      pipeline::IntactParts parts =
+          pipeline::intact_part_recordings(log, role, min_samples, in.rig);
       if (parts.recordings.empty()) {
         err << "furuta identify: " << parts.account << "\n";
         refused = true;
@@ -128,7 +129,7 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
       refused = true;
       return out;
     }
-    out.push_back(pipeline::log_recording(log, role));
+    out.push_back(pipeline::log_recording(log, role, in.rig));
     const std::string too_short = identification::length_problem(out.back().experiment, identify);
     if (!too_short.empty()) {
       err << "furuta identify: " << log.path.string() << ": " << too_short << "\n";
@@ -213,11 +214,11 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
     return identification::experiment_from_csv(identification::import_csv(path, spec),
                                                path.filename().string());
   };
-  for (const auto& path : options.csvs) in.fit.push_back({load(path), std::nullopt});
+  for (const auto& path : options.csvs) in.fit.push_back({load(path), std::nullopt, std::nullopt});
   if (!excited(in.fit, spec, options, err)) return std::nullopt;
   in.files = options.csvs;
   if (!options.validate.empty()) {
-    in.held_out = pipeline::Recording{load(options.validate), std::nullopt};
+    in.held_out = pipeline::Recording{load(options.validate), std::nullopt, std::nullopt};
     in.files.push_back(options.validate);
   }
   in.files.push_back(options.import_spec);
@@ -244,14 +245,19 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   return in;
 }
 
-// Table I the moment LSMI is done (SIVIA and the scenarios can take minutes), then the terminal's
-// progress lines, if any.
+// Table I the moment the fit is done (SIVIA and the scenarios can take minutes), then the
+// terminal's progress lines, if any.
 class IdentifyProgress : public pipeline::Progress {
  public:
   IdentifyProgress(std::ostream* table_one, pipeline::Progress* terminal)
       : table_one_(table_one), terminal_(terminal) {}
-  void lsmi_done(const identification::Identification& id) override {
-    if (table_one_ != nullptr) *table_one_ << report::format_table_one(id) << std::flush;
+  void output_error_started(std::size_t experiments) override {
+    if (terminal_ != nullptr) terminal_->output_error_started(experiments);
+  }
+  void fit_done(const identification::Identification& id,
+                const identification::OutputErrorResult* refined) override {
+    if (terminal_ != nullptr) terminal_->fit_done(id, refined);
+    if (table_one_ != nullptr) *table_one_ << report::format_table_one(id, refined) << std::flush;
   }
   void sivia(std::size_t tested, std::size_t pending) override {
     if (terminal_ != nullptr) terminal_->sivia(tested, pending);
@@ -290,6 +296,7 @@ pipeline::Settings identify_settings(const config::RigConfig& rig,
                                      const IdentifyCommandOptions& options) {
   pipeline::Settings settings = pipeline::settings_for(rig);
   settings.identify = identify_options_for(rig, options);
+  if (options.no_output_error) settings.output_error.run = false;
   settings.sivia.run = options.sivia;
   settings.sivia.threads = options.threads.value_or(rig.sivia.threads);
   settings.simulation.run = options.simulate;

@@ -148,6 +148,8 @@ int main(int argc, char** argv) {
       ->add_flag("--estimate-input-lag", identify.estimate_input_lag,
                  "Estimate the lag from the data (to calibrate the configuration's)")
       ->excludes(lag_option);
+  identify_cmd->add_flag("--no-output-error", identify.no_output_error,
+                         "Skip the output-error refinement after the LSMI ([output_error])");
   identify_cmd->add_flag("--sivia", identify.sivia,
                          "Guaranteed identification by SIVIA after the LSMI ([sivia] settings)");
   identify_cmd->add_option("--threads", identify.threads, "SIVIA threads (0: all cores)")

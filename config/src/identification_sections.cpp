@@ -1,4 +1,5 @@
-// rig.toml's sections for identification: [identification], [sivia], [automation].
+// rig.toml's sections for identification: [identification], [output_error], [sivia],
+// [automation].
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -38,6 +39,24 @@ IdentificationConfig read_identification(Section s, const DaemonConfig& daemon) 
       "in [0, 100] (the angles cannot lead the input)");
   s.reject_unknown_keys();
   return ic;
+}
+
+OutputErrorConfig read_output_error(Section s) {
+  OutputErrorConfig oc;
+  oc.enabled = s.boolean("enabled", oc.enabled);
+  // A segment needs several pendulum swings' worth of angles against its 4 initial states, and
+  // beyond a few seconds the upright region's divergence makes the fit lose phase.
+  oc.segment_s = s.number(
+      "segment_s", oc.segment_s, [](double v) { return v >= 0.05 && v <= 10; }, "in [0.05, 10]");
+  oc.substep_s = s.number(
+      "substep_s", oc.substep_s, [](double v) { return v > 0 && v <= 0.01; },
+      "in (0, 0.01] (the arm's time constant is 4.4 ms)");
+  oc.estimate_lag = s.boolean("estimate_lag", oc.estimate_lag);
+  oc.max_iterations = static_cast<int>(s.integer(
+      "max_iterations", oc.max_iterations, [](std::int64_t v) { return v >= 1 && v <= 1000; },
+      "in [1, 1000]"));
+  s.reject_unknown_keys();
+  return oc;
 }
 
 SiviaConfig read_sivia(Section s) {

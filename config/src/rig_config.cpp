@@ -172,6 +172,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   c.limits = detail::read_limits(top.child("limits"), c.safety);
   c.excitation = detail::read_excitation(top.child("excitation"), c.limits);
   c.identification = detail::read_identification(top.child("identification"), c.daemon);
+  c.output_error = detail::read_output_error(top.child("output_error"));
   c.sivia = detail::read_sivia(top.child("sivia"));
   c.automation = detail::read_automation(top.child("automation"));
   Section nominal = top.child("nominal");

@@ -37,6 +37,7 @@ ExcitationConfig read_excitation(Section s, const CommandLimitsConfig& limits);
 
 // identification_sections.cpp
 IdentificationConfig read_identification(Section s, const DaemonConfig& daemon);
+OutputErrorConfig read_output_error(Section s);
 SiviaConfig read_sivia(Section s);
 AutomationConfig read_automation(Section s);
 

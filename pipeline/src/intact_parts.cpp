@@ -15,7 +15,9 @@ std::string seq_range(const session_log::SessionLog& log, const session_log::Sam
 }
 
 // The run's samples as a log of their own: experiment_from_log then resamples and names it without
-// seeing anything on the other side of a gap.
+// seeing anything on the other side of a gap. The USB reports (the commands written, for the
+// output-error input) are those within the run's time: the input before the run's first command
+// is then its first sample's echoed duty, held, as for any log.
 session_log::SessionLog run_log(const session_log::SessionLog& log,
                                 const session_log::SampleRun& run) {
   session_log::SessionLog part;
@@ -24,13 +26,18 @@ session_log::SessionLog run_log(const session_log::SessionLog& log,
   part.end = log.end;
   part.samples.assign(log.samples.begin() + static_cast<std::ptrdiff_t>(run.begin),
                       log.samples.begin() + static_cast<std::ptrdiff_t>(run.end));
+  const std::int64_t from_ns = part.samples.front().monotonic_ns;
+  const std::int64_t to_ns = part.samples.back().monotonic_ns;
+  for (const auto& r : log.usb_reports) {
+    if (r.time_ns >= from_ns && r.time_ns <= to_ns) part.usb_reports.push_back(r);
+  }
   return part;
 }
 
 }  // namespace
 
 IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role,
-                                   std::size_t min_samples) {
+                                   std::size_t min_samples, const config::RigConfig& rig) {
   const std::vector<session_log::SampleRun> runs = session_log::contiguous_sample_runs(log);
   std::vector<session_log::SampleRun> kept, too_short, not_chosen;
   for (const auto& run : runs) (run.size() >= min_samples ? kept : too_short).push_back(run);
@@ -80,10 +87,13 @@ IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role
   parts.account = account.str();
   const std::string role_name = role == Role::fit ? "fit" : "held out";
   for (std::size_t i = 0; i < kept.size(); ++i) {
-    identification::RawExperiment e = identification::experiment_from_log(run_log(log, kept[i]));
+    const session_log::SessionLog part = run_log(log, kept[i]);
+    identification::RawExperiment e = identification::experiment_from_log(part);
+    identification::OeExperiment oe = identification::oe_experiment_from_log(part, rig);
     // Named by its samples whenever the log was cut: Table I's columns and the held-out fit say
     // which part they are.
     if (runs.size() > 1) e.name += " (" + seq_range(log, kept[i]) + ")";
+    oe.name = e.name;
     // The session's own warnings (lost reports, overruns) once, with the account.
     if (i == 0) {
       e.warnings.push_back(parts.account);
@@ -92,7 +102,7 @@ IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role
     }
     std::optional<SessionSummary> summary;
     if (i == 0) summary = summarize_session(log, role_name);
-    parts.recordings.push_back({std::move(e), std::move(summary)});
+    parts.recordings.push_back({std::move(e), std::move(summary), std::move(oe)});
   }
   return parts;
 }

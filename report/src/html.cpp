@@ -175,6 +175,7 @@ void table_one(Html& h, const ReportInput& in) {
   std::vector<std::string> header = {"parameter", "unit"};
   for (const auto& head : heads.heads) header.push_back(head);
   header.push_back("all experiments");
+  if (in.output_error) header.push_back("output error");
   if (in.nominal) header.push_back("CAD");
   if (in.truth) header.push_back("truth");
   std::vector<std::vector<std::string>> rows;
@@ -186,11 +187,18 @@ void table_one(Html& h, const ReportInput& in) {
     };
     for (const auto& r : in.per_experiment) row.push_back(cell(r));
     row.push_back(cell(in.combined));
+    if (in.output_error) {
+      row.push_back(plus_minus(dash_sci(in.output_error->estimate[i], 4),
+                               dash_sci(in.output_error->std_dev[i], 1)));
+    }
     if (in.nominal) row.push_back((*in.nominal)[i] != 0 ? dash_sci((*in.nominal)[i], 4) : "-");
     if (in.truth) row.push_back(dash_sci((*in.truth)[i], 4));
     rows.push_back(std::move(row));
   }
-  h.table("table-1", "Table I: LSMI estimates \u00b1 one standard deviation", header, rows);
+  h.table("table-1",
+          in.output_error ? "Table I: LSMI and output-error estimates \u00b1 one standard deviation"
+                          : "Table I: LSMI estimates \u00b1 one standard deviation",
+          header, rows);
   if (heads.legend) {
     h.raw("<ul class=\"keys\" id=\"table-1-keys\">\n");
     for (std::size_t i = 0; i < in.experiment_names.size(); ++i) {
@@ -227,6 +235,19 @@ void section_lsmi(Html& h, const ReportInput& in) {
       "(W\u1d40W)\u207b\u00b9). "
       "The standard deviations measure noise, not bias.");
   table_one(h, in);
+  if (in.output_error) {
+    const OutputErrorSummary& oe = *in.output_error;
+    h.paragraph(
+        "Output error: the model simulated with the input as the board applied it and fitted to "
+        "the measured angles (multiple shooting, " +
+        std::to_string(oe.segments) + " segments, " + std::to_string(oe.iterations) +
+        " iterations, " + (oe.converged ? "converged" : "not converged") +
+        "), from the LSMI estimate and inside the physical region; angle residual RMS q1 " +
+        dash_sci(oe.angle_rms_rad[0], 2) + " rad, q2 " + dash_sci(oe.angle_rms_rad[1], 2) +
+        " rad; data path lag " + dash_fixed(oe.input_lag_s * 1e3, 3) +
+        " ms. Its standard deviations are local (from the Jacobian at the optimum) and assume "
+        "independent angle errors.");
+  }
   std::vector<std::vector<std::string>> diagnostics;
   for (std::size_t e = 0; e < in.per_experiment.size() && e < in.experiment_names.size(); ++e) {
     diagnostics.push_back(diagnostic(in.experiment_names[e], in.per_experiment[e]));
@@ -286,6 +307,19 @@ void section_validation(Html& h, const ReportInput& in) {
         "No held-out session was given (furuta identify --validate LOG): no torque "
         "validation.",
         "absent");
+  }
+  if (in.output_error && !in.output_error->svg.empty()) {
+    const OutputErrorSummary& oe = *in.output_error;
+    const auto rmse = [](const std::array<double, 2>& r) {
+      return "q1 " + dash_sci(r[0], 3) + " rad, q2 " + dash_sci(r[1], 3) + " rad";
+    };
+    h.figure("fig-free-run", oe.svg,
+             "The held-out " + oe.held_out_name +
+                 ": measured angles (black) against free runs of the model from the same input "
+                 "with the LSMI (red) and the output-error (blue) parameters, over time t [s]. "
+                 "Angle RMSE with LSMI: " +
+                 rmse(oe.lsmi_rmse_rad) + "; with output error: " + rmse(oe.refined_rmse_rad) +
+                 ".");
   }
   h.raw("</section>\n");
 }

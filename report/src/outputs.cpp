@@ -63,7 +63,8 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
   const identification::Identification& id = run.identification;
   const Json results = results_json(run, software_version);
   write_text_file(dir / "results.json", json_text(results));
-  write_text_file(dir / "table.txt", format_table_one(id));
+  write_text_file(dir / "table.txt",
+                  format_table_one(id, run.output_error ? &run.output_error->result : nullptr));
   std::string paving_svg;
   if (run.sivia) {
     std::vector<double> reference;
@@ -89,6 +90,10 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
   }
   if (id.validation) {
     write_text_file(dir / "torque_validation.svg", svg_torque_validation(*id.validation));
+  }
+  if (run.output_error && run.output_error->held_out) {
+    const pipeline::HeldOutFreeRuns& h = *run.output_error->held_out;
+    write_text_file(dir / "free_run.svg", svg_free_runs(h.name, h.lsmi, h.refined));
   }
   write_text_file(dir / "report.html",
                   render_html(report_page(run, software_version, signals, paving_svg)));

@@ -54,10 +54,12 @@ ReportInput report_input(const identification::Identification& id) {
   for (const auto& w : id.combined.warnings) excitation.insert("all experiments: " + w);
   for (const auto& w : id.warnings) {
     const bool physical = w.starts_with(identification::kPhysicalWarningPrefix);
+    const bool output_error = w.starts_with("output error: ");
     r.warnings.push_back({physical                 ? "physical"
+                          : output_error           ? "output error"
                           : excitation.contains(w) ? "excitation"
                                                    : "session",
-                          w});
+                          output_error ? w.substr(14) : w});
   }
   return r;
 }
@@ -73,6 +75,25 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
     s << v << " " << unit;
     return s.str();
   };
+  if (run.output_error) {
+    const identification::OutputErrorResult& r = run.output_error->result;
+    OutputErrorSummary oe;
+    oe.estimate = r.estimate;
+    oe.std_dev = r.std_dev;
+    oe.input_lag_s = r.input_lag_s;
+    oe.angle_rms_rad = r.angle_rms_rad;
+    oe.segments = r.segments;
+    oe.iterations = r.iterations;
+    oe.converged = r.converged;
+    if (run.output_error->held_out) {
+      const pipeline::HeldOutFreeRuns& h = *run.output_error->held_out;
+      oe.held_out_name = h.name;
+      oe.lsmi_rmse_rad = h.lsmi.rmse_rad;
+      oe.refined_rmse_rad = h.refined.rmse_rad;
+      oe.svg = svg_free_runs(h.name, h.lsmi, h.refined);
+    }
+    page.output_error = std::move(oe);
+  }
   const bool csv = run.kind == pipeline::InputKind::csv_recordings;
   if (!id.raw.empty()) page.torque_source = torque_source(id.raw.front().input_kind, csv);
   // Where the configuration came from, not only its name (every shipped one is "furuta").

@@ -190,8 +190,41 @@ Json simulation_json(const pipeline::Simulation& s) {
               {"results", scenarios_json(s.results)}};
 }
 
+Json output_error_json(const pipeline::OutputError& oe) {
+  const identification::OutputErrorResult& r = oe.result;
+  const auto joints = [](const std::array<double, 2>& v) {
+    return Json{{"q1", v[0]}, {"q2", v[1]}};
+  };
+  Json j{{"estimate", parameters_json(r.estimate)},
+         {"std_dev", parameters_json(r.std_dev)},
+         {"std_dev_basis",
+          "local: sqrt(diag((J^T J)^-1)) of the angle residuals at the optimum, scaled by their "
+          "estimated sigma; assumes independent angle errors"},
+         {"input_lag_s", r.input_lag_s},
+         {"input_lag_std_s", r.input_lag_std_s},
+         {"q2_offset_rad", r.q2_offset_rad},
+         {"input_gain", r.input_gain},
+         {"angle_rms_rad", joints(r.angle_rms_rad)},
+         {"continuity_rms", r.continuity_rms},
+         {"residual_sigma", r.residual_sigma},
+         {"segments", r.segments},
+         {"observations", r.observations},
+         {"iterations", r.iterations},
+         {"converged", r.converged},
+         {"message", r.message},
+         {"physical", oe.physical.consistent()},
+         {"warnings", r.warnings}};
+  if (oe.held_out) {
+    j["held_out_free_run"] = Json{{"name", oe.held_out->name},
+                                  {"lsmi_rmse_rad", joints(oe.held_out->lsmi.rmse_rad)},
+                                  {"refined_rmse_rad", joints(oe.held_out->refined.rmse_rad)}};
+  }
+  return j;
+}
+
 Json results_json(const pipeline::Run& run, const std::string& software_version) {
   Json more = Json::object();
+  if (run.output_error) more["output_error"] = output_error_json(*run.output_error);
   if (run.sivia) {
     more["sivia"] = sivia_json(run.sivia->result, run.sivia->samples);
     more["sivia"]["paving_file"] = "paving.json";

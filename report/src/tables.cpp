@@ -26,7 +26,8 @@ std::string scenario_description(const validated::Scenario& s) {
          " deg, 0], u = " + short_number(s.torque_nm) + " N m";
 }
 
-std::string format_table_one(const identification::Identification& id) {
+std::string format_table_one(const identification::Identification& id,
+                             const identification::OutputErrorResult* refined) {
   std::ostringstream out;
   const int w = 26;
   std::vector<std::string> names;
@@ -40,6 +41,7 @@ std::string format_table_one(const identification::Identification& id) {
   out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
   for (const std::string& head : heads.heads) out << std::setw(w) << head;
   out << std::setw(w) << "all experiments";
+  if (refined != nullptr) out << std::setw(w) << "output error";
   if (id.nominal) out << std::setw(13) << "CAD";
   if (id.truth) out << std::setw(13) << "truth";
   out << "\n";
@@ -51,6 +53,9 @@ std::string format_table_one(const identification::Identification& id) {
     };
     for (const identification::LsmiResult& r : id.per_experiment) out << std::setw(w) << cell(r);
     out << std::setw(w) << cell(id.combined);
+    if (refined != nullptr) {
+      out << std::setw(w) << (sci(refined->estimate[k], 4) + " +-" + sci(refined->std_dev[k], 1));
+    }
     if (id.nominal)
       out << std::setw(13) << ((*id.nominal)[k] != 0 ? sci((*id.nominal)[k], 4) : "-");
     if (id.truth) out << std::setw(13) << sci((*id.truth)[k], 4);
@@ -66,6 +71,13 @@ std::string format_table_one(const identification::Identification& id) {
   out << std::setw(w) << sci(id.combined.sigma, 2) << "\n";
   out << "input lag (torque formed from the input this much earlier): " << std::fixed
       << std::setprecision(3) << id.input_lag_s * 1e3 << " ms\n";
+  if (refined != nullptr) {
+    out << "output error: " << refined->segments << " segments, " << refined->iterations
+        << " iterations, " << (refined->converged ? "converged" : "NOT converged")
+        << "; angle residual RMS q1 " << sci(refined->angle_rms_rad[0], 2) << " rad, q2 "
+        << sci(refined->angle_rms_rad[1], 2) << " rad; lag " << std::fixed << std::setprecision(3)
+        << refined->input_lag_s * 1e3 << " ms (its sd: local, from the Jacobian)\n";
+  }
   if (id.validation) {
     out << "\nheld-out torque on " << id.validation->name << ": RMSE "
         << sci(id.validation->fit.rmse_nm, 3) << " N m = " << std::fixed << std::setprecision(2)
@@ -160,11 +172,25 @@ std::string measurement_source_text(const pipeline::MeasurementSource& source) {
 }
 
 std::string terminal_text(const pipeline::Run& run) {
-  return format_table_one(run.identification) + terminal_text_after_lsmi(run);
+  return format_table_one(run.identification,
+                          run.output_error ? &run.output_error->result : nullptr) +
+         terminal_text_after_lsmi(run);
+}
+
+std::string held_out_free_run_text(const pipeline::HeldOutFreeRuns& runs) {
+  std::ostringstream out;
+  out << "\nheld-out free run on " << runs.name << " (angle RMSE, q1 / q2): LSMI "
+      << sci(runs.lsmi.rmse_rad[0], 3) << " / " << sci(runs.lsmi.rmse_rad[1], 3)
+      << " rad, output error " << sci(runs.refined.rmse_rad[0], 3) << " / "
+      << sci(runs.refined.rmse_rad[1], 3) << " rad\n";
+  return out.str();
 }
 
 std::string terminal_text_after_lsmi(const pipeline::Run& run) {
   std::string text;
+  if (run.output_error && run.output_error->held_out) {
+    text += held_out_free_run_text(*run.output_error->held_out);
+  }
   if (run.sivia) text += sivia_summary_text(run.sivia->result, run.identification.truth);
   if (run.simulation) {
     text += simulation_summary_text(measurement_source_text(run.simulation->source),

@@ -146,6 +146,7 @@ TEST(CliArguments, HelpDescribesPositionalsShowsDefaultsAndTheExitRule) {
       {"log export-csv", "LOG TEXT:FILE REQUIRED      A session log"},
       {"replay", "LOG TEXT:FILE REQUIRED      A session log"},
       {"identify", "Session logs (.lcmlog) to fit"},
+      {"identify", "--no-output-error           Skip the output-error refinement"},
       {"process-logs", "DIR TEXT                    Logs directory"},
   };
   for (const auto& [command, text] : positionals) {

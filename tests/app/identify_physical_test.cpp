@@ -146,6 +146,13 @@ class IdentifyPhysical : public ::testing::Test {
       in_warnings = in_warnings || w.get<std::string>().starts_with("not physical: ");
     }
     EXPECT_TRUE(in_warnings) << o.results["warnings"].dump();
+    // No refinement of a recording the model cannot describe: skipped, saying why.
+    EXPECT_FALSE(o.results.contains("output_error"));
+    EXPECT_NE(
+        o.out.find("output error: skipped: the LSMI estimate points to a recording mistake (" +
+                   cause + ")"),
+        std::string::npos)
+        << o.out;
     const auto banner = o.html.find("<section id=\"physical\"");
     EXPECT_NE(banner, std::string::npos);
     EXPECT_LT(banner, o.html.find("<nav>"));
@@ -161,6 +168,8 @@ TEST_F(IdentifyPhysical, ACorrectRecordingGivesNoWarning) {
   EXPECT_EQ(o.out.find("not physical"), std::string::npos) << o.out;
   EXPECT_FALSE(o.results.contains("physical"));
   EXPECT_EQ(o.html.find("id=\"physical\""), std::string::npos);
+  ASSERT_TRUE(o.results.contains("output_error")) << o.out;
+  EXPECT_TRUE(o.results["output_error"]["physical"].get<bool>());
 }
 
 TEST_F(IdentifyPhysical, PendulumSignFlipped) {

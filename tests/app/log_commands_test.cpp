@@ -213,6 +213,17 @@ TEST_F(LogCommands, WithUseIntactPartADamagedLogFitsLikeTheIntactOne) {
     EXPECT_NEAR(b / a, 1.0, 0.03) << model::kParameterNames[k];
   }
   EXPECT_LT(parts->identification.combined.sigma, 1.5 * intact->identification.combined.sigma);
+  // The output error on the parts, each with the commands written within its time.
+  ASSERT_TRUE(intact->output_error.has_value());
+  ASSERT_TRUE(parts->output_error.has_value());
+  EXPECT_TRUE(parts->output_error->result.converged) << parts->output_error->result.message;
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const double a = intact->output_error->result.estimate[k];
+    const double b = parts->output_error->result.estimate[k];
+    std::printf("[ measured ] output error %s intact %.4e, intact parts %.4e (%+.3f %%)\n",
+                std::string(model::kParameterNames[k]).c_str(), a, b, 100 * (b / a - 1));
+    EXPECT_NEAR(b / a, 1.0, k == 6 ? 0.05 : 0.01) << model::kParameterNames[k];
+  }
   std::string warnings;
   for (const auto& w : parts->warnings) warnings += w.text + "\n";
   EXPECT_TRUE(contains(warnings, damaged.filename().string() + ": not intact (damaged: "))

@@ -325,14 +325,31 @@ TEST(IdentifyCommand, SimulateAddsTheScenariosToTheResults) {
   EXPECT_NE(out.str().find("Table III"), std::string::npos);
   const nlohmann::json j = nlohmann::json::parse(read(options.output_dir / "results.json"));
   const nlohmann::json& rows = j.at("simulation").at("results");
-  ASSERT_EQ(rows.size(), 4u);  // four scenarios, LSMI only (no --sivia)
-  for (const nlohmann::json& row : rows) EXPECT_EQ(row.at("parameter_set"), "LSMI");
+  // Four scenarios, with LSMI and the output-error refinement (on by default; no --sivia).
+  ASSERT_EQ(rows.size(), 8u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(rows[i].at("parameter_set"), i % 2 == 0 ? "LSMI" : "output error");
+  }
   EXPECT_DOUBLE_EQ(rows[0].at("parameters").at("mu1")[0].get<double>(),
                    j.at("combined").at("estimate").at("mu1").get<double>());
+  EXPECT_DOUBLE_EQ(rows[1].at("parameters").at("mu1")[0].get<double>(),
+                   j.at("output_error").at("estimate").at("mu1").get<double>());
   EXPECT_TRUE(fs::exists(options.output_dir / "table3.txt"));
   for (int n = 1; n <= 4; ++n) {
     EXPECT_TRUE(fs::exists(options.output_dir / ("scenario_" + std::to_string(n) + "_lsmi.svg")));
   }
+
+  // --no-output-error: LSMI alone, no section, no column, no scenario rows for it.
+  options.no_output_error = true;
+  options.output_dir = dir.path() / "identification-lsmi-only";
+  std::ostringstream lsmi_out, lsmi_err;
+  ASSERT_EQ(run_identify_command(options, lsmi_out, lsmi_err), 0) << lsmi_err.str();
+  const nlohmann::json lsmi_only = nlohmann::json::parse(read(options.output_dir / "results.json"));
+  EXPECT_FALSE(lsmi_only.contains("output_error"));
+  EXPECT_EQ(lsmi_only.at("simulation").at("results").size(), 4u);
+  EXPECT_EQ(lsmi_out.str().find("output error"), std::string::npos) << lsmi_out.str();
+  EXPECT_EQ(lsmi_only.at("combined").at("estimate"), j.at("combined").at("estimate"))
+      << "LSMI does not depend on the refinement";
 }
 
 }  // namespace

@@ -413,7 +413,15 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
       nlohmann::json::parse(read_text(options.output_dir / "results.json"));
   const bool sivia_found_a_set = !results["sivia"].value("empty", false);
   const std::size_t scenario_rows = results["simulation"]["results"].size();
-  EXPECT_EQ(scenario_rows, sivia_found_a_set ? 8u : 4u);
+  EXPECT_EQ(scenario_rows, sivia_found_a_set ? 12u : 8u) << "SIVIA, LSMI, output error";
+  ASSERT_TRUE(results.contains("output_error"));
+  for (const char* key : {"estimate", "std_dev", "input_lag_s", "angle_rms_rad", "segments",
+                          "iterations", "converged", "message", "held_out_free_run"}) {
+    EXPECT_TRUE(results["output_error"].contains(key)) << key;
+  }
+  EXPECT_EQ(results["output_error"]["estimate"].size(), 7u);
+  EXPECT_NE(printed.find("output error"), std::string::npos) << printed;
+  EXPECT_NE(printed.find("held-out free run on"), std::string::npos) << printed;
 
   // A copy with the measuring script: the report itself carries no script.
   const fs::path checked = dir.path() / "checked.html";
@@ -437,7 +445,7 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
 
   // Every figure drawn, with geometry.
   std::size_t signals = 0, fig6 = 0;
-  bool fig4 = false, fig5 = false;
+  bool fig4 = false, fig5 = false, free_run = false;
   for (const auto& f : check["figures"]) {
     const std::string id = f["id"];
     EXPECT_TRUE(f["svg"].get<bool>()) << id;
@@ -450,14 +458,15 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
     if (id.rfind("fig-6-", 0) == 0) ++fig6;
     fig4 = fig4 || id == "fig-4";
     fig5 = fig5 || id == "fig-5";
+    free_run = free_run || id == "fig-free-run";
   }
   EXPECT_EQ(signals, 2u);
   // Every time series has a labelled time axis and value axes with ticks beyond min and max; the
   // paving's axes have ticks too.
   for (const auto& f : check["figures"]) {
     const std::string id = f["id"];
-    const bool time_series =
-        id.rfind("fig-signals-", 0) == 0 || id == "fig-5" || id.rfind("fig-6-", 0) == 0;
+    const bool time_series = id.rfind("fig-signals-", 0) == 0 || id == "fig-5" ||
+                             id == "fig-free-run" || id.rfind("fig-6-", 0) == 0;
     std::size_t time_axes = 0, value_axes = 0;
     for (const auto& a : f["axes"]) {
       EXPECT_GE(a["ticks"].get<int>(), 3) << id << ": " << a.dump();
@@ -471,6 +480,9 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
     }
     if (id.rfind("fig-signals-", 0) == 0) {
       EXPECT_EQ(value_axes, 7u) << id << ": q1, q2, dq1, dq2, ddq1, ddq2, tau on their own axes";
+    }
+    if (id == "fig-free-run") {
+      EXPECT_EQ(value_axes, 2u) << id << ": q1 and q2 on their own axes";
     }
     if (id == "fig-4") {
       EXPECT_EQ(f["axes"].size(), 2u);
@@ -486,6 +498,7 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
   }
   EXPECT_TRUE(fig4);
   EXPECT_TRUE(fig5);
+  EXPECT_TRUE(free_run);
   EXPECT_EQ(fig6, scenario_rows);
 
   // Tables with the right rows.
@@ -494,8 +507,8 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
     tables[t["id"].get<std::string>()] = {t["rows"].get<int>(), t["columns"].get<int>()};
   }
   EXPECT_EQ(tables["table-1"].first, 7) << "one row per parameter";
-  // parameter, unit, 2 experiments, all, CAD, truth
-  EXPECT_EQ(tables["table-1"].second, 7);
+  // parameter, unit, 2 experiments, all, output error, CAD, truth
+  EXPECT_EQ(tables["table-1"].second, 8);
   EXPECT_EQ(tables["table-2"].first, 7);
   EXPECT_EQ(tables["table-3"].first, static_cast<int>(scenario_rows));
   EXPECT_EQ(tables["sessions"].first, 3) << "two fitted, one held out";

@@ -76,6 +76,15 @@ struct IdentificationConfig {
   std::optional<double> input_lag_ms;
 };
 
+// [output_error]: the output-error refinement after LSMI (identification::refine_output_error).
+struct OutputErrorConfig {
+  bool enabled = true;
+  double segment_s = 0.5;    // multiple shooting's segment length
+  double substep_s = 1e-3;   // the RK4 substeps' longest
+  bool estimate_lag = true;  // the data path's lag as a parameter (else held at the core's 1 ms)
+  int max_iterations = 50;
+};
+
 // [sivia] inner_test: how SIVIA proves a box inside the feasible set (identification::InnerTest),
 // spelled in rig.toml as the value's name.
 enum class SiviaInnerTest : std::uint8_t { witness, intermediate_value, for_all_data, none };
@@ -153,6 +162,7 @@ struct RigConfig {
   CommandLimitsConfig limits;
   ExcitationConfig excitation;
   IdentificationConfig identification;
+  OutputErrorConfig output_error;
   SiviaConfig sivia;
   AutomationConfig automation;
   std::string source_text;  // the file verbatim, so logs can carry it

@@ -1,10 +1,11 @@
 #pragma once
 // The identification as one call: preprocessing and LSMI over the fitted recordings, the check on
-// the held-out one, SIVIA, the paper's scenarios as guaranteed tubes. Numbers in, numbers out: no
-// text, JSON, SVG or HTML is made here; report/ writes every output from a Run.
+// the held-out one, the output-error refinement, SIVIA, the paper's scenarios as guaranteed tubes.
+// Numbers in, numbers out: no text, JSON, SVG or HTML is made here; report/ writes every output
+// from a Run.
 //
 //   pipeline::Batch batch;                                  // the recordings, loaded
-//   batch.fit.push_back(pipeline::log_recording(log, pipeline::Role::fit));
+//   batch.fit.push_back(pipeline::log_recording(log, pipeline::Role::fit, rig));
 //   batch.rig = rig;
 //   pipeline::Settings settings = pipeline::settings_for(rig);
 //   settings.sivia.run = true;
@@ -21,6 +22,7 @@
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/identification/output_error.hpp"
 #include "furuta/identification/physical.hpp"
 #include "furuta/interval/box.hpp"
 #include "furuta/model/model.hpp"
@@ -60,21 +62,28 @@ SessionSummary summarize_session(const session_log::SessionLog& log, std::string
 struct Recording {
   identification::RawExperiment experiment;
   std::optional<SessionSummary> session;  // session logs only
+  // The angles at their own times and the input as the board applied it (session logs, from their
+  // raw reports and command writes, an intact part's cut to its time); absent for CSVs (run()
+  // makes it from `experiment`).
+  std::optional<identification::OeExperiment> oe;
 };
-// A session log as a recording (its samples resampled, its summary).
-Recording log_recording(const session_log::SessionLog& log, Role role);
+// A session log as a recording (its samples resampled, its summary, its OeExperiment read with
+// `rig`'s encoders and motor).
+Recording log_recording(const session_log::SessionLog& log, Role role,
+                        const config::RigConfig& rig);
 
 // A log that is not intact (session_log::integrity_problems), used as far as it is: its samples
 // cut at every gap (session_log::contiguous_sample_runs), each run a recording of its own, so that
 // nothing is filtered or differentiated across a gap. Runs shorter than min_samples (the fit's
 // identification::minimum_samples) are dropped; held out, only the longest run is kept. The first
-// recording carries the session summary and, as a warning, `account`.
+// recording carries the session summary and, as a warning, `account`. Each has its OeExperiment
+// (read with `rig`), with the commands written within its time.
 struct IntactParts {
   std::vector<Recording> recordings;  // empty: no run is long enough
   std::string account;  // what was used and what was dropped, naming the file and the samples
 };
 IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role,
-                                   std::size_t min_samples);
+                                   std::size_t min_samples, const config::RigConfig& rig);
 
 enum class InputKind { session_logs, csv_recordings };
 
@@ -107,14 +116,20 @@ struct SimulationSettings {
   std::size_t pieces = 1;  // tubes per run (validated::scenario_split_options)
 };
 
+struct OutputErrorSettings {
+  bool run = false;
+  identification::OutputErrorOptions options;
+};
+
 struct Settings {
   identification::IdentifyOptions identify;  // preprocessing, LSMI, the input lag
+  OutputErrorSettings output_error;
   SiviaSettings sivia;
   SimulationSettings simulation;
 };
 
-// The configuration's settings: [identification] as IdentifyOptions, [sivia]; SIVIA and the
-// scenarios off.
+// The configuration's settings: [identification] as IdentifyOptions, [output_error] (run as
+// its `enabled` says), [sivia]; SIVIA and the scenarios off.
 Settings settings_for(const config::RigConfig& rig);
 // [sivia]'s bounds on the preprocessed data (SIVIA's data boxes, the figures' bands), and
 // whether the configuration gives any (a configuration without them leaves them all 0).
@@ -128,6 +143,11 @@ class Progress {
   // LSMI is done (Table I is ready; SIVIA and the scenarios may take minutes yet). `id` has the
   // CAD values and the truth filled in, as Run::identification will.
   virtual void lsmi_done(const identification::Identification& /*id*/) {}
+  virtual void output_error_started(std::size_t /*experiments*/) {}
+  // The fit is done (Table I with its output-error column is ready): after the refinement, or
+  // right after LSMI when it does not run; `refined` is null then.
+  virtual void fit_done(const identification::Identification& /*id*/,
+                        const identification::OutputErrorResult* /*refined*/) {}
   virtual void sivia(std::size_t /*tested*/, std::size_t /*pending*/) {}  // per generation
   virtual void sivia_done() {}
   virtual void scenario(const validated::Scenario& /*scenario*/,
@@ -179,11 +199,31 @@ struct Simulation {
   std::vector<TubeSet> tubes;                      // tubes[i] is results[i]'s
 };
 
+// The held-out recording run free (no re-shooting) with the LSMI and with the refined parameters,
+// both with the refinement's lag and pendulum zero offset (properties of the data path, not of
+// the parameters) and an input gain of 1.
+struct HeldOutFreeRuns {
+  std::string name;
+  identification::FreeRun lsmi, refined;
+};
+
+// Its parameter set's name in the scenarios (Table III) and Table I.
+inline constexpr const char* kOutputErrorSetName = "output error";
+
+// The output-error refinement, started from the combined LSMI estimate.
+struct OutputError {
+  identification::OutputErrorResult result;
+  // Inside the region by its parametrisation: a violation here is a bug (a Stage::physical
+  // warning says so).
+  identification::PhysicalCheck physical;
+  std::optional<HeldOutFreeRuns> held_out;
+};
+
 // Something that happened that a reader should know of, beyond the numbers.
 struct Warning {
   // physical: the LSMI estimate is outside the physical region (docs/model.md), or its
   // magnitudes are no rig's; the text names the likely recording mistake.
-  enum class Stage { data, lsmi, physical, sivia, simulation };
+  enum class Stage { data, lsmi, physical, output_error, sivia, simulation };
   Stage stage = Stage::data;
   std::string text;
 };
@@ -202,8 +242,9 @@ struct Run {
   // The combined LSMI estimate against the physical region, with the likely cause; its warning
   // (Stage::physical) is also in identification.warnings, so it reaches every output.
   identification::PhysicalCheck physical;
-  std::optional<Guaranteed> sivia;       // settings.sivia.run
-  std::optional<Simulation> simulation;  // settings.simulation.run
+  std::optional<OutputError> output_error;  // settings.output_error.run, when it could run
+  std::optional<Guaranteed> sivia;          // settings.sivia.run
+  std::optional<Simulation> simulation;     // settings.simulation.run
   std::vector<Warning> warnings;
 };
 

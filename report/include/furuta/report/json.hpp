@@ -69,8 +69,13 @@ Json tubes_json(const pipeline::Simulation& simulation);
 // as [lo, hi]), from which the constraint rows are built.
 Json paving_json(const pipeline::Guaranteed& guaranteed);
 
+// results.json's "output_error": laid out like "combined" (estimate, std_dev) plus the lag, the
+// pendulum's zero offset, the input gains, the angle residuals per joint, segments, iterations,
+// convergence and, with a held-out recording, both parameter sets' free-run RMSE on it.
+Json output_error_json(const pipeline::OutputError& output_error);
+
 // results.json of a run: results_json above with "sivia" (naming paving.json in "paving_file")
-// and "simulation" when they ran.
+// and "simulation" and "output_error" when they ran.
 Json results_json(const pipeline::Run& run, const std::string& software_version);
 
 // batch.json, the trigger's record of one identification: its name, when, the logs directory,

@@ -31,7 +31,8 @@ using pipeline::SessionSummary;
 using pipeline::summarize_session;
 
 struct Warning {
-  // "physical" (also shown above everything), "excitation", "session", "SIVIA", "simulation"
+  // "physical" (also shown above everything), "excitation", "session", "output error", "SIVIA",
+  // "simulation"
   std::string topic;
   std::string text;
 };
@@ -63,6 +64,20 @@ struct ValidationSummary {
   std::string svg;  // Fig. 5 (svg_torque_validation)
 };
 
+// The output-error refinement: Table I's column, its diagnostics, the held-out free runs.
+struct OutputErrorSummary {
+  model::Parameters<double> estimate{}, std_dev{};
+  double input_lag_s = 0;
+  std::array<double, 2> angle_rms_rad = {0, 0};  // fitted minus measured, q1 and q2
+  std::size_t segments = 0;
+  int iterations = 0;
+  bool converged = false;
+  // The held-out recording run free with the LSMI and the refined parameters.
+  std::string held_out_name;
+  std::array<double, 2> lsmi_rmse_rad = {0, 0}, refined_rmse_rad = {0, 0};
+  std::string svg;  // svg_free_runs; empty without a held-out recording
+};
+
 struct SimulationSummary {
   std::string measurement_source;                  // where the "measured" scenarios come from
   std::vector<validated::ScenarioResult> results;  // Table III rows; Fig. 6 drawn from each
@@ -83,6 +98,7 @@ struct ReportInput {
   identification::LsmiResult combined;
   std::optional<model::Parameters<double>> nominal, truth;
   double input_lag_s = 0;
+  std::optional<OutputErrorSummary> output_error;  // absent: not run
 
   // How the torque of Fig. 2/3/5 was had: "by eq. 4 from the logged duty cycle", "as recorded".
   std::string torque_source;

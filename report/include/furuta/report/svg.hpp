@@ -6,6 +6,7 @@
 
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/identification/output_error.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::report {
@@ -18,6 +19,11 @@ std::string svg_signals(const identification::RawExperiment& raw,
                         const identification::DataErrorBounds* bounds = nullptr);
 // Fig. 5: measured vs LSMI-predicted torque on the held-out session.
 std::string svg_torque_validation(const identification::ValidationResult& validation);
+
+// The held-out recording's measured q1 and q2 against free runs (no re-shooting) with the LSMI
+// and the output-error parameters, each run's angle RMSE in the panel titles.
+std::string svg_free_runs(const std::string& name, const identification::FreeRun& lsmi,
+                          const identification::FreeRun& refined);
 
 // Fig. 4: the paving projected on two parameters (default fv1, fv2): inner, boundary and outer
 // boxes in three colours, axes with units, the truth or a reference point if given.

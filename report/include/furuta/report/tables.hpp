@@ -8,6 +8,7 @@
 
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/identification/output_error.hpp"
 #include "furuta/model/model.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/validated/scenarios.hpp"
@@ -22,7 +23,10 @@ std::string scenario_description(const validated::Scenario& scenario);
 // Table I: parameter, unit, one column per experiment, all, (CAD), (truth), each +- its standard
 // deviation; condition numbers, residuals, the input lag, the held-out RMSE and the warnings.
 // Experiments whose names do not fit a column are headed E1, E2, ..., named in a legend above.
-std::string format_table_one(const identification::Identification& id);
+// With `refined`, an "output error" column beside "all experiments" and a line of its lag,
+// angle residuals and convergence.
+std::string format_table_one(const identification::Identification& id,
+                             const identification::OutputErrorResult* refined = nullptr);
 
 // "\nSIVIA (n samples, q = ..): counts ..." and each unknown's hull (6 digits, rounded outward)
 // (with whether it holds the truth, when there is one), or the finding when the set is empty.
@@ -44,11 +48,14 @@ std::string measurement_source_text(const pipeline::MeasurementSource& source);
 std::string simulation_summary_text(const std::string& measurement_source, bool sivia_set_empty,
                                     const std::vector<validated::ScenarioResult>& results);
 
-// What `furuta identify` prints: Table I, then the SIVIA summary and the simulation summary when
-// they ran.
+// "\nheld-out free run on NAME (angle RMSE, q1 / q2): LSMI a / b rad, output error c / d rad"
+std::string held_out_free_run_text(const pipeline::HeldOutFreeRuns& runs);
+
+// What `furuta identify` prints: Table I, then the held-out free runs, the SIVIA summary and the
+// simulation summary when they ran.
 std::string terminal_text(const pipeline::Run& run);
 // terminal_text less Table I: what follows it once SIVIA and the scenarios are done (`furuta
-// identify` prints Table I as soon as LSMI is done, pipeline::Progress::lsmi_done).
+// identify` prints Table I as soon as the fit is done, pipeline::Progress::fit_done).
 std::string terminal_text_after_lsmi(const pipeline::Run& run);
 
 }  // namespace furuta::report
