@@ -2,6 +2,8 @@
 // The arm's drive: a Maxon DC motor and gearbox driven by the 1065's PWM duty (paper section IV.A,
 // eq. 4; docs/model.md).
 
+#include <numbers>
+
 namespace furuta::model {
 
 struct MotorData {
@@ -20,8 +22,8 @@ struct MotorData {
   // scalar (automatic differentiation passes its Jets through).
   template <class T>
   T arm_torque(const T& duty, const T& dq1_rad_s) const {
-    constexpr double kRadPerSToRpm = 9.549296585513720;  // 60 / (2 pi)
-    const T motor_speed_rpm = total_ratio() * kRadPerSToRpm * dq1_rad_s;
+    constexpr double kRadPerSToRpm = 60.0 / (2.0 * std::numbers::pi);
+    const T motor_speed_rpm = total_ratio() * dq1_rad_s * kRadPerSToRpm;
     return total_ratio() * motor_efficiency * gear_efficiency *
            (duty * no_load_speed_rpm - motor_speed_rpm) / speed_torque_gradient_rpm_per_nm;
   }
