@@ -20,6 +20,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/model/model.hpp"
 #include "temp_dir.hpp"
+#include "voltage_rig_csv.hpp"
 
 namespace furuta::app {
 namespace {
@@ -28,20 +29,9 @@ namespace fs = std::filesystem;
 using furuta::testing::TempDir;
 constexpr double kPi = std::numbers::pi;
 
-// The rig of tests/identification/voltage_rig_test.cpp (arm time constant about 150 ms).
 model::Parameters<double> truth() {
-  model::Parameters<double> p;
-  p.mu1 = 3.0e-3;
-  p.mu2 = 2.56e-3;
-  p.mu3 = 1.2e-3;
-  p.mu4 = 1.32e-3;
-  p.mug = 7.4e-2;
-  p.fv1 = 1.5e-2;
-  p.fv2 = 6.4e-4;
-  return p;
+  return furuta::testing::voltage_rig_truth();
 }
-constexpr double kTorquePerVolt = 4.0 * 0.9 * 0.03 / 3.0;  // gear eff k_t / R
-constexpr double kBackEmfDamping = 4.0 * 4.0 * 0.9 * 0.03 * 0.03 / 3.0;
 
 constexpr const char* kSpec =
     "[csv]\n"                                                         // 1
@@ -53,36 +43,9 @@ constexpr const char* kSpec =
     "torque_constant_nm_per_a = 0.03\nback_emf_v_s_per_rad = 0.03\n"  // 12-13
     "resistance_ohm = 3\ngear_ratio = 4\nefficiency = 0.9\n";         // 14-16
 
-// 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms, in radians from hanging down. The
-// volts column may be written late by input_delay_s (a logger that stamps the input after the
-// angles it drives).
 fs::path record(const fs::path& dir, const std::string& name, double phase,
                 double input_delay_s = 0) {
-  const fs::path path = dir / name;
-  std::ofstream out(path);
-  out << "t,q1,q2,volts\n" << std::setprecision(10);
-  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
-  const auto volts = [&](double t) {
-    double sum = 0;
-    for (std::size_t i = 0; i < hz.size(); ++i) {
-      sum += std::sin(2 * kPi * hz[i] * t + phase * static_cast<double>(i + 1));
-    }
-    return 3.5 * sum / std::sqrt(6.0);
-  };
-  const model::Parameters<double> p = truth();
-  model::PendulumState x;
-  const double h = 5e-4;
-  for (int step = -4000; step < 20000; ++step) {  // 2 s of settling first
-    const double t = step * h;
-    if (step >= 0 && step % 20 == 0) {
-      out << t << "," << x.q1 << "," << x.q2 << "," << volts(t - input_delay_s) << "\n";
-    }
-    const double v = volts(t + h / 2);
-    x = model::rk4_step(p, x, h, [&](const model::PendulumState& s) {
-      return kTorquePerVolt * v - kBackEmfDamping * s.dq1;
-    });
-  }
-  return path;
+  return furuta::testing::write_voltage_rig_csv(dir / name, phase, input_delay_s);
 }
 
 fs::path write(const fs::path& path, const std::string& text) {

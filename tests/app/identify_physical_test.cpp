@@ -18,6 +18,7 @@
 #include "commands.hpp"
 #include "furuta/model/model.hpp"
 #include "temp_dir.hpp"
+#include "voltage_rig_csv.hpp"
 
 namespace furuta::app {
 namespace {
@@ -27,12 +28,9 @@ using furuta::testing::TempDir;
 using nlohmann::json;
 constexpr double kPi = std::numbers::pi;
 
-// The voltage-driven rig of identify_csv_test.cpp (tests/identification/voltage_rig_test.cpp).
 model::Parameters<double> truth() {
-  return {3.0e-3, 2.56e-3, 1.2e-3, 1.32e-3, 7.4e-2, 1.5e-2, 6.4e-4};
+  return furuta::testing::voltage_rig_truth();
 }
-constexpr double kTorquePerVolt = 4.0 * 0.9 * 0.03 / 3.0;
-constexpr double kBackEmfDamping = 4.0 * 4.0 * 0.9 * 0.03 * 0.03 / 3.0;
 
 constexpr const char* kSpec =
     "[csv]\n"
@@ -45,40 +43,10 @@ constexpr const char* kSpec =
     "resistance_ohm = 3\ngear_ratio = 4\nefficiency = 0.9\n";
 
 // How a recording went wrong: applied to each row's (q1, q2, volts) in the model's conventions.
-struct Mistake {
-  std::function<double(double)> q1 = [](double q) { return q; };
-  std::function<double(double)> q2 = [](double q) { return q; };
-  std::function<double(double)> volts = [](double v) { return v; };
-};
+using Mistake = furuta::testing::CsvColumns;
 
-// 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms, as identify_csv_test.cpp records
-// it, each column passed through the mistake.
 fs::path record(const fs::path& path, double phase, const Mistake& mistake) {
-  std::ofstream out(path);
-  out << "t,q1,q2,volts\n" << std::setprecision(12);
-  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
-  const auto volts = [&](double t) {
-    double sum = 0;
-    for (std::size_t i = 0; i < hz.size(); ++i) {
-      sum += std::sin(2 * kPi * hz[i] * t + phase * static_cast<double>(i + 1));
-    }
-    return 3.5 * sum / std::sqrt(6.0);
-  };
-  const model::Parameters<double> p = truth();
-  model::PendulumState x;
-  const double h = 5e-4;
-  for (int step = -4000; step < 20000; ++step) {
-    const double t = step * h;
-    if (step >= 0 && step % 20 == 0) {
-      out << t << "," << mistake.q1(x.q1) << "," << mistake.q2(x.q2) << ","
-          << mistake.volts(volts(t)) << "\n";
-    }
-    const double v = volts(t + h / 2);
-    x = model::rk4_step(p, x, h, [&](const model::PendulumState& s) {
-      return kTorquePerVolt * v - kBackEmfDamping * s.dq1;
-    });
-  }
-  return path;
+  return furuta::testing::write_voltage_rig_csv(path, phase, 0.0, mistake, 12);
 }
 
 std::string read(const fs::path& path) {

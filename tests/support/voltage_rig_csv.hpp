@@ -1,0 +1,65 @@
+#pragma once
+// CSV recordings of the voltage-driven rig of tests/identification/voltage_rig_test.cpp (another
+// rig, another logger; arm time constant about 150 ms), for the tests of `furuta identify --csv`.
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <numbers>
+
+#include "furuta/model/model.hpp"
+
+namespace furuta::testing {
+
+inline model::Parameters<double> voltage_rig_truth() {
+  return {3.0e-3, 2.56e-3, 1.2e-3, 1.32e-3, 7.4e-2, 1.5e-2, 6.4e-4};
+}
+inline constexpr double kVoltageRigTorquePerVolt = 4.0 * 0.9 * 0.03 / 3.0;  // gear eff k_t / R
+inline constexpr double kVoltageRigBackEmfDamping = 4.0 * 4.0 * 0.9 * 0.03 * 0.03 / 3.0;
+
+// What a logger writes of each row's (q1, q2, volts), given in the model's conventions: the
+// identity, or a recording mistake (a sign, a zero, a unit).
+struct CsvColumns {
+  std::function<double(double)> q1 = [](double q) { return q; };
+  std::function<double(double)> q2 = [](double q) { return q; };
+  std::function<double(double)> volts = [](double v) { return v; };
+};
+
+// 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms after 2 s of settling, in radians from
+// hanging down, as columns t,q1,q2,volts. The volts column may be written late by input_delay_s (a
+// logger that stamps the input after the angles it drives).
+inline std::filesystem::path write_voltage_rig_csv(const std::filesystem::path& path, double phase,
+                                                   double input_delay_s = 0,
+                                                   const CsvColumns& columns = {},
+                                                   int digits = 10) {
+  std::ofstream out(path);
+  out << "t,q1,q2,volts\n" << std::setprecision(digits);
+  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
+  const auto volts = [&](double t) {
+    double sum = 0;
+    for (std::size_t i = 0; i < hz.size(); ++i) {
+      sum += std::sin(2 * std::numbers::pi * hz[i] * t + phase * static_cast<double>(i + 1));
+    }
+    return 3.5 * sum / std::sqrt(6.0);
+  };
+  const model::Parameters<double> p = voltage_rig_truth();
+  model::PendulumState x;
+  const double h = 5e-4;
+  for (int step = -4000; step < 20000; ++step) {
+    const double t = step * h;
+    if (step >= 0 && step % 20 == 0) {
+      out << t << "," << columns.q1(x.q1) << "," << columns.q2(x.q2) << ","
+          << columns.volts(volts(t - input_delay_s)) << "\n";
+    }
+    const double v = volts(t + h / 2);
+    x = model::rk4_step(p, x, h, [&](const model::PendulumState& s) {
+      return kVoltageRigTorquePerVolt * v - kVoltageRigBackEmfDamping * s.dq1;
+    });
+  }
+  return path;
+}
+
+}  // namespace furuta::testing
