@@ -22,6 +22,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/session_log/session_log.hpp"
+#include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::identification {
@@ -42,22 +43,8 @@ struct Excitation {
 
 // One 10 s session of the simulated rig with the project's rig.toml, in virtual time.
 fs::path session_log_path(const fs::path& logs, const Excitation& x, std::int64_t seed) {
-  app::RunOptions options;
-  options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
-  options.simulated = true;
-  options.virtual_time = true;
-  options.logs_dir = logs;
-  options.lcm_url = "memq://";
-  options.session.label = x.profile + std::to_string(seed);
-  options.session.seed = seed;
-  options.session.profile = x.profile;
-  options.session.amplitude_duty = x.amplitude_duty;
-  std::ostringstream out, err;
-  EXPECT_EQ(app::run_session_command(options, out, err), 0) << out.str() << err.str();
-  const std::string text = out.str();
-  const auto at = text.find("; log ");
-  if (at == std::string::npos) return {};
-  return fs::path(text.substr(at + 6, text.find('\n', at) - at - 6));
+  return furuta::testing::simulated_session_log(logs, x.profile + std::to_string(seed), seed, {},
+                                                x.profile, x.amplitude_duty);
 }
 
 // Logs made once for the whole suite.

@@ -15,11 +15,13 @@
 namespace furuta::testing {
 
 // One session of the simulated rig with the project's rig.toml (its bang-bang unless the
-// configuration says otherwise), in virtual time, logged into `logs`; the log's path, or an empty
-// path (with a test failure) when the command failed.
+// configuration or `profile` says otherwise), in virtual time, logged into `logs`; the log's path,
+// or an empty path (with a test failure) when the command failed.
 inline std::filesystem::path simulated_session_log(const std::filesystem::path& logs,
                                                    const std::string& label, std::int64_t seed,
-                                                   std::optional<double> duration_s = {}) {
+                                                   std::optional<double> duration_s = {},
+                                                   std::optional<std::string> profile = {},
+                                                   std::optional<double> amplitude_duty = {}) {
   app::RunOptions options;
   options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
   options.simulated = true;
@@ -29,6 +31,8 @@ inline std::filesystem::path simulated_session_log(const std::filesystem::path& 
   options.session.label = label;
   options.session.seed = seed;
   options.session.duration_s = duration_s;
+  options.session.profile = profile;
+  options.session.amplitude_duty = amplitude_duty;
   std::ostringstream out, err;
   EXPECT_EQ(app::run_session_command(options, out, err), 0) << out.str() << err.str();
   const std::string text = out.str();
