@@ -1,9 +1,9 @@
 // The main job (scripts/run.sh) end to end against a golden copy of its outputs: two bang-bang
 // sessions and a validation session of the simulated rig, then the trigger's pass, must give the
-// same results.json (every number within 1e-12 relative) and the same Table I and Table III text as
-// the golden files in tests/data/golden/. A refactoring that moves code keeps these figures; a
-// change meant to alter them regenerates the files with FURUTA_UPDATE_GOLDEN=1 and says why in
-// its commit.
+// same results.json (every number, also within text, within kRelativeTolerance) and the same Table
+// I and Table III text as the golden files in tests/data/golden/. A refactoring that moves code
+// keeps these figures; a change meant to alter them regenerates the files with
+// FURUTA_UPDATE_GOLDEN=1 and says why in its commit.
 
 #include <gtest/gtest.h>
 
@@ -16,6 +16,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "furuta/config/rig_config.hpp"
 #include "log_processor.hpp"
@@ -52,12 +53,45 @@ std::string without_times(const std::string& text) {
 // wall-clock times), how long things took, and the software version.
 const std::set<std::string> kNotCompared = {"path", "sha256", "seconds", "software_version"};
 
+// Not 1e-12: glibc picks its exp/sin/cos by the processor (FMA or not), and the last bit they
+// differ in is amplified by the chaotic free runs, the validated tubes near their blow-up and the
+// output-error solver's stopping point (measured: up to 3e-9 relative between processors, and
+// between GLIBC_TUNABLES=glibc.cpu.hwcaps=-FMA,-AVX2 and the default on one). A refactoring that
+// changes what is computed moves the figures by far more.
+constexpr double kRelativeTolerance = 1e-6;
+
+bool same_number(double g, double a) {
+  return g == a || std::fabs(g - a) <= kRelativeTolerance * std::max(std::fabs(g), std::fabs(a));
+}
+
+// Text with its numbers compared as numbers: the words and their order exactly, each number
+// within the tolerance.
+void expect_same_text(const std::string& golden, const std::string& actual,
+                      const std::string& where) {
+  static const std::regex number(R"([-+]?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?)");
+  const auto numbers = [](const std::string& text) {
+    std::vector<double> out;
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), number);
+         it != std::sregex_iterator(); ++it) {
+      out.push_back(std::stod(it->str()));
+    }
+    return out;
+  };
+  const std::string g = without_times(golden), a = without_times(actual);
+  EXPECT_EQ(std::regex_replace(g, number, "#"), std::regex_replace(a, number, "#")) << where;
+  const std::vector<double> gn = numbers(g), an = numbers(a);
+  if (gn.size() != an.size()) return;  // the words differ already
+  for (std::size_t i = 0; i < gn.size(); ++i) {
+    EXPECT_TRUE(same_number(gn[i], an[i])) << where << ": number " << i << ": golden " << gn[i]
+                                           << ", now " << an[i] << " in \"" << a << "\"";
+  }
+}
+
 void expect_same(const json& golden, const json& actual, const std::string& where) {
   if (golden.is_number() && actual.is_number()) {
     const double g = golden.get<double>();
     const double a = actual.get<double>();
-    const double tolerance = 1e-12 * std::max(std::fabs(g), std::fabs(a));
-    EXPECT_TRUE(g == a || std::fabs(g - a) <= tolerance)
+    EXPECT_TRUE(same_number(g, a))
         << where << ": golden " << golden.dump() << ", now " << actual.dump();
     return;
   }
@@ -77,8 +111,7 @@ void expect_same(const json& golden, const json& actual, const std::string& wher
       expect_same(golden[i], actual[i], where + "[" + std::to_string(i) + "]");
     }
   } else if (golden.is_string()) {
-    EXPECT_EQ(without_times(golden.get<std::string>()), without_times(actual.get<std::string>()))
-        << where;
+    expect_same_text(golden.get<std::string>(), actual.get<std::string>(), where);
   } else {
     EXPECT_EQ(golden, actual) << where;
   }
