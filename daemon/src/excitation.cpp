@@ -199,6 +199,11 @@ Excitation::Excitation(const ExcitationSpec& spec) : spec_(spec), rng_(spec.seed
         const double index = k + 1;  // Schroeder's phases count components from 1
         ms_phase_[k] = -std::numbers::pi * index * (index - 1.0) / n;
       }
+      // The seed shifts the signal in time by up to one period of its slowest component, so that
+      // sessions of other seeds are other stretches of the same signal (the phases' low crest
+      // factor kept).
+      const double shift_s = uniform01(rng_) / ms_freq_[0];
+      for (int k = 0; k < n; ++k) ms_phase_[k] += kTwoPi * ms_freq_[k] * shift_s;
       ms_scale_ = 1.0;
       const auto magnitude = [this, n](double t) {
         double sum = 0.0;
@@ -238,9 +243,12 @@ Excitation::Excitation(const ExcitationSpec& spec) : spec_(spec), rng_(spec.seed
       ms_scale_ = spec_.amplitude_duty / best;
       break;
     }
+    case ProfileKind::chirp:
+      // The seed picks the sweep's starting phase.
+      chirp_phase_ = kTwoPi * uniform01(rng_);
+      break;
     case ProfileKind::free_decay:
     case ProfileKind::step:
-    case ProfileKind::chirp:
       break;
   }
 }
@@ -300,7 +308,7 @@ double Excitation::duty(double t_s, double arm_angle_rad) noexcept {
     }
     case ProfileKind::chirp: {
       const double sweep = (spec_.chirp_f1_hz - spec_.chirp_f0_hz) / (2.0 * spec_.duration_s);
-      value = a * std::sin(kTwoPi * (spec_.chirp_f0_hz * t_s + sweep * t_s * t_s));
+      value = a * std::sin(kTwoPi * (spec_.chirp_f0_hz * t_s + sweep * t_s * t_s) + chirp_phase_);
       break;
     }
     case ProfileKind::multisine: {

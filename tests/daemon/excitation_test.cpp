@@ -567,24 +567,40 @@ TEST(Prbs, ValuesHoldForABitAndSeedsShiftTheSequence) {
 
 // --- chirp and multisine ---
 
-TEST(Chirp, FollowsTheLinearSweep) {
+// The sweep's phase at time t, without the seed's starting phase.
+double sweep_phase(double t) {
+  return 2 * kPi * (0.5 * t + (4.0 - 0.5) * t * t / (2 * 20.0));
+}
+
+TEST(Chirp, FollowsTheLinearSweepFromTheSeedsStartingPhase) {
   ExcitationSpec spec = spec_of(ProfileKind::chirp);
   spec.chirp_f0_hz = 0.5;
   spec.chirp_f1_hz = 4.0;
   spec.duration_s = 20.0;
-  Excitation excitation(spec);
-  int crossings = 0;
-  double last = 0.0;
-  for (int k = 0; k < 20000; ++k) {
-    const double t = k * 1e-3;
-    const double expected = 0.3 * std::sin(2 * kPi * (0.5 * t + (4.0 - 0.5) * t * t / (2 * 20.0)));
-    const double d = excitation.duty(t, 0.0);
-    ASSERT_NEAR(d, expected, 1e-12) << t;
-    if (k > 0 && (d > 0) != (last > 0)) ++crossings;
-    last = d;
+  std::vector<double> starts;
+  for (std::uint64_t seed : {1, 2, 1}) {
+    spec.seed = seed;
+    Excitation excitation(spec);
+    // The starting phase from the first two values: sin from the first, cos from the step.
+    const double d0 = excitation.duty(0.0, 0.0) / 0.3;
+    const double d1 = excitation.duty(1e-3, 0.0) / 0.3;
+    const double w = sweep_phase(1e-3);
+    const double start = std::atan2(d0, (d1 - d0 * std::cos(w)) / std::sin(w));
+    starts.push_back(start);
+    int crossings = 0;
+    double last = 0.0;
+    for (int k = 0; k < 20000; ++k) {
+      const double t = k * 1e-3;
+      const double d = excitation.duty(t, 0.0);
+      ASSERT_NEAR(d, 0.3 * std::sin(sweep_phase(t) + start), 1e-9) << t;
+      if (k > 0 && (d > 0) != (last > 0)) ++crossings;
+      last = d;
+    }
+    // The phase runs through 2 * (f0 + f1) / 2 * T = 45 cycles: 90 sign changes.
+    EXPECT_NEAR(crossings, 90, 1);
   }
-  // The phase runs through 2 * (f0 + f1) / 2 * T = 45 cycles: 90 sign changes.
-  EXPECT_NEAR(crossings, 90, 1);
+  EXPECT_GT(std::abs(std::remainder(starts[0] - starts[1], 2 * kPi)), 1e-3);  // another seed
+  EXPECT_DOUBLE_EQ(starts[0], starts[2]);                                     // the same seed
 }
 
 TEST(Multisine, PeakEqualsTheAmplitudeAndIsNeverExceeded) {
@@ -604,7 +620,9 @@ TEST(Multisine, PeakEqualsTheAmplitudeAndIsNeverExceeded) {
   }
 }
 
-TEST(Multisine, ComponentsAreLogSpacedWithEqualAmplitudesAndSchroederPhases) {
+// The seed shifts the signal in time (by tau), which adds 2 pi f tau to each Schroeder phase: with
+// components at 0.5 * 2^k Hz, component k's shift is 2^k times the first one's.
+TEST(Multisine, ComponentsAreLogSpacedWithEqualAmplitudesAndShiftedSchroederPhases) {
   ExcitationSpec spec = spec_of(ProfileKind::multisine);
   spec.multisine_components = 4;
   spec.multisine_f_min_hz = 0.5;
@@ -614,6 +632,7 @@ TEST(Multisine, ComponentsAreLogSpacedWithEqualAmplitudesAndSchroederPhases) {
   const auto duty = run(spec, dt, spec.duration_s);
   const double freqs[] = {0.5, 1.0, 2.0, 4.0};
   double first_magnitude = 0.0;
+  double first_shift = 0.0;
   for (int k = 0; k < 4; ++k) {
     std::complex<double> c = 0.0;
     for (std::size_t i = 0; i < duty.size(); ++i) {
@@ -622,9 +641,11 @@ TEST(Multisine, ComponentsAreLogSpacedWithEqualAmplitudesAndSchroederPhases) {
     c *= 2.0 / static_cast<double>(duty.size());
     // sin(w t + phi) projects to exp(i (phi - pi/2)).
     const double index = k + 1;
-    const double phase = -kPi * index * (index - 1) / 4;
-    const double error = std::remainder(std::arg(c) - (phase - kPi / 2), 2 * kPi);
-    EXPECT_NEAR(error, 0.0, 1e-3) << freqs[k] << " Hz";
+    const double schroeder = -kPi * index * (index - 1) / 4;
+    const double shift = std::remainder(std::arg(c) - (schroeder - kPi / 2), 2 * kPi);
+    if (k == 0) first_shift = shift;
+    EXPECT_NEAR(std::remainder(shift - std::pow(2.0, k) * first_shift, 2 * kPi), 0.0, 1e-3)
+        << freqs[k] << " Hz";
     if (k == 0) first_magnitude = std::abs(c);
     EXPECT_NEAR(std::abs(c), first_magnitude, 1e-3 * first_magnitude) << freqs[k] << " Hz";
   }

@@ -37,10 +37,12 @@ struct ExcitationSpec {
   // PRBS: a maximal-length LFSR sequence of +-amplitude, one bit per bit_period_s.
   double prbs_bit_period_s = 0.048;
   int prbs_order = 9;  // 2..16: period 2^order - 1 bits
-  // chirp: amplitude * sin of a linear sweep from f0 to f1 over the duration.
+  // chirp: amplitude * sin of a linear sweep from f0 to f1 over the duration, from a starting phase
+  // the seed picks.
   double chirp_f0_hz = 0.2;
   double chirp_f1_hz = 5.0;
-  // multisine: components log-spaced in [f_min, f_max], Schroeder phases, scaled to peak amplitude.
+  // multisine: components log-spaced in [f_min, f_max], Schroeder phases, scaled to peak amplitude;
+  // the seed shifts it in time by up to a period of f_min.
   int multisine_components = 8;  // 1..16
   double multisine_f_min_hz = 0.2;
   double multisine_f_max_hz = 5.0;
@@ -74,6 +76,8 @@ class Excitation {
   std::array<double, kMaxMultisineComponents> ms_freq_{};
   std::array<double, kMaxMultisineComponents> ms_phase_{};
   double ms_scale_ = 1.0;
+  // chirp
+  double chirp_phase_ = 0.0;
 };
 
 }  // namespace furuta::daemon
