@@ -210,6 +210,7 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   // unless the command gives one (or asks for it to be estimated).
   in.rig.identification.input_lag_ms = 0.0;
   if (spec.voltage_motor) in.voltage_motor = *spec.voltage_motor;
+  in.input_between_samples = spec.input_between_samples;
   const auto load = [&](const std::filesystem::path& path) {
     return identification::experiment_from_csv(identification::import_csv(path, spec),
                                                path.filename().string());

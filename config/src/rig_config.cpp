@@ -129,6 +129,7 @@ bridge::SimulatedRigConfig read_simulation(Section sim) {
   s.usb_latency_ns = sim.integer("usb_latency_ns", s.usb_latency_ns, non_negative_integer, ">= 0");
   s.usb_latency_jitter_ns = sim.integer("usb_latency_jitter_ns", 0, non_negative_integer, ">= 0");
   s.supply_voltage_v = sim.number("supply_voltage_v", s.supply_voltage_v, positive, "> 0");
+  s.supply_noise_v = sim.number("supply_noise_v", 0.05, non_negative, ">= 0");
   const auto firmware = [](std::int64_t v) { return v >= 100 && v <= 999; };
   s.firmware_1065 =
       static_cast<int>(sim.integer("firmware_1065", s.firmware_1065, firmware, "in [100, 999]"));

@@ -194,7 +194,8 @@ class SimulatedRig::Impl {
  private:
   DeviceInfo info_of(RigBoard board) const;
   sim_detail::Board& board_of(RigBoard board) { return boards_[sim_detail::board_index(board)]; }
-  double drive_torque(double duty, double dq1) const;
+  // The arm torque at `duty`; `idle`: the board has no PWM (duty exactly 0), so it brakes.
+  double drive_torque(double duty, double dq1, bool idle) const;
   void reset_motor();
   void power_up(RigBoard board);
   void advance_locked(std::int64_t t_ns);

@@ -157,6 +157,11 @@ void read_units(Section& s, CsvImportSpec& spec) {
   spec.input_kind = s.required_choice<InputKind>(
       "input_kind",
       {{"duty", InputKind::duty}, {"voltage", InputKind::voltage}, {"torque", InputKind::torque}});
+  spec.input_between_samples =
+      s.choice<InputBetweenSamples>("input_between_samples", InputBetweenSamples::linear,
+                                    {{"held", InputBetweenSamples::held},
+                                     {"linear", InputBetweenSamples::linear},
+                                     {"cubic", InputBetweenSamples::cubic}});
 }
 
 // The [motor] table: the DC motor of a voltage-driven rig. Required with input_kind = "voltage"

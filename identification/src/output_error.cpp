@@ -2,10 +2,13 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <optional>
+#include <span>
 #include <stdexcept>
 
 namespace furuta::identification {
@@ -89,32 +92,45 @@ std::array<double, model::kParameterCount> theta_from_natural(
           p.fv2};
 }
 
-// The applied input at time t (the state's clock): piecewise linear between the breakpoints.
+// The applied input on piece `piece` of the breakpoints at time t (the state's clock): linear from
+// breakpoint piece - 1 to breakpoint piece, held before the first (piece 0) and after the last
+// (piece = the breakpoints' count). The piece is chosen by the integrator, never from t, so that
+// a step ending on a breakpoint keeps the piece it integrates (the input may jump there: a held
+// CSV input, or braking at an exact zero).
 template <class T>
-T arm_torque(const OeExperiment& e, const model::MotorData& motor, const T& t, const T& dq1,
-             const T& gain) {
-  const double ts = scalar_of(t);
+T arm_torque(const OeExperiment& e, const model::MotorData& motor, std::size_t piece, const T& t,
+             const T& dq1, const T& gain) {
   const auto& bt = e.input_t_s;
   const std::size_t n = bt.size();
-  const std::size_t upper =
-      static_cast<std::size_t>(std::upper_bound(bt.begin(), bt.end(), ts) - bt.begin());
   T value;
   bool exactly_zero = false;
   double braking = 0;
-  if (upper == 0) {
+  const auto brake_at = [&](std::size_t i) {
+    return e.braking_fraction.empty() ? 0.0 : e.braking_fraction[i];
+  };
+  if (piece == 0) {
     value = T(e.input.front());
     exactly_zero = e.input.front() == 0.0;
-    braking = e.braking_fraction.empty() ? 0.0 : e.braking_fraction.front();
-  } else if (upper >= n) {
+    braking = brake_at(0);
+  } else if (piece >= n) {
     value = T(e.input.back());
     exactly_zero = e.input.back() == 0.0;
-    braking = e.braking_fraction.empty() ? 0.0 : e.braking_fraction.back();
+    braking = brake_at(n - 1);
   } else {
-    const std::size_t j = upper - 1;
+    const std::size_t j = piece - 1;
     const double a = e.input[j], b = e.input[j + 1];
-    value = T(a) + (b - a) * (t - bt[j]) / (bt[j + 1] - bt[j]);
+    const double h = bt[j + 1] - bt[j];
+    if (e.input_slope.empty()) {
+      value = T(a) + (b - a) * (t - bt[j]) / h;
+    } else {
+      // Cubic Hermite: the samples and the slopes at both ends.
+      const T s = (t - bt[j]) / h;
+      const T s2 = s * s, s3 = s2 * s;
+      value = (2.0 * s3 - 3.0 * s2 + 1.0) * a + (s3 - 2.0 * s2 + s) * (h * e.input_slope[j]) +
+              (-2.0 * s3 + 3.0 * s2) * b + (s3 - s2) * (h * e.input_slope[j + 1]);
+    }
     exactly_zero = a == 0.0 && b == 0.0;
-    braking = e.braking_fraction.empty() ? 0.0 : e.braking_fraction[j];
+    braking = brake_at(j);
   }
   switch (e.input_kind) {
     case InputKind::duty:
@@ -133,8 +149,9 @@ T arm_torque(const OeExperiment& e, const model::MotorData& motor, const T& t, c
 
 template <class T>
 State<T> derivative(const OeExperiment& e, const model::MotorData& motor,
-                    const model::Parameters<T>& p, const T& gain, const T& t, const State<T>& x) {
-  const T tau = arm_torque(e, motor, t, x.dq1, gain);
+                    const model::Parameters<T>& p, const T& gain, std::size_t piece, const T& t,
+                    const State<T>& x) {
+  const T tau = arm_torque(e, motor, piece, t, x.dq1, gain);
   const model::JointAccelerations<T> a = model::accelerations(p, x.q2, x.dq1, x.dq2, tau);
   return {x.dq1, a.ddq1, x.dq2, a.ddq2};
 }
@@ -144,28 +161,46 @@ State<T> axpy(const State<T>& x, const State<T>& d, const T& h) {
   return {x.q1 + h * d.q1, x.dq1 + h * d.dq1, x.q2 + h * d.q2, x.dq2 + h * d.dq2};
 }
 
-// RK4 from t0 to t1 in equal substeps of at most max_step_s. The input's time is t - lag.
+// RK4 from t0 to t1 (the observations' clock; the input's time is t - lag). The interval is cut
+// at every input breakpoint (at breakpoint + lag, so the cuts move with the lag and carry its
+// derivative) and each piece into equal substeps of at most max_step_s: RK4 is 4th order only
+// where the input is smooth, and across a kink in a 1 ms step it errs by a fraction of the kink's
+// duty change (a 16 ms chirp, with two kinks a cycle, was 0.8 counts RMS off on the arm).
 template <class T>
 State<T> integrate(const OeExperiment& e, const model::MotorData& motor,
                    const model::Parameters<T>& p, const T& lag, const T& gain, State<T> x,
                    double t0, double t1, double max_step_s) {
   if (!(t1 > t0)) return x;
-  const int n = std::max(1, static_cast<int>(std::ceil((t1 - t0) / max_step_s - 1e-9)));
-  const double h = (t1 - t0) / n;
-  const T hT(h), half(h / 2);
-  for (int k = 0; k < n; ++k) {
-    const T t = T(t0 + k * h) - lag;
-    const State<T> k1 = derivative(e, motor, p, gain, t, x);
-    const State<T> k2 = derivative(e, motor, p, gain, t + half, axpy(x, k1, half));
-    const State<T> k3 = derivative(e, motor, p, gain, t + half, axpy(x, k2, half));
-    const State<T> k4 = derivative(e, motor, p, gain, t + hT, axpy(x, k3, hT));
-    const T w = hT / 6.0;
-    x.q1 += w * (k1.q1 + 2.0 * k2.q1 + 2.0 * k3.q1 + k4.q1);
-    x.dq1 += w * (k1.dq1 + 2.0 * k2.dq1 + 2.0 * k3.dq1 + k4.dq1);
-    x.q2 += w * (k1.q2 + 2.0 * k2.q2 + 2.0 * k3.q2 + k4.q2);
-    x.dq2 += w * (k1.dq2 + 2.0 * k2.dq2 + 2.0 * k3.dq2 + k4.dq2);
+  const auto& bt = e.input_t_s;
+  const double lag_s = scalar_of(lag);
+  std::size_t piece =
+      static_cast<std::size_t>(std::upper_bound(bt.begin(), bt.end(), t0 - lag_s) - bt.begin());
+  T start(t0);
+  for (;;) {
+    const bool last = piece >= bt.size() || bt[piece] + lag_s >= t1;
+    const T end = last ? T(t1) : T(bt[piece]) + lag;
+    const double length = scalar_of(end) - scalar_of(start);
+    if (length > 0) {
+      const int n = std::max(1, static_cast<int>(std::ceil(length / max_step_s - 1e-9)));
+      const T h = (end - start) / static_cast<double>(n);
+      const T half = h / 2.0;
+      for (int k = 0; k < n; ++k) {
+        const T t = start + static_cast<double>(k) * h - lag;
+        const State<T> k1 = derivative(e, motor, p, gain, piece, t, x);
+        const State<T> k2 = derivative(e, motor, p, gain, piece, t + half, axpy(x, k1, half));
+        const State<T> k3 = derivative(e, motor, p, gain, piece, t + half, axpy(x, k2, half));
+        const State<T> k4 = derivative(e, motor, p, gain, piece, t + h, axpy(x, k3, h));
+        const T w = h / 6.0;
+        x.q1 += w * (k1.q1 + 2.0 * k2.q1 + 2.0 * k3.q1 + k4.q1);
+        x.dq1 += w * (k1.dq1 + 2.0 * k2.dq1 + 2.0 * k3.dq1 + k4.dq1);
+        x.q2 += w * (k1.q2 + 2.0 * k2.q2 + 2.0 * k3.q2 + k4.q2);
+        x.dq2 += w * (k1.dq2 + 2.0 * k2.dq2 + 2.0 * k3.dq2 + k4.dq2);
+      }
+    }
+    if (last) return x;
+    start = end;
+    ++piece;
   }
-  return x;
 }
 
 // Observations [first, end) of one experiment, simulated from the state x0 at the first one's time.
@@ -317,9 +352,67 @@ void check_experiment(const OeExperiment& e) {
   }
 }
 
+// The covariance of the first `leading` free coordinates, two ways, from the Jacobian J and the
+// residuals r at the optimum (A = J^T J over every free coordinate, sparse):
+// - local: A^-1, for residuals weighted by independent errors of the assumed sigma;
+// - robust: White's sandwich over clusters, A^-1 (sum_c g_c g_c^T) A^-1 C / (C - 1) with
+//   g_c = J_c^T r_c of cluster c (a segment, or a prior): right also where the errors are
+//   correlated within a segment (an encoder's quantisation of a slow joint, a model that misses
+//   something), which the local one counts as independent.
+// Nothing when the problem cannot be evaluated or A is singular.
+struct LeadingCovariance {
+  Eigen::MatrixXd local, robust;
+};
+std::optional<LeadingCovariance> leading_covariance(
+    ceres::Problem& problem, const std::vector<double*>& free_blocks,
+    const std::vector<ceres::ResidualBlockId>& clusters, int leading) {
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = free_blocks;
+  evaluate.residual_blocks = clusters;
+  std::vector<double> residuals;
+  ceres::CRSMatrix jacobian;
+  if (!problem.Evaluate(evaluate, nullptr, &residuals, nullptr, &jacobian)) return std::nullopt;
+  const int columns = jacobian.num_cols;
+  if (columns < leading || clusters.size() < 2) return std::nullopt;
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(jacobian.values.size());
+  for (int row = 0; row < jacobian.num_rows; ++row) {
+    for (int a = jacobian.rows[static_cast<std::size_t>(row)];
+         a < jacobian.rows[static_cast<std::size_t>(row) + 1]; ++a) {
+      entries.emplace_back(row, jacobian.cols[static_cast<std::size_t>(a)],
+                           jacobian.values[static_cast<std::size_t>(a)]);
+    }
+  }
+  Eigen::SparseMatrix<double> j(jacobian.num_rows, columns);
+  j.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(j.transpose() * j);
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(normal);
+  if (factor.info() != Eigen::Success) return std::nullopt;
+  // Rows of A^-1 for the leading coordinates (A is symmetric: its first columns).
+  const Eigen::MatrixXd unit = Eigen::MatrixXd::Identity(columns, leading);
+  const Eigen::MatrixXd inverse_columns = factor.solve(unit);
+  if (factor.info() != Eigen::Success || !inverse_columns.allFinite()) return std::nullopt;
+  LeadingCovariance out;
+  out.local = inverse_columns.topRows(leading);
+  out.robust = Eigen::MatrixXd::Zero(leading, leading);
+  const Eigen::Map<const Eigen::VectorXd> r(residuals.data(),
+                                            static_cast<Eigen::Index>(residuals.size()));
+  int row = 0;
+  for (ceres::ResidualBlockId id : clusters) {
+    const int rows = problem.GetCostFunctionForResidualBlock(id)->num_residuals();
+    const Eigen::VectorXd g = j.middleRows(row, rows).transpose() * r.segment(row, rows);
+    const Eigen::VectorXd h = inverse_columns.transpose() * g;
+    out.robust += h * h.transpose();
+    row += rows;
+  }
+  const double c = static_cast<double>(clusters.size());
+  out.robust *= c / (c - 1.0);
+  return out;
+}
+
 ceres::Solver::Options solver_options(int max_iterations, int threads) {
   ceres::Solver::Options o;
-  o.linear_solver_type = ceres::DENSE_QR;
+  o.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   o.max_num_iterations = max_iterations;
   o.num_threads = std::max(1, threads);
   o.function_tolerance = 1e-9;
@@ -339,32 +432,84 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
   const std::int64_t t0 = log.samples.front().monotonic_ns;
   const auto seconds = [t0](std::int64_t ns) { return static_cast<double>(ns - t0) * 1e-9; };
 
+  // Every report of both boards, not one per cycle: the boards report every 8 ms, and an arm
+  // angle 8 ms after a command change still shows the arm's 4.4 ms transient that separates its
+  // inertia from the data path's lag. The sample lists the decodable reports of its cycle, oldest
+  // first, and its angles are those of the newest; the older 1047 reports' angles follow from their
+  // deltas, the older 1065 reports' from their positions in the raw reports of the log.
+  const std::vector<session_log::MotorInputReport> arm_positions =
+      session_log::motor_input_reports(log);
+  std::size_t cursor = 0;
+  const auto position_at = [&](std::int64_t host_ns) -> const session_log::MotorInputReport* {
+    while (cursor < arm_positions.size() && arm_positions[cursor].time_ns < host_ns) ++cursor;
+    if (cursor < arm_positions.size() && arm_positions[cursor].time_ns == host_ns) {
+      return &arm_positions[cursor++];
+    }
+    return nullptr;
+  };
+  const double arm_rad_per_count =
+      rig.arm_encoder.sign * kTwoPi / rig.arm_encoder.counts_per_joint_rev();
+  const double pendulum_rad_per_count =
+      rig.pendulum_encoder.sign * kTwoPi / rig.pendulum_encoder.counts_per_joint_rev();
+
   std::array<double, 2> last_t = {-1e300, -1e300};
-  std::vector<double> supply_v;
+  const auto observe = [&](std::int64_t host_ns, int joint, double angle_rad) {
+    const double t = seconds(host_ns);
+    if (t > last_t[joint]) e.observations.push_back({t, joint, angle_rad});
+    last_t[joint] = std::max(last_t[joint], t);
+  };
+  std::vector<const session_log::MotorInputReport*> cycle;
   for (const auto& s : log.samples) {
     if (s.n_motor_reports > 0) {
-      const double t = seconds(s.motor_report_host_ns[s.n_motor_reports - 1]);
-      if (t > last_t[0]) e.observations.push_back({t, 0, s.arm_angle_rad});
-      last_t[0] = std::max(last_t[0], t);
-      supply_v.push_back(s.supply_voltage_v);
+      cycle.clear();
+      for (std::int16_t k = 0; k < s.n_motor_reports; ++k) {
+        cycle.push_back(position_at(s.motor_report_host_ns[k]));
+      }
+      const session_log::MotorInputReport* newest = cycle.back();
+      for (std::int16_t k = 0; k + 1 < s.n_motor_reports; ++k) {
+        if (cycle[k] == nullptr || newest == nullptr) continue;
+        // The board's position is an i32 that wraps: the difference is taken in 32 bits.
+        const auto behind =
+            static_cast<std::int32_t>(static_cast<std::uint32_t>(cycle[k]->encoder_position) -
+                                      static_cast<std::uint32_t>(newest->encoder_position));
+        observe(s.motor_report_host_ns[k], 0, s.arm_angle_rad + behind * arm_rad_per_count);
+      }
+      observe(s.motor_report_host_ns[s.n_motor_reports - 1], 0, s.arm_angle_rad);
     }
-    if (s.n_encoder_reports > 0) {
-      const double t = seconds(s.encoder_report_host_ns[s.n_encoder_reports - 1]);
-      if (t > last_t[1]) e.observations.push_back({t, 1, s.pendulum_angle_rad});
-      last_t[1] = std::max(last_t[1], t);
+    std::int64_t after = 0;  // counts of the cycle's reports after report k
+    for (std::int16_t k = 0; k < s.n_encoder_reports; ++k) after += s.encoder_delta_counts[k];
+    for (std::int16_t k = 0; k < s.n_encoder_reports; ++k) {
+      after -= s.encoder_delta_counts[k];
+      observe(s.encoder_report_host_ns[k], 1,
+              s.pendulum_angle_rad - after * pendulum_rad_per_count);
     }
   }
   std::stable_sort(e.observations.begin(), e.observations.end(),
                    [](const OeObservation& a, const OeObservation& b) { return a.t_s < b.t_s; });
   if (e.observations.empty()) throw std::invalid_argument(e.name + ": no board reports");
 
-  if (!supply_v.empty()) {
-    std::nth_element(supply_v.begin(), supply_v.begin() + supply_v.size() / 2, supply_v.end());
-    const double median = supply_v[supply_v.size() / 2];
-    if (median > 0) {
-      e.supply_scale = median / rig.motor.nominal_voltage_v;
-      // The reading's quantisation (docs/phidget-protocol.md), uniform over one step.
-      e.input_gain_sigma = kSupplyStep_v / std::sqrt(12.0) / median;
+  // The supply: every report's reading. Its mean, with a tenth cut at each end against glitches,
+  // resolves the supply below the reading's step when the reading is noisy; readings that never
+  // change resolve it to one step only.
+  std::vector<double> supply_v;
+  for (const auto& r : arm_positions) supply_v.push_back(r.supply_v);
+  std::sort(supply_v.begin(), supply_v.end());
+  const std::size_t cut = supply_v.size() / 10;
+  const std::span<const double> kept(supply_v.data() + cut, supply_v.size() - 2 * cut);
+  if (!kept.empty()) {
+    double mean = 0, spread = 0;
+    for (double v : kept) mean += v;
+    mean /= static_cast<double>(kept.size());
+    for (double v : kept) spread += (v - mean) * (v - mean);
+    spread = std::sqrt(spread / static_cast<double>(std::max<std::size_t>(1, kept.size() - 1)));
+    if (mean > 0) {
+      e.supply_scale = mean / rig.motor.nominal_voltage_v;
+      // The reading's quantisation (docs/phidget-protocol.md): without half a step of noise to
+      // dither it, the supply is known to a step, uniform; with it, to the mean's own spread.
+      const double sigma_v = spread < kSupplyStep_v / 2
+                                 ? kSupplyStep_v / std::sqrt(12.0)
+                                 : spread / std::sqrt(static_cast<double>(kept.size()));
+      e.input_gain_sigma = sigma_v / mean;
     }
   }
 
@@ -426,7 +571,9 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
 }
 
 OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,
-                                    bool hold_input, const VoltageMotor& voltage_motor) {
+                                    InputBetweenSamples between,
+                                    const VoltageMotor& voltage_motor) {
+  const bool hold_input = between == InputBetweenSamples::held;
   OeExperiment e;
   e.name = raw.name;
   e.input_kind = raw.input_kind;
@@ -450,6 +597,14 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
   }
   // Braking at zero: a recorded duty of 0 is taken as eq. 4 at zero duty (the board braking).
   e.braking_fraction.assign(e.input.size(), 1.0);
+  if (between == InputBetweenSamples::cubic && n >= 2) {
+    // Catmull-Rom slopes: the centred difference inside, the one-sided one at the ends.
+    e.input_slope.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t lo = i == 0 ? 0 : i - 1, hi = i + 1 == n ? i : i + 1;
+      e.input_slope[i] = (raw.input[hi] - raw.input[lo]) / (raw.t_s[hi] - raw.t_s[lo]);
+    }
+  }
   return e;
 }
 
@@ -495,12 +650,18 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
     problem.SetParameterLowerBound(aux.data(), 0, 0.0);
     problem.SetParameterUpperBound(aux.data(), 0, 0.05);
   }
+  // The residual blocks in clusters for the robust covariance: each segment's, each prior's.
+  std::vector<ceres::ResidualBlockId> clusters;
+  std::vector<double*> free_blocks = {theta.data()};
+  if (held.size() < 2) free_blocks.push_back(aux.data());
   for (std::size_t i = 0; i < experiments.size(); ++i) {
     problem.AddParameterBlock(&gains[i], 1);
     if (experiments[i].input_gain_sigma > 0) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GainPrior, 1, 1>(
-                                   new GainPrior{experiments[i].input_gain_sigma}),
-                               nullptr, &gains[i]);
+      clusters.push_back(
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GainPrior, 1, 1>(
+                                       new GainPrior{experiments[i].input_gain_sigma}),
+                                   nullptr, &gains[i]));
+      free_blocks.push_back(&gains[i]);
     } else {
       problem.SetParameterBlockConstant(&gains[i]);
     }
@@ -517,17 +678,18 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
                       e.angle_sigma_rad[1] / w, e.angle_sigma_rad[1] / w / kVelocityDefectTime_s}};
     const int residuals = cost.residual_count();
     if (segments[k].t_next_s >= 0) {
-      problem.AddResidualBlock(
+      clusters.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<SegmentCost, ceres::DYNAMIC, 7, 2, 1, 4, 4>(
               new SegmentCost(cost), residuals),
-          nullptr, theta.data(), aux.data(), gain, states[k].data(), states[k + 1].data());
+          nullptr, theta.data(), aux.data(), gain, states[k].data(), states[k + 1].data()));
     } else {
-      problem.AddResidualBlock(
+      clusters.push_back(problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<SegmentCost, ceres::DYNAMIC, 7, 2, 1, 4>(
               new SegmentCost(cost), residuals),
-          nullptr, theta.data(), aux.data(), gain, states[k].data());
+          nullptr, theta.data(), aux.data(), gain, states[k].data()));
     }
   }
+  for (auto& x : states) free_blocks.push_back(x.data());
 
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options(options.max_iterations, options.num_threads), &problem, &summary);
@@ -586,18 +748,23 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
   const double dof = static_cast<double>(summary.num_residuals - summary.num_effective_parameters);
   result.residual_sigma = dof > 0 ? std::sqrt(2.0 * summary.final_cost / dof) : 0.0;
 
-  ceres::Covariance::Options covariance_options;
-  covariance_options.algorithm_type = ceres::DENSE_SVD;
-  covariance_options.null_space_rank = -1;
-  covariance_options.num_threads = std::max(1, options.num_threads);
-  ceres::Covariance covariance(covariance_options);
-  std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()},
-                                                                 {aux.data(), aux.data()}};
-  if (covariance.Compute(blocks, &problem)) {
-    Eigen::Matrix<double, 7, 7, Eigen::RowMajor> c;
-    covariance.GetCovarianceBlock(theta.data(), theta.data(), c.data());
-    std::array<double, 4> c_aux{};
-    covariance.GetCovarianceBlock(aux.data(), aux.data(), c_aux.data());
+  const int lag_column = options.estimate_lag ? 7 : -1;
+  const std::optional<LeadingCovariance> covariance =
+      leading_covariance(problem, free_blocks, clusters, options.estimate_lag ? 8 : 7);
+  if (covariance) {
+    // Each coordinate's larger variance: the robust one where the angle errors are correlated,
+    // the local one where few segments make the robust one a poor estimate of itself.
+    const Eigen::MatrixXd local =
+        covariance->local * (result.residual_sigma * result.residual_sigma);
+    Eigen::MatrixXd combined = local;
+    for (int i = 0; i < combined.rows(); ++i) {
+      const double robust = covariance->robust(i, i);
+      if (robust > combined(i, i) && combined(i, i) > 0) {
+        const double scale = std::sqrt(robust / combined(i, i));
+        combined.row(i) *= scale;
+        combined.col(i) *= scale;
+      }
+    }
     // The chain rule: d p / d theta at the optimum, by the same automatic differentiation.
     using Jet = ceres::Jet<double, 7>;
     std::array<Jet, 7> theta_jet;
@@ -605,17 +772,22 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
     const model::Parameters<Jet> p = natural_from_theta(theta_jet.data());
     Eigen::Matrix<double, 7, 7> jac;
     for (int i = 0; i < 7; ++i) jac.row(i) = p[static_cast<std::size_t>(i)].v.transpose();
-    const Eigen::Matrix<double, 7, 7> natural = jac * c * jac.transpose();
-    const double s2 = result.residual_sigma * result.residual_sigma;
+    const Eigen::Matrix<double, 7, 7> natural =
+        jac * combined.topLeftCorner(7, 7) * jac.transpose();
+    const Eigen::Matrix<double, 7, 7> natural_local =
+        jac * local.topLeftCorner(7, 7) * jac.transpose();
     for (std::size_t i = 0; i < 7; ++i) {
-      result.std_dev[i] =
-          std::sqrt(std::max(0.0, natural(static_cast<int>(i), static_cast<int>(i))) * s2);
+      const auto k = static_cast<int>(i);
+      result.std_dev[i] = std::sqrt(std::max(0.0, natural(k, k)));
+      result.local_std_dev[i] = std::sqrt(std::max(0.0, natural_local(k, k)));
     }
-    result.input_lag_std_s = std::sqrt(std::max(0.0, c_aux[0]) * s2);
+    result.input_lag_std_s =
+        lag_column < 0 ? 0.0 : std::sqrt(std::max(0.0, combined(lag_column, lag_column)));
   } else {
     result.warnings.push_back(
-        "output error: the covariance could not be computed (rank deficient)");
+        "output error: the covariance could not be computed (a direction the data leave free)");
     for (double& v : result.std_dev) v = std::numeric_limits<double>::quiet_NaN();
+    result.local_std_dev = result.std_dev;
   }
   if (!result.converged) {
     result.warnings.push_back("output error: no convergence: " + result.message);

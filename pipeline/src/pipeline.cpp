@@ -153,13 +153,10 @@ double smallest_step(const std::vector<double>& q) {
 identification::OeExperiment oe_experiment(const Recording& r, const Batch& batch) {
   if (r.oe) return *r.oe;
   const identification::RawExperiment& e = r.experiment;
-  // Linear between samples: a recorded input is mostly a sampled continuous signal (a measured
-  // voltage, a board's ramped duty). Held instead, the voltage rig's CSV (a sum of sines at 10 ms)
-  // gave mu1 -4.9 % where linear gives -0.07 %. A logger of step commands would want held: the
-  // import spec does not say yet.
+  // As the import spec says (docs/csv-import.md, input_between_samples; linear unless it says).
   return identification::oe_experiment_from_raw(
-      e, {smallest_step(e.q1) / std::sqrt(12.0), smallest_step(e.q2) / std::sqrt(12.0)}, false,
-      batch.voltage_motor);
+      e, {smallest_step(e.q1) / std::sqrt(12.0), smallest_step(e.q2) / std::sqrt(12.0)},
+      batch.input_between_samples, batch.voltage_motor);
 }
 
 // The refinement from the combined LSMI estimate, the held-out free runs, and the check that the

@@ -199,7 +199,8 @@ Json output_error_json(const pipeline::OutputError& oe) {
          {"std_dev", parameters_json(r.std_dev)},
          {"std_dev_basis",
           "local: sqrt(diag((J^T J)^-1)) of the angle residuals at the optimum, scaled by their "
-          "estimated sigma; assumes independent angle errors"},
+          "estimated sigma, or where larger the cluster-robust sandwich over the segments (errors "
+          "correlated within a segment); the model and the input taken as exact"},
          {"input_lag_s", r.input_lag_s},
          {"input_lag_std_s", r.input_lag_std_s},
          {"q2_offset_rad", r.q2_offset_rad},

@@ -116,6 +116,22 @@ std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log) {
   return out;
 }
 
+std::vector<MotorInputReport> motor_input_reports(const SessionLog& log) {
+  std::vector<MotorInputReport> out;
+  for (const furuta::rig_usb_report_t& r : log.usb_reports) {
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
+        r.kind != furuta::rig_usb_report_t::KIND_INPUT) {
+      continue;
+    }
+    bridge::MotorReport1065 m;
+    if (bridge::decode_input_1065(r.bytes, m) != bridge::CodecStatus::ok) continue;
+    out.push_back({r.time_ns, m.encoder_position, m.applied_duty(), m.supply_voltage_v()});
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const auto& a, const auto& b) { return a.time_ns < b.time_ns; });
+  return out;
+}
+
 bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board) {
   const std::string where = " in " + log.path.string();
   if (board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 &&

@@ -400,6 +400,7 @@ TEST(CsvImportSpec, ParsesDefaultsAndLoadsFromAFile) {
   EXPECT_EQ(spec.angle_unit, AngleUnit::rad);
   EXPECT_EQ(spec.pendulum_zero, PendulumZero::down);
   EXPECT_EQ(spec.input_kind, InputKind::duty);
+  EXPECT_EQ(spec.input_between_samples, InputBetweenSamples::linear);
   EXPECT_FALSE(
       spec.voltage_motor.has_value());  // duty input: eq. 4's motor comes from the rig config
   EXPECT_THROW(load_csv_import_spec(dir.path() / "absent.toml"), ConfigError);
@@ -433,6 +434,19 @@ TEST(CsvImportSpec, BadEnumValuesListTheChoices) {
   text = spec_text();
   text.replace(text.find("time_unit = \"s\""), 15, "time_unit = \"min\"");
   EXPECT_THAT(spec_error(text).what(), HasSubstr("csv.time_unit: 'min' is not one of: s, ms, us"));
+}
+
+TEST(CsvImportSpec, WhatTheInputDidBetweenSamplesIsOneOfThree) {
+  EXPECT_EQ(parse_csv_import_spec(spec_text("input_between_samples = \"held\"\n"), "spec.toml")
+                .input_between_samples,
+            InputBetweenSamples::held);
+  EXPECT_EQ(parse_csv_import_spec(spec_text("input_between_samples = \"cubic\"\n"), "spec.toml")
+                .input_between_samples,
+            InputBetweenSamples::cubic);
+  const ConfigError e = spec_error(spec_text("input_between_samples = \"smooth\"\n"));
+  EXPECT_EQ(e.line(), 10);
+  EXPECT_THAT(e.what(), HasSubstr("spec.toml:10: csv.input_between_samples: 'smooth' is not one "
+                                  "of: held, linear, cubic"));
 }
 
 TEST(CsvImportSpec, CountsNeedCountsPerRevolution) {

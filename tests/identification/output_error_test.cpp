@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -113,16 +114,19 @@ class OutputErrorSim : public ::testing::Test {
 // Figures for the report and the README (not a check): run with
 // --gtest_also_run_disabled_tests --gtest_filter='*Explore*'.
 TEST_F(OutputErrorSim, DISABLED_Explore) {
-  const std::vector<std::array<std::int64_t, 3>> seeds = {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}};
+  const std::vector<std::array<std::int64_t, 3>> seeds = {
+      {1, 2, 3}, {4, 5, 6}, {7, 8, 9}, {10, 11, 12}, {13, 14, 15}};
   std::vector<Excitation> excitations = {
-      {}, {"bang_bang", 0.1}, {"bang_bang", 0.5}, {"chirp", 0.1}, {"multisine", 0.3}};
+      {}, {"bang_bang", 0.1}, {"bang_bang", 0.5}, {"chirp", 0.1}, {"multisine", 0.1}};
   if (const char* only = std::getenv("OE_EXPLORE_PROFILE")) {
     excitations = {{only, std::atof(std::getenv("OE_EXPLORE_AMPLITUDE"))}};
   }
   for (const Excitation& x : excitations) {
     for (const auto& s : seeds) {
       const auto t0 = std::chrono::steady_clock::now();
-      const Fit f = fit(s[0], s[1], s[2], {}, x);
+      OutputErrorOptions o;
+      if (const char* seg = std::getenv("OE_SEGMENT")) o.segment_s = std::atof(seg);
+      const Fit f = fit(s[0], s[1], s[2], o, x);
       const double seconds =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       print(f, x.profile + " " + std::to_string(x.amplitude_duty) + " seeds " +
@@ -158,18 +162,20 @@ TEST_F(OutputErrorSim, DISABLED_ExploreSteps) {
   }
 }
 
-// The issue's targets on the default sessions (bang-bang, amplitude 0.3, 16 ms), two fitted and
-// one held out: every mu and fv1 within 1 % of the truth, fv2 within 5 %, the truth within 3
-// reported standard deviations; the lag and the pendulum's zero as the simulated rig made them; the
-// held-out free run closer to the measured angles than LSMI's.
-void expect_targets(const OutputErrorSim::Fit& f, const std::string& what) {
+// The issue's targets for one fit (two sessions fitted, one held out): every mu and fv1 within 1 %
+// of the truth, fv2 within 5 %; the lag and the pendulum's zero as the simulated rig made them;
+// residuals at the encoders' quantisation; the result in the physical region; the held-out free
+// run closer to the measured angles than LSMI's. The truth's distance in reported standard
+// deviations is returned for the caller to judge over many fits.
+std::vector<double> expect_targets(const OutputErrorSim::Fit& f, const std::string& what) {
   SCOPED_TRACE(what);
   EXPECT_TRUE(f.oe.converged) << f.oe.message;
+  std::vector<double> sds;
   for (std::size_t i = 0; i < model::kParameterCount; ++i) {
     const double truth = f.truth[i];
     const double tolerance = i == 6 ? 0.05 : 0.01;
     EXPECT_NEAR(f.oe.estimate[i], truth, tolerance * std::abs(truth)) << model::kParameterNames[i];
-    EXPECT_LT(std::abs(f.oe.estimate[i] - truth), 3 * f.oe.std_dev[i]) << model::kParameterNames[i];
+    sds.push_back(std::abs(f.oe.estimate[i] - truth) / f.oe.std_dev[i]);
   }
   // The physical region (docs/model.md).
   const model::Parameters<double>& p = f.oe.estimate;
@@ -194,16 +200,70 @@ void expect_targets(const OutputErrorSim::Fit& f, const std::string& what) {
       simulate_free_run(f.held_out, f.oe.estimate, motor, f.oe.input_lag_s, f.oe.q2_offset_rad);
   EXPECT_LT(oe.rmse_rad[1], lsmi.rmse_rad[1]);
   EXPECT_LT(oe.rmse_rad[0], lsmi.rmse_rad[0]);
+  return sds;
+}
+
+// The truth within 3 reported standard deviations, judged as a calibrated estimate is: of normal
+// errors 0.27 % lie beyond 3 sd, so over the 7 parameters of five fits a strict test would fail
+// about one run in twelve with perfect standard deviations. The parameters of one fit move
+// together (the arm's inertia and the lag), so fits are counted: at most one of them with a
+// parameter beyond 3 sd, none beyond 4.
+void expect_calibrated(const std::vector<std::vector<double>>& fits, const std::string& what) {
+  std::size_t beyond3 = 0;
+  double worst = 0;
+  for (const std::vector<double>& sds : fits) {
+    const double fit_worst = *std::max_element(sds.begin(), sds.end());
+    beyond3 += fit_worst > 3.0;
+    worst = std::max(worst, fit_worst);
+  }
+  EXPECT_LE(beyond3, 1u) << what;
+  EXPECT_LT(worst, 4.0) << what;
 }
 
 TEST_F(OutputErrorSim, DefaultSessionsMeetTheTargets) {
-  expect_targets(fit(1, 2, 3), "seeds 1 2, held out 3");
-  expect_targets(fit(4, 5, 6), "seeds 4 5, held out 6");
+  const std::vector<double> sds = expect_targets(fit(1, 2, 3), "seeds 1 2, held out 3");
+  EXPECT_LT(*std::max_element(sds.begin(), sds.end()), 3.0);
 }
 
-TEST_F(OutputErrorSim, GentleAndStrongBangBangMeetTheTargets) {
-  expect_targets(fit(1, 2, 3, {}, {"bang_bang", 0.1}), "amplitude 0.1");
-  expect_targets(fit(1, 2, 3, {}, {"bang_bang", 0.5}), "amplitude 0.5");
+// Five seed triples of each excitation the issue names: bang-bang at amplitude 0.1, 0.3 and 0.5,
+// the chirp and the multisine (at 0.1: at 0.3 both drive the arm past its limit within 2 s).
+class RefinementTargets : public OutputErrorSim {
+ public:
+  static void five_seed_triples(const Excitation& x) {
+    std::vector<std::vector<double>> fits;
+    for (std::int64_t first : {1, 4, 7, 10, 13}) {
+      fits.push_back(expect_targets(fit(first, first + 1, first + 2, {}, x),
+                                    x.profile + " " + std::to_string(x.amplitude_duty) + " seeds " +
+                                        std::to_string(first) + " " + std::to_string(first + 1)));
+    }
+    expect_calibrated(fits, x.profile);
+  }
+};
+
+TEST_F(RefinementTargets, BangBangAtTheDefaultAmplitude) {
+  five_seed_triples({"bang_bang", 0.3});
+}
+
+TEST_F(RefinementTargets, GentleBangBang) {
+  five_seed_triples({"bang_bang", 0.1});
+}
+
+// At 0.5 the arm reaches its +-86 degree thresholds before any switch period ends, so the sign
+// follows the thresholds alone and every seed gives the same session: one fit says it all. Its
+// LSMI start is 28 % off (the pendulum spins over at 16 ms samples).
+TEST_F(RefinementTargets, StrongBangBang) {
+  const Fit f = fit(1, 2, 3, {}, {"bang_bang", 0.5});
+  const std::vector<double> sds = expect_targets(f, "amplitude 0.5");
+  EXPECT_LT(*std::max_element(sds.begin(), sds.end()), 3.0);
+  EXPECT_GT(std::abs(f.lsmi.combined.estimate.mu1 - f.truth.mu1), 0.1 * f.truth.mu1);
+}
+
+TEST_F(RefinementTargets, Chirp) {
+  five_seed_triples({"chirp", 0.1});
+}
+
+TEST_F(RefinementTargets, Multisine) {
+  five_seed_triples({"multisine", 0.1});
 }
 
 // A start outside the physical region (what a reversed pendulum gives LSMI: mu3 < 0 and a mass
@@ -225,6 +285,34 @@ TEST_F(OutputErrorSim, AStartOutsideThePhysicalRegionIsMovedIntoItAndSaid) {
     EXPECT_NEAR(r.estimate[i], truth[i], (i == 6 ? 0.05 : 0.01) * std::abs(truth[i]))
         << model::kParameterNames[i];
   }
+}
+
+// Angle errors correlated over a segment (a one-count wobble of the pendulum's reading at 1.2 Hz,
+// its own swing, as an eccentric encoder disc would give) are not independent noise: the reported
+// standard deviations take the cluster-robust estimate where it is the larger, and the truth stays
+// within 3 of them. On clean sessions the two agree.
+TEST_F(OutputErrorSim, CorrelatedAngleErrorsWidenTheStandardDeviations) {
+  const Fit clean = fit(1, 2, 3);
+  std::vector<OeExperiment> wobbly = clean.experiments;
+  const double count = 2 * std::numbers::pi / 4096;
+  for (OeExperiment& e : wobbly) {
+    for (OeObservation& o : e.observations) {
+      if (o.joint == 1) o.angle_rad += count * std::sin(2 * std::numbers::pi * 1.2 * o.t_s);
+    }
+  }
+  const OutputErrorResult r =
+      refine_output_error(wobbly, clean.lsmi.combined.estimate, clean.truth_motor);
+  ASSERT_TRUE(r.converged) << r.message;
+  std::size_t widened = 0;
+  for (std::size_t i = 0; i < model::kParameterCount; ++i) {
+    const char* name = model::kParameterNames[i];
+    std::printf("[ measured ] %s: robust / local sd %.2f clean, %.2f with the wobble\n", name,
+                clean.oe.std_dev[i] / clean.oe.local_std_dev[i], r.std_dev[i] / r.local_std_dev[i]);
+    EXPECT_LT(clean.oe.std_dev[i], 1.1 * clean.oe.local_std_dev[i]) << name;
+    widened += r.std_dev[i] > 1.2 * r.local_std_dev[i];
+    EXPECT_LT(std::abs(r.estimate[i] - clean.truth[i]), 3 * r.std_dev[i]) << name;
+  }
+  EXPECT_GE(widened, 4u);
 }
 
 // With the lag held at a wrong value, the fit is worse: the lag is what the data say, not free.

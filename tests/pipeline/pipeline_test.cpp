@@ -280,7 +280,7 @@ TEST(PipelineSettings, FromTheConfiguration) {
   EXPECT_FALSE(s.sivia.run);
   EXPECT_FALSE(s.simulation.run);
   EXPECT_TRUE(s.output_error.run) << "on by default";
-  EXPECT_EQ(s.output_error.options.segment_s, 0.5);
+  EXPECT_EQ(s.output_error.options.segment_s, 0.25);
   rig.output_error.enabled = false;
   rig.output_error.segment_s = 0.8;
   rig.output_error.estimate_lag = false;

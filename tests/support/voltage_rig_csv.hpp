@@ -28,13 +28,25 @@ struct CsvColumns {
   std::function<double(double)> volts = [](double v) { return v; };
 };
 
+// Encoders that quantise the angles as incremental ones do (floor of the count), or none (0).
+struct CsvEncoders {
+  double arm_counts_per_rev = 0;
+  double pendulum_counts_per_rev = 0;
+};
+
 // 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms after 2 s of settling, in radians from
 // hanging down, as columns t,q1,q2,volts. The volts column may be written late by input_delay_s (a
-// logger that stamps the input after the angles it drives).
+// logger that stamps the input after the angles it drives; negative: the voltage reaches the motor
+// that much after it is recorded, an amplifier's lag).
 inline std::filesystem::path write_voltage_rig_csv(const std::filesystem::path& path, double phase,
                                                    double input_delay_s = 0,
-                                                   const CsvColumns& columns = {},
-                                                   int digits = 10) {
+                                                   const CsvColumns& columns = {}, int digits = 10,
+                                                   CsvEncoders encoders = {}) {
+  const auto quantised = [](double q, double counts_per_rev) {
+    if (counts_per_rev <= 0) return q;
+    const double step = 2 * std::numbers::pi / counts_per_rev;
+    return std::floor(q / step) * step;
+  };
   std::ofstream out(path);
   out << "t,q1,q2,volts\n" << std::setprecision(digits);
   constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
@@ -51,7 +63,8 @@ inline std::filesystem::path write_voltage_rig_csv(const std::filesystem::path& 
   for (int step = -4000; step < 20000; ++step) {
     const double t = step * h;
     if (step >= 0 && step % 20 == 0) {
-      out << t << "," << columns.q1(x.q1) << "," << columns.q2(x.q2) << ","
+      out << t << "," << columns.q1(quantised(x.q1, encoders.arm_counts_per_rev)) << ","
+          << columns.q2(quantised(x.q2, encoders.pendulum_counts_per_rev)) << ","
           << columns.volts(volts(t - input_delay_s)) << "\n";
     }
     const double v = volts(t + h / 2);

@@ -79,7 +79,7 @@ struct IdentificationConfig {
 // [output_error]: the output-error refinement after LSMI (identification::refine_output_error).
 struct OutputErrorConfig {
   bool enabled = true;
-  double segment_s = 0.5;    // multiple shooting's segment length
+  double segment_s = 0.25;   // multiple shooting's segment length
   double substep_s = 1e-3;   // the RK4 substeps' longest
   bool estimate_lag = true;  // the data path's lag as a parameter (else held at the core's 1 ms)
   int max_iterations = 50;

@@ -40,6 +40,7 @@ struct SimulatedRigConfig {
 
   double arm_angle_noise_rad = 0.0;       // std dev, added before quantisation
   double pendulum_angle_noise_rad = 0.0;  // std dev, added before quantisation
+  double supply_noise_v = 0.0;  // std dev of the 1065's supply reading, before quantisation
   std::int64_t usb_latency_ns = 1'000'000;
   std::int64_t usb_latency_jitter_ns = 0;  // uniform in [0, jitter]
 

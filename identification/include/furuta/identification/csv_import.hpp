@@ -23,6 +23,10 @@ struct VoltageMotor {
 enum class AngleUnit { rad, deg, counts };
 enum class InputKind { duty, voltage, torque };
 enum class PendulumZero { down, up };
+// What the recorded input did between two samples, for the output-error fit's simulation: held
+// (a logger of step commands, a DAC), linear (a ramped duty) or a smooth curve through the
+// samples (cubic Hermite with Catmull-Rom slopes: a measured continuous voltage).
+enum class InputBetweenSamples { held, linear, cubic };
 
 struct CsvColumn {
   std::string name;    // header name (or 1-based index as text when the file has no header)
@@ -52,6 +56,7 @@ struct CsvImportSpec {
   double arm_counts_per_rev = 0, pendulum_counts_per_rev = 0;
   PendulumZero pendulum_zero = PendulumZero::down;
   InputKind input_kind = InputKind::duty;
+  InputBetweenSamples input_between_samples = InputBetweenSamples::linear;
   // The [motor] table: set exactly when input_kind = voltage (pass *voltage_motor to preprocess or
   // identify).
   std::optional<VoltageMotor> voltage_motor;

@@ -31,6 +31,8 @@ struct OeExperiment {
   std::vector<OeObservation> observations;  // time order
   // The applied input at the breakpoints (linear between, held outside): duty, volts or N m.
   std::vector<double> input_t_s, input;
+  // Its slope at each breakpoint [1/s] for a cubic Hermite curve between them; empty: linear.
+  std::vector<double> input_slope;
   // Duty only, per breakpoint (in force from it to the next): what an applied duty of exactly 0
   // does, as a fraction of eq. 4's braking at zero duty (0: the motor coasts).
   std::vector<double> braking_fraction;
@@ -48,27 +50,31 @@ struct OeExperiment {
   std::vector<std::string> warnings;
 };
 
-// From a session log: the arm angle of the newest 1065 report of each cycle at its host time, the
-// pendulum's likewise from the 1047; the input rebuilt from every command written to the 1065
-// (session_log::motor_command_writes) and the board's ramp towards it, scaled by the median logged
-// supply voltage. `rig` gives the encoders' resolutions, the motor's nominal voltage and the
-// braking before the first command (the log's carried configuration, or the one the user named).
+// From a session log: the angles of every report of both boards at its host time; the input rebuilt
+// from every command written to the 1065 (session_log::motor_command_writes) and the board's ramp
+// towards it, scaled by the mean supply reading of the 1065's reports. `rig` gives the encoders'
+// geometry, the motor's nominal voltage and the braking before the first command (the log's
+// carried configuration, or the one the user named).
 OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
                                     const config::RigConfig& rig);
 
 // From a recording (a CSV, or any RawExperiment): both angles at each sample time, the input as
-// recorded, held from one sample to the next (`hold_input`, a logger that records what it wrote)
-// or linear between samples. `angle_sigma_rad` as in OeExperiment (one count / sqrt(12)).
+// recorded with `between` samples (held: a logger that records what it wrote; linear; cubic: a
+// sampled smooth signal, where linear's chords shrink every peak: 0.06 % of every parameter on
+// the voltage rig's six sines at 10 ms). `angle_sigma_rad` as in OeExperiment (one count /
+// sqrt(12)).
 OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,
-                                    bool hold_input, const VoltageMotor& voltage_motor = {});
+                                    InputBetweenSamples between,
+                                    const VoltageMotor& voltage_motor = {});
 
 struct OutputErrorOptions {
   // Multiple shooting: each experiment is cut into segments of about this length, each with its
-  // own initial state. 0.5 s: about half a pendulum period (0.84 s), short enough that the LSMI
-  // start (a few % off) keeps each segment's simulation in phase with the data and that the
-  // upright region's divergence (time constant about 0.13 s) cannot grow by more than e^4 within
-  // one; long enough that the 4 state unknowns are few against the segment's ~60 angles.
-  double segment_s = 0.5;
+  // own initial state. 0.25 s, a third of a pendulum period (0.84 s): short enough that an LSMI
+  // start 30 % off (a pendulum spinning over at amplitude 0.5) keeps each segment's simulation in
+  // phase with the data, where 0.5 s segments lost it and stopped far off; long enough that the 4
+  // state unknowns are few against the segment's ~60 angles. The continuity residuals make the
+  // optimum one trajectory whatever the length: it decides whether the fit gets there.
+  double segment_s = 0.25;
   // Fixed RK4 substeps at most this long between observations; the arm's time constant is 4.4 ms.
   double substep_s = 1e-3;
   // The data path's lag (host time of an angle minus the time of the state it shows, relative to
@@ -90,10 +96,12 @@ struct OutputErrorResult {
   model::Parameters<double> estimate{};
   // Local standard deviations: sqrt(diag(J^T J)^-1) at the optimum, J the Jacobian of the residuals
   // weighted by the assumed angle noise, scaled by the residuals' estimated sigma (the weighted
-  // RMS over degrees of freedom) and carried to the natural parameters by the chain rule. They
-  // assume independent angle errors; quantisation of a slow angle is correlated, so they can be
-  // optimistic.
+  // RMS over degrees of freedom), or where larger the cluster-robust ones (the sandwich over the
+  // segments: quantisation of a slow angle repeats its error over many samples, which the first
+  // counts as independent), carried to the natural parameters by the chain rule. Both are local:
+  // the model and the input are taken as exact.
   model::Parameters<double> std_dev{};
+  model::Parameters<double> local_std_dev{};  // the first of the two alone (<= std_dev)
   double input_lag_s = 0, input_lag_std_s = 0;
   double q2_offset_rad = 0;
   std::vector<double> input_gain;                // per experiment (1 when held)

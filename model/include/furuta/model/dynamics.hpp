@@ -5,6 +5,7 @@
 // Taylor jets.
 
 #include <cmath>
+#include <type_traits>
 
 #include "furuta/model/parameters.hpp"
 
@@ -66,21 +67,29 @@ double total_energy(const Parameters<double>& p, const PendulumState& x);
 double energy_rate(const Parameters<double>& p, const PendulumState& x, double tau_nm);
 
 // One classical Runge-Kutta 4 step of dt_s. `torque` maps a state to the arm torque, so a
-// speed-dependent torque (eq. 4) is evaluated inside the step.
+// speed-dependent torque (eq. 4) is evaluated inside the step; or a state and the stage's time as
+// a fraction of the step (0, 1/2, 1/2, 1), for an input that changes within the step.
 template <typename TorqueOfState>
 PendulumState rk4_step(const Parameters<double>& p, const PendulumState& x, double dt_s,
                        TorqueOfState&& torque, bool arm_clamped = false) {
-  auto f = [&](const PendulumState& s) {
-    const JointAccelerations<double> a = forward_dynamics(p, s, torque(s), arm_clamped);
+  auto f = [&](const PendulumState& s, double fraction) {
+    double tau = 0.0;
+    if constexpr (std::is_invocable_v<TorqueOfState&, const PendulumState&, double>) {
+      tau = torque(s, fraction);
+    } else {
+      (void)fraction;
+      tau = torque(s);
+    }
+    const JointAccelerations<double> a = forward_dynamics(p, s, tau, arm_clamped);
     return PendulumState{s.dq1, a.ddq1, s.dq2, a.ddq2};
   };
   auto add = [](const PendulumState& s, const PendulumState& d, double h) {
     return PendulumState{s.q1 + h * d.q1, s.dq1 + h * d.dq1, s.q2 + h * d.q2, s.dq2 + h * d.dq2};
   };
-  const PendulumState k1 = f(x);
-  const PendulumState k2 = f(add(x, k1, dt_s / 2));
-  const PendulumState k3 = f(add(x, k2, dt_s / 2));
-  const PendulumState k4 = f(add(x, k3, dt_s));
+  const PendulumState k1 = f(x, 0.0);
+  const PendulumState k2 = f(add(x, k1, dt_s / 2), 0.5);
+  const PendulumState k3 = f(add(x, k2, dt_s / 2), 0.5);
+  const PendulumState k4 = f(add(x, k3, dt_s), 1.0);
   PendulumState out;
   out.q1 = x.q1 + dt_s / 6 * (k1.q1 + 2 * k2.q1 + 2 * k3.q1 + k4.q1);
   out.dq1 = x.dq1 + dt_s / 6 * (k1.dq1 + 2 * k2.dq1 + 2 * k3.dq1 + k4.dq1);

@@ -101,7 +101,10 @@ struct Batch {
   std::optional<model::Parameters<double>> nominal;  // CAD values
   std::optional<model::Parameters<double>> truth;    // simulated sessions: the rig's parameters
   identification::VoltageMotor voltage_motor;        // CSV recordings with voltage input
-  double angle_resolution_rad = 0;                   // the pendulum's quantisation
+  // CSV recordings: what the input did between samples (the import spec's input_between_samples).
+  identification::InputBetweenSamples input_between_samples =
+      identification::InputBetweenSamples::linear;
+  double angle_resolution_rad = 0;  // the pendulum's quantisation
 };
 
 struct SiviaSettings {

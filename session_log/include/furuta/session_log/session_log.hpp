@@ -60,6 +60,18 @@ struct MotorCommandWrite {
 // to decode are skipped.
 std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log);
 
+// A report the 1065 sent (an INPUT report of the log), decoded: what the board measured when it
+// made the report, received by the host at `time_ns`.
+struct MotorInputReport {
+  std::int64_t time_ns = 0;
+  std::int32_t encoder_position = 0;  // the board's count; an i32 that wraps
+  double applied_duty = 0.0;          // [-1, 1], n/255
+  double supply_v = 0.0;
+};
+
+// Every decodable report of the 1065, in time order (reports of equal time in the log's order).
+std::vector<MotorInputReport> motor_input_reports(const SessionLog& log);
+
 // The raw USB reports of one board, as a trace the replay backend can play (the device line from
 // the session start record).
 bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board);
