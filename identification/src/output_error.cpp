@@ -5,6 +5,7 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -647,7 +648,7 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
     problem.SetManifold(aux.data(), new ceres::SubsetManifold(2, held));
   }
   if (options.estimate_lag) {
-    problem.SetParameterLowerBound(aux.data(), 0, 0.0);
+    problem.SetParameterLowerBound(aux.data(), 0, std::min(options.min_lag_s, 0.0));
     problem.SetParameterUpperBound(aux.data(), 0, 0.05);
   }
   // The residual blocks in clusters for the robust covariance: each segment's, each prior's.
@@ -791,6 +792,14 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
   }
   if (!result.converged) {
     result.warnings.push_back("output error: no convergence: " + result.message);
+  }
+  if (result.input_lag_s < 0) {
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "output error: the angles lead the recorded input by %.2f ms (a negative lag): "
+                  "the logger stamps the input after the angles it drives?",
+                  -result.input_lag_s * 1e3);
+    result.warnings.push_back(text);
   }
   return result;
 }

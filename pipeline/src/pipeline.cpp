@@ -164,8 +164,10 @@ identification::OeExperiment oe_experiment(const Recording& r, const Batch& batc
 std::optional<OutputError> run_output_error(const OutputErrorSettings& settings, const Batch& batch,
                                             Run& run, Progress* progress) {
   const auto warn = [&](const std::string& text) {
-    run.identification.warnings.push_back("output error: " + text);
-    run.warnings.push_back({Warning::Stage::output_error, "output error: " + text});
+    // The refinement's own warnings already say where they come from.
+    const std::string said = text.rfind("output error: ", 0) == 0 ? text : "output error: " + text;
+    run.identification.warnings.push_back(said);
+    run.warnings.push_back({Warning::Stage::output_error, said});
   };
   std::vector<const Recording*> fitted;
   for (const Recording& r : batch.fit) fitted.push_back(&r);
@@ -190,9 +192,13 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
   for (const Recording* r : fitted) experiments.push_back(oe_experiment(*r, batch));
   if (progress != nullptr) progress->output_error_started(experiments.size());
   OutputError out;
+  identification::OutputErrorOptions options = settings.options;
+  // Another logger may stamp its input after the angles (docs/csv-import.md); a session log's
+  // angles never lead the commands written.
+  if (!logs) options.min_lag_s = -0.05;
   try {
     out.result = identification::refine_output_error(
-        experiments, run.identification.combined.estimate, batch.rig.motor, settings.options);
+        experiments, run.identification.combined.estimate, batch.rig.motor, options);
   } catch (const std::invalid_argument& e) {
     warn(std::string("skipped: ") + e.what());
     return std::nullopt;

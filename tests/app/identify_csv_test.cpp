@@ -346,6 +346,13 @@ TEST_F(IdentifyCsv, ANegativeEstimatedInputLagIsAWarning) {
   const auto lag = json.find("\"input_lag_s\": ");
   ASSERT_NE(lag, std::string::npos);
   EXPECT_NEAR(std::strtod(json.c_str() + lag + 15, nullptr), -5e-3, 1e-3);
+  // The refinement finds the same, and says so.
+  const nlohmann::json oe = nlohmann::json::parse(json)["output_error"];
+  EXPECT_TRUE(oe["converged"].get<bool>()) << oe["message"];
+  EXPECT_NEAR(oe["input_lag_s"].get<double>(), -5e-3, 0.2e-3);
+  EXPECT_NE(out_.str().find("warning: output error: the angles lead the recorded input by 4.9"),
+            std::string::npos)
+      << out_.str();
 }
 
 // Before: a second run into the same directory left the first run's figures beside its files.

@@ -320,10 +320,11 @@ TEST_F(OutputErrorSim, AHeldWrongLagShowsInTheResiduals) {
   OutputErrorOptions held;
   held.estimate_lag = false;
   held.input_lag_s = 3e-3;
+  held.max_iterations = 15;  // far enough to show it; a wrong lag takes the full 50 to stop
   const Fit wrong = fit(1, 2, 3, held);
-  const Fit right = fit(1, 2, 3);
   EXPECT_EQ(wrong.oe.input_lag_s, 3e-3);
-  EXPECT_GT(wrong.oe.residual_sigma, 1.3 * right.oe.residual_sigma);
+  // The right lag leaves the encoders' quantisation, sigma 1 (DefaultSessionsMeetTheTargets).
+  EXPECT_GT(wrong.oe.residual_sigma, 1.3) << wrong.oe.message;
 }
 
 TEST(OutputError, RefusesAnExperimentWithoutAngles) {

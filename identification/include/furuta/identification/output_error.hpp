@@ -78,9 +78,12 @@ struct OutputErrorOptions {
   // Fixed RK4 substeps at most this long between observations; the arm's time constant is 4.4 ms.
   double substep_s = 1e-3;
   // The data path's lag (host time of an angle minus the time of the state it shows, relative to
-  // the command writes' times): estimated (>= 0) from `input_lag_s` as start, or held at it.
+  // the command writes' times): estimated in [min_lag_s, 50 ms] from `input_lag_s` as start, or
+  // held at it. A session log's angles cannot lead the commands written (0); another logger may
+  // stamp its input after the angles it drives (a CSV: -50 ms, and a negative estimate warns).
   bool estimate_lag = true;
   double input_lag_s = 1e-3;
+  double min_lag_s = 0.0;
   // The pendulum's zero: an offset added to every measured q2 (a quantising encoder reads half a
   // count low on average; a rig zeroed slightly off its rest). Estimated, or held at 0.
   bool estimate_q2_offset = true;
