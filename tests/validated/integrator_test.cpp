@@ -530,6 +530,52 @@ TEST(Integrator, FailuresAreReportedWithTimeAndReason) {
   EXPECT_NE(coarse.reason.find("Picard"), std::string::npos);
 }
 
+// The affine form in the start (what set inversion reads as linear constraints): every sampled
+// solution at time t lies in offset + a (x0 - origin), and the part it leaves unexplained
+// (offset) is much narrower than the enclosure, because the start's spread is carried by a.
+TEST(Integrator, AffineFormHoldsEverySolutionAndCarriesTheStart) {
+  const model::Parameters<double> p = model::paper_run1();
+  const Box state{Interval(0.1, 0.102), Interval(2.0, 2.05), Interval(-0.3, -0.297),
+                  Interval(-1.0, -0.95)};
+  const Box x0 = FurutaDynamics::initial_box(state, parameters_around(p, 1e-3));
+  const FurutaDynamics system(Interval(0.05));
+  IntegratorOptions options;
+  options.t_end = 0.3;
+  options.tolerance = 1e-11;
+  options.max_inflation = 1.0;
+  const IntegrationResult r = integrate(system, x0, options);
+  ASSERT_TRUE(r.ok()) << r.reason;
+  std::mt19937_64 rng(20);
+  const std::vector<Point<11>> points = testing::sample_box<11>(x0, 100, rng);
+  std::size_t checks = 0;
+  for (double t : {0.0, 0.013, r.tube.steps[3].t1, 0.15, 0.3}) {
+    const AffineEnclosure e = r.tube.affine_at(t);
+    ASSERT_EQ(e.dimension, 11U);
+    const Box at = r.tube.enclosure_at(t);
+    for (std::size_t c : {std::size_t{0}, std::size_t{2}}) {
+      // The start's spread is in a: the rest is a small part of the enclosure.
+      EXPECT_LT(e.offset[c].width(), 0.2 * at[c].width()) << "t " << t << " component " << c;
+    }
+    for (const Point<11>& x : points) {
+      const Point<11> xt = testing::simulate(system, x, 0.0, t, 1e-4);
+      for (std::size_t c = 0; c < 11; ++c) {
+        Interval v = e.offset[c];
+        for (std::size_t k = 0; k < 11; ++k) {
+          v += Interval(e.a[c * 11 + k]) *
+               (Interval(static_cast<double>(x[k])) - Interval(e.origin[k]));
+        }
+        ++checks;
+        EXPECT_TRUE(static_cast<double>(xt[c]) >= v.lo() - 1e-12 &&
+                    static_cast<double>(xt[c]) <= v.hi() + 1e-12)
+            << "t " << t << " component " << c;
+      }
+    }
+  }
+  EXPECT_GT(checks, 5000U);
+  EXPECT_THROW((void)r.tube.affine_at(0.31), std::out_of_range);
+  EXPECT_THROW((void)r.tube.affine_at(-0.01), std::out_of_range);
+}
+
 TEST(Integrator, TubeQueries) {
   const Box x0{Interval(-1.755, -1.735), Interval(-0.01, 0.01)};
   IntegratorOptions options;

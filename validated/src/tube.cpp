@@ -4,6 +4,7 @@
 #include "tube.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <utility>
 
 #include "interval_matrix.hpp"
@@ -33,6 +34,41 @@ Box Tube::step_form(std::size_t index, const Interval& s) const {
   for (std::size_t i = 0; i < n; ++i) {
     out[i] = horner(step.centre, n, i, order, s) + horner(step.second, n, i, order, s) +
              linear0[i] + quadratic[i] + linear[i] + s_k1 * step.remainder[i];
+  }
+  return out;
+}
+
+AffineEnclosure Tube::affine_at(double t) const {
+  if (!(t >= t_start && t <= t_end()) || steps.empty()) {
+    throw std::out_of_range("Tube::affine_at: t outside the tube");
+  }
+  // The step that starts at or before t and ends after it (the last one at t_end()).
+  auto it = std::upper_bound(steps.begin(), steps.end(), t,
+                             [](double time, const TubeStep& s) { return time < s.t1; });
+  if (it == steps.end()) --it;
+  const TubeStep& step = *it;
+  const std::size_t n = dimension;
+  const Interval s = (Interval(t) - Interval(step.t0)) & Interval(0.0, step.h.hi());
+  const IMatrix v = jacobian_series(step.jacobian, n, order, s);
+  const IMatrix vc = v * from_point(n, step.c);
+  AffineEnclosure out;
+  out.dimension = n;
+  out.rho = step.r0.empty() ? r0 : step.r0;
+  out.origin = step.origin.empty() ? initial.mid() : step.origin;
+  out.a.resize(n * n);
+  IMatrix rest(n);
+  for (std::size_t k = 0; k < n * n; ++k) {
+    out.a[k] = vc.v[k].mid();
+    rest.v[k] = vc.v[k] - Interval(out.a[k]);
+  }
+  const std::vector<Interval> linear_rest = rest * out.rho;
+  const std::vector<Interval> errors = (v * from_point(n, step.b)) * step.r;
+  const std::vector<Interval> quadratic = v * forms_range(step.quad, out.rho);
+  const Interval s_k1 = pow(s, order + 1);
+  out.offset.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out.offset[i] = horner(step.centre, n, i, order, s) + horner(step.second, n, i, order, s) +
+                    linear_rest[i] + quadratic[i] + errors[i] + s_k1 * step.remainder[i];
   }
   return out;
 }

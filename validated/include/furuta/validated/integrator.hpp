@@ -57,6 +57,19 @@ struct IntegratorOptions {
   double t_end = 1.0;
 };
 
+// Every solution at one time as an affine form in its start: x(t) in offset + a rho for every
+// start x0 = origin + rho with rho in `rho`. `a` is a point matrix (the midpoint of the step's
+// V(s) C); the rest of V(s) C over rho, the quadratic part, the gathered errors and the Lagrange
+// remainder are in `offset`. Set inversion reads the measured components of it as linear
+// constraints on the start and on parameters carried as state.
+struct AffineEnclosure {
+  std::size_t dimension = 0;
+  std::vector<double> a;         // dimension x dimension, row-major
+  std::vector<Interval> offset;  // dimension
+  std::vector<Interval> rho;     // the box rho lives in (the start minus origin)
+  std::vector<double> origin;    // dimension
+};
+
 // One step of the tube, over [t0, t1].
 struct TubeStep {
   double t0 = 0.0;
@@ -108,6 +121,9 @@ class Tube {
   Box enclosure_over(double ta, double tb) const;
   // The Taylor form of step i over s (a part of [0, h]), not intersected with anything.
   Box step_form(std::size_t i, const Interval& s) const;
+  // The affine form of every solution at t in [t_start, t_end()] (see AffineEnclosure); at a
+  // step's boundary the later step's. Throws std::out_of_range outside the tube.
+  AffineEnclosure affine_at(double t) const;
 };
 
 struct IntegrationResult {
