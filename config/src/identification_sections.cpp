@@ -1,5 +1,5 @@
 // rig.toml's sections for identification: [identification], [output_error], [sivia],
-// [automation].
+// [guaranteed], [automation].
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -89,6 +89,28 @@ SiviaConfig read_sivia(Section s) {
   read_data_bounds(s, sc);
   s.reject_unknown_keys();
   return sc;
+}
+
+GuaranteedConfig read_guaranteed(Section s) {
+  GuaranteedConfig gc;
+  gc.prior_percent = s.number(
+      "prior_percent", gc.prior_percent, [](double v) { return v > 0 && v < 100; },
+      "in (0, 100) (a mu's prior must stay positive)");
+  const auto ordered = [&](const char* key, std::array<double, 2> fallback, double low,
+                           const char* what) {
+    const std::array<double, 2> v = s.numbers(key, fallback);
+    if (!(v[0] >= low && v[0] < v[1])) s.fail(key, s.node(key), what);
+    return v;
+  };
+  gc.friction_prior = ordered("friction_prior", gc.friction_prior, 0.0,
+                              "must be [low, high] with 0 <= low < high (friction takes energy)");
+  gc.lag_ms = ordered("lag_ms", gc.lag_ms, 0.0,
+                      "must be [low, high] with 0 <= low < high (an angle cannot lead its state)");
+  gc.motor_tolerance_pct = s.numbers(
+      "motor_tolerance_pct", gc.motor_tolerance_pct, [](double v) { return v >= 0 && v < 50; },
+      "in [0, 50)");
+  s.reject_unknown_keys();
+  return gc;
 }
 
 AutomationConfig read_automation(Section s) {

@@ -175,6 +175,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   c.identification = detail::read_identification(top.child("identification"), c.daemon);
   c.output_error = detail::read_output_error(top.child("output_error"));
   c.sivia = detail::read_sivia(top.child("sivia"));
+  c.guaranteed = detail::read_guaranteed(top.child("guaranteed"));
   c.automation = detail::read_automation(top.child("automation"));
   Section nominal = top.child("nominal");
   if (nominal.present()) c.nominal = read_parameters(nominal, model::Parameters<double>{});

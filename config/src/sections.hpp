@@ -39,6 +39,7 @@ ExcitationConfig read_excitation(Section s, const CommandLimitsConfig& limits);
 IdentificationConfig read_identification(Section s, const DaemonConfig& daemon);
 OutputErrorConfig read_output_error(Section s);
 SiviaConfig read_sivia(Section s);
+GuaranteedConfig read_guaranteed(Section s);
 AutomationConfig read_automation(Section s);
 
 }  // namespace furuta::config::detail

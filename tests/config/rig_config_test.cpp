@@ -75,6 +75,30 @@ TEST(RigConfig, ANegativeInputLagIsRefused) {
             0.0);
 }
 
+// [guaranteed]: the physical inputs no recording gives; each refusal names its key and line.
+TEST(RigConfig, GuaranteedInputsAreReadAndChecked) {
+  const RigConfig shipped = load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  EXPECT_EQ(shipped.guaranteed.prior_percent, 50.0);
+  EXPECT_EQ(shipped.guaranteed.lag_ms, (std::array<double, 2>{0.0, 2.0}));
+  const RigConfig c = parse_rig_config(
+      "[guaranteed]\nprior_percent = 30\nfriction_prior = [0.0, 0.5]\nlag_ms = [0.5, 3]\n"
+      "motor_tolerance_pct = [2, 3, 0.5, 0]\n",
+      "rig.toml");
+  EXPECT_EQ(c.guaranteed.prior_percent, 30.0);
+  EXPECT_EQ(c.guaranteed.friction_prior, (std::array<double, 2>{0.0, 0.5}));
+  EXPECT_EQ(c.guaranteed.lag_ms, (std::array<double, 2>{0.5, 3.0}));
+  EXPECT_EQ(c.guaranteed.motor_tolerance_pct, (std::array<double, 4>{2, 3, 0.5, 0}));
+  EXPECT_STREQ(error_of("[guaranteed]\n\nlag_ms = [2, 1]\n").what(),
+               "rig.toml:3: guaranteed.lag_ms: must be [low, high] with 0 <= low < high (an "
+               "angle cannot lead its state)");
+  EXPECT_EQ(error_of("[guaranteed]\nfriction_prior = [-0.1, 1]\n").field(),
+            "guaranteed.friction_prior");
+  EXPECT_EQ(error_of("[guaranteed]\nprior_percent = 100\n").field(), "guaranteed.prior_percent");
+  EXPECT_EQ(error_of("[guaranteed]\nmotor_tolerance_pct = [1, 1, 1]\n").field(),
+            "guaranteed.motor_tolerance_pct");
+  EXPECT_EQ(error_of("[guaranteed]\nlag = [0, 1]\n").field(), "guaranteed.lag");
+}
+
 TEST(RigConfig, CountsPerRevolutionMustBeAWholeNumber) {
   const ConfigError e = error_of("[encoders.pendulum]\ncounts_per_rev = 1024.5\n");
   EXPECT_EQ(e.line(), 2);

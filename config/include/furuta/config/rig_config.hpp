@@ -113,6 +113,20 @@ struct SiviaConfig {
   std::array<double, 2> tau_bound = {0.0, 0.0};
 };
 
+// [guaranteed]: the physical inputs of a guaranteed identification that no recording gives
+// (identification::physical_inputs). Everything else it bounds comes from the encoders' counts,
+// the board's ramp and duty steps, the supply readings and the rest check.
+struct GuaranteedConfig {
+  double prior_percent = 50.0;  // mu1, mu2, mu3, mu4, mug: [nominal] (CAD) +- this
+  std::array<double, 2> friction_prior = {0.0, 1.0};  // fv1 and fv2 [N m s]: never negative
+  // The data path: an angle's host time minus the time of the state it shows, against the times
+  // the duty commands were written.
+  std::array<double, 2> lag_ms = {0.0, 2.0};
+  // Relative tolerances [%] of [motor]'s eq. 4 figures: no_load_speed_rpm,
+  // speed_torque_gradient_rpm_per_nm, motor_efficiency, gear_efficiency.
+  std::array<double, 4> motor_tolerance_pct = {1.0, 1.0, 1.0, 1.0};
+};
+
 // [automation]: what the identification trigger (`furuta process-logs`, furuta-identify.path) does
 // with the session logs that are complete. Sessions are told apart by the label they were started
 // with (`--label`), as their start record carries it.
@@ -164,6 +178,7 @@ struct RigConfig {
   IdentificationConfig identification;
   OutputErrorConfig output_error;
   SiviaConfig sivia;
+  GuaranteedConfig guaranteed;
   AutomationConfig automation;
   std::string source_text;  // the file verbatim, so logs can carry it
   std::string source_name;

@@ -1,0 +1,151 @@
+// The physical inputs of a guaranteed identification (physical_inputs.hpp).
+#include "furuta/identification/physical_inputs.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace furuta::identification {
+
+namespace {
+
+// The 1065's supply reading steps by 80/2048 V and its duty by 1/255 (docs/phidget-protocol.md).
+constexpr double kSupplyStep_v = 80.0 / 2048.0;
+constexpr double kDutyStep = 1.0 / 255.0;
+// The daemon's rest check holds a start until the pendulum count stays within this many counts
+// (docs/model.md, "Zeros").
+constexpr double kRestCheckCounts = 2.0;
+
+Interval rpm_per_rad_s() {
+  return Interval(60.0) / (Interval(2.0) * Interval::pi());
+}
+
+Interval plus_minus(double centre, double relative) {
+  return Interval(centre) * Interval(1.0 - relative, 1.0 + relative);
+}
+
+}  // namespace
+
+PhysicalInputs physical_inputs(const config::RigConfig& rig,
+                               std::span<const double> supply_readings_v) {
+  if (!rig.nominal) {
+    throw std::invalid_argument(
+        "physical inputs: the configuration has no [nominal] section (the CAD values the "
+        "parameters' prior is centred on)");
+  }
+  if (supply_readings_v.empty()) {
+    throw std::invalid_argument("physical inputs: no supply readings in the session");
+  }
+  PhysicalInputs in;
+  const config::GuaranteedConfig& gc = rig.guaranteed;
+  const auto add = [&](std::string quantity, const Interval& value, std::string unit,
+                       InputSource source, std::string setting) {
+    in.provenance.push_back(
+        {std::move(quantity), value, std::move(unit), source, std::move(setting)});
+  };
+
+  const Interval two_pi = Interval(2.0) * Interval::pi();
+  const Interval arm_count = two_pi / Interval(rig.arm_encoder.counts_per_joint_rev());
+  const Interval pendulum_count = two_pi / Interval(rig.pendulum_encoder.counts_per_joint_rev());
+  in.arm_angle_error_rad = arm_count * Interval(-0.5, 0.5);
+  in.pendulum_angle_error_rad = pendulum_count * Interval(-0.5, 0.5);
+  add("arm_angle_error", in.arm_angle_error_rad, "rad", InputSource::encoder_counts,
+      "[encoders.arm] counts_per_rev x [motor] motor_ratio x gear_ratio: half a count");
+  add("pendulum_angle_error", in.pendulum_angle_error_rad, "rad", InputSource::encoder_counts,
+      "[encoders.pendulum] counts_per_rev: half a count");
+  in.pendulum_zero_rad = pendulum_count * Interval(-kRestCheckCounts - 0.5, kRestCheckCounts + 0.5);
+  add("pendulum_zero", in.pendulum_zero_rad, "rad", InputSource::rest_check,
+      "[daemon] rest_check_s: the count stayed within 2 counts before the start, plus half a "
+      "count");
+
+  in.duty_error = Interval(-0.5 * kDutyStep, 0.5 * kDutyStep);
+  add("duty_error", in.duty_error, "1", InputSource::duty_steps,
+      "the 1065 echoes its applied duty in steps of 1/255: half a step");
+  in.lag_s = Interval(gc.lag_ms[0], gc.lag_ms[1]) / Interval(1000.0);
+  add("lag", in.lag_s, "s", InputSource::configured, "[guaranteed] lag_ms");
+
+  double lowest = supply_readings_v.front(), highest = supply_readings_v.front();
+  for (double v : supply_readings_v) {
+    if (!(std::isfinite(v) && v > 0)) {
+      throw std::invalid_argument("physical inputs: a supply reading of " + std::to_string(v) +
+                                  " V is not a voltage");
+    }
+    lowest = std::min(lowest, v);
+    highest = std::max(highest, v);
+  }
+  // A constant supply read with noise of both signs lies within the readings' range, widened by
+  // the half step each reading was rounded to.
+  in.supply_v = Interval(lowest, highest) + Interval(-0.5, 0.5) * Interval(kSupplyStep_v);
+  add("supply", in.supply_v, "V", InputSource::supply_readings,
+      "the session's supply readings: their range +- half a step of 80/2048 V");
+
+  const model::MotorData& m = rig.motor;
+  const std::array<double, 4>& tol = gc.motor_tolerance_pct;
+  in.drive.ratio = m.total_ratio();
+  in.drive.factor_nm_per_rpm = plus_minus(m.motor_efficiency, tol[2] / 100) *
+                               plus_minus(m.gear_efficiency, tol[3] / 100) /
+                               plus_minus(m.speed_torque_gradient_rpm_per_nm, tol[1] / 100);
+  // PWM scales the no-load speed by the supply (docs/model.md, "Motor torque").
+  in.drive.no_load_rpm =
+      plus_minus(m.no_load_speed_rpm, tol[0] / 100) * in.supply_v / Interval(m.nominal_voltage_v);
+  const std::string motor_keys =
+      "[motor] motor_ratio, gear_ratio, motor_efficiency, gear_efficiency, "
+      "speed_torque_gradient_rpm_per_nm +- [guaranteed] motor_tolerance_pct";
+  add("drive_gain", in.drive.gain_nm(), "N m", InputSource::data_sheet,
+      motor_keys + ", no_load_speed_rpm x supply / nominal_voltage_v");
+  add("back_emf_damping", in.drive.back_emf_damping_nm_s(), "N m s", InputSource::data_sheet,
+      motor_keys);
+
+  const model::Parameters<double>& cad = *rig.nominal;
+  const double relative = gc.prior_percent / 100;
+  const Interval friction(gc.friction_prior[0], gc.friction_prior[1]);
+  in.prior = {plus_minus(cad.mu1, relative),
+              plus_minus(cad.mu2, relative),
+              plus_minus(cad.mu3, relative),
+              plus_minus(cad.mu4, relative),
+              plus_minus(cad.mug, relative),
+              friction,
+              friction};
+  const char* names[model::kParameterCount] = {"mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"};
+  const char* units[model::kParameterCount] = {"kg m^2",      "kg m^2", "kg m^2", "kg m^2",
+                                               "kg m^2 s^-2", "N m s",  "N m s"};
+  std::size_t k = 0;
+  for (const Interval& v : in.prior) {
+    const bool is_friction = k >= 5;
+    add(std::string("prior_") + names[k], v, units[k],
+        is_friction ? InputSource::configured : InputSource::cad,
+        is_friction ? "[guaranteed] friction_prior"
+                    : std::string("[nominal] ") + names[k] + " +- [guaranteed] prior_percent");
+    ++k;
+  }
+  return in;
+}
+
+Interval DriveData::gain_nm() const {
+  return factor_nm_per_rpm * Interval(ratio) * no_load_rpm;
+}
+
+Interval DriveData::back_emf_damping_nm_s() const {
+  return factor_nm_per_rpm * Interval(ratio) * Interval(ratio) * rpm_per_rad_s();
+}
+
+model::Parameters<Interval> scaled_parameters(const model::Parameters<Interval>& p,
+                                              const DriveData& drive) {
+  const Interval g = drive.gain_nm();
+  // b = (fv1 + k_w) / g = fv1 / g + N (60 / 2 pi) / omega0_s: F cancels in the back-EMF's part.
+  const Interval back_emf = Interval(drive.ratio) * rpm_per_rad_s() / drive.no_load_rpm;
+  return {p.mu1 / g, p.mu2 / g, p.mu3 / g, p.mu4 / g, p.mug / g, p.fv1 / g + back_emf, p.fv2 / g};
+}
+
+model::Parameters<Interval> rig_parameters(const model::Parameters<Interval>& theta,
+                                           const DriveData& drive) {
+  const Interval g = drive.gain_nm();
+  const Interval n(drive.ratio);
+  const Interval fv1 =
+      drive.factor_nm_per_rpm * n * (theta.fv1 * drive.no_load_rpm - n * rpm_per_rad_s());
+  return {theta.mu1 * g, theta.mu2 * g, theta.mu3 * g, theta.mu4 * g,
+          theta.mug * g, fv1,           theta.fv2 * g};
+}
+
+}  // namespace furuta::identification
