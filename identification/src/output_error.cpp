@@ -12,6 +12,8 @@
 #include <span>
 #include <stdexcept>
 
+#include "board_1065.hpp"
+
 namespace furuta::identification {
 
 namespace {
@@ -22,8 +24,7 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kVelocityDefectTime_s = 0.01;
 // How far from a segment's start the observations are that give its starting state.
 constexpr double kStartFitHalfWidth_s = 0.04;
-// The 1065 reports its supply voltage in steps of 80 / 2048 V.
-constexpr double kSupplyStep_v = 80.0 / 2048.0;
+using internal::kSupplyStep_v;
 
 double scalar_of(double x) {
   return x;

@@ -6,13 +6,15 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "board_1065.hpp"
+
 namespace furuta::identification {
 
 namespace {
 
-// The 1065's supply reading steps by 80/2048 V and its duty by 1/255 (docs/phidget-protocol.md).
-constexpr double kSupplyStep_v = 80.0 / 2048.0;
-constexpr double kDutyStep = 1.0 / 255.0;
+using internal::kDutyStep;
+using internal::kSupplyStep_v;
+
 // The daemon's rest check holds a start until the pendulum count stays within this many counts
 // (docs/model.md, "Zeros").
 constexpr double kRestCheckCounts = 2.0;

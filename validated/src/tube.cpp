@@ -19,21 +19,41 @@ using internal::horner;
 using internal::IMatrix;
 using internal::jacobian_series;
 
+namespace {
+
+// The parts of a step's Taylor form at s that do not carry the start exactly: V(s) (by Horner),
+// the centre's and the second-order term's polynomials, the quadratic part P(r0) and the gathered
+// errors B r through V(s), and the Lagrange remainder.
+struct FormTerms {
+  IMatrix v;
+  std::vector<Interval> polynomial, quadratic, errors, remainder;
+};
+
+FormTerms form_terms(const TubeStep& step, std::size_t n, int order, const Interval& s,
+                     const std::vector<Interval>& step_r0) {
+  FormTerms t{jacobian_series(step.jacobian, n, order, s), {}, {}, {}, {}};
+  t.quadratic = t.v * forms_range(step.quad, step_r0);
+  t.errors = (t.v * from_point(n, step.b)) * step.r;
+  const Interval s_k1 = pow(s, order + 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    t.polynomial.push_back(horner(step.centre, n, i, order, s) +
+                           horner(step.second, n, i, order, s));
+    t.remainder.push_back(s_k1 * step.remainder[i]);
+  }
+  return t;
+}
+
+}  // namespace
+
 Box Tube::step_form(std::size_t index, const Interval& s) const {
   const TubeStep& step = steps.at(index);
   const std::size_t n = dimension;
-  // V(s) = sum_i s^i V_i by Horner.
-  const IMatrix v = jacobian_series(step.jacobian, n, order, s);
   const std::vector<Interval>& step_r0 = step.r0.empty() ? r0 : step.r0;
-  const std::vector<Interval> linear0 = (v * from_point(n, step.c)) * step_r0;
-  const std::vector<Interval> linear = (v * from_point(n, step.b)) * step.r;
-  // The quadratic part of the set at t0 (P(r0), if any), through V(s) as the rest.
-  const std::vector<Interval> quadratic = v * forms_range(step.quad, step_r0);
-  const Interval s_k1 = pow(s, order + 1);
+  const FormTerms t = form_terms(step, n, order, s, step_r0);
+  const std::vector<Interval> linear0 = (t.v * from_point(n, step.c)) * step_r0;
   Box out(n);
   for (std::size_t i = 0; i < n; ++i) {
-    out[i] = horner(step.centre, n, i, order, s) + horner(step.second, n, i, order, s) +
-             linear0[i] + quadratic[i] + linear[i] + s_k1 * step.remainder[i];
+    out[i] = t.polynomial[i] + linear0[i] + t.quadratic[i] + t.errors[i] + t.remainder[i];
   }
   return out;
 }
@@ -49,12 +69,13 @@ AffineEnclosure Tube::affine_at(double t) const {
   const TubeStep& step = *it;
   const std::size_t n = dimension;
   const Interval s = (Interval(t) - Interval(step.t0)) & Interval(0.0, step.h.hi());
-  const IMatrix v = jacobian_series(step.jacobian, n, order, s);
-  const IMatrix vc = v * from_point(n, step.c);
   AffineEnclosure out;
   out.dimension = n;
   out.rho = step.r0.empty() ? r0 : step.r0;
   out.origin = step.origin.empty() ? initial.mid() : step.origin;
+  const FormTerms terms = form_terms(step, n, order, s, out.rho);
+  // V(s) C splits into its midpoint (the point matrix a) and the rest, enclosed over rho.
+  const IMatrix vc = terms.v * from_point(n, step.c);
   out.a.resize(n * n);
   IMatrix rest(n);
   for (std::size_t k = 0; k < n * n; ++k) {
@@ -62,13 +83,10 @@ AffineEnclosure Tube::affine_at(double t) const {
     rest.v[k] = vc.v[k] - Interval(out.a[k]);
   }
   const std::vector<Interval> linear_rest = rest * out.rho;
-  const std::vector<Interval> errors = (v * from_point(n, step.b)) * step.r;
-  const std::vector<Interval> quadratic = v * forms_range(step.quad, out.rho);
-  const Interval s_k1 = pow(s, order + 1);
   out.offset.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    out.offset[i] = horner(step.centre, n, i, order, s) + horner(step.second, n, i, order, s) +
-                    linear_rest[i] + quadratic[i] + errors[i] + s_k1 * step.remainder[i];
+    out.offset[i] = terms.polynomial[i] + linear_rest[i] + terms.quadratic[i] + terms.errors[i] +
+                    terms.remainder[i];
   }
   return out;
 }
