@@ -19,9 +19,12 @@ inline constexpr int kExitDone = 0;  // everything asked happened
 inline constexpr int kExitPartOrRefused =
     1;                                  // done in part, or refused: the output says what and why
 inline constexpr int kExitNotDone = 2;  // bad usage or input (named), or nothing answered
+// Not allowed: `furuta start` without the command key (sysexits' EX_NOPERM).
+inline constexpr int kExitNotPermitted = 77;
 inline constexpr const char* kExitStatusHelp =
     "Exit status: 0 done; 1 done in part or refused (the output says what was set aside and why); "
-    "2 not done: bad usage, bad or untrustworthy input, or nothing answered.";
+    "2 not done: bad usage, bad or untrustworthy input, or nothing answered; 77 not permitted "
+    "(`furuta start` cannot read the command key: not in group furuta).";
 // CLI11's own codes for a usage error (100 and up) folded into the rule; --help and --version are
 // 0.
 inline int usage_exit_status(int cli11_exit_code) {
@@ -47,6 +50,9 @@ struct RemoteOptions {
   // (the loop refuses a pendulum that swings); stop, estop: for the session to end.
   double wait_s = 5.0;
   bool wait = true;  // false: return once the daemon has answered the command itself
+  // The key `start` signs with (docs/security.md); empty: the configuration's
+  // [daemon] command_key_file.
+  std::filesystem::path command_key;
 };
 // A session's excitation as the user gave it; what is left out comes from the configuration's
 // [excitation], field by field.

@@ -1,13 +1,15 @@
 #pragma once
-// How `furuta start|stop|estop|status` reach the daemon: commands out on RIG_COMMAND, every status
-// the daemon publishes in (its replies to anyone and its periodic one). Over LCM in `furuta`; tests
-// put a daemon of their own, in virtual time, behind it.
+// How `furuta start|stop|estop|status` reach the daemon: commands out on RIG_COMMAND
+// (RIG_COMMAND_SIGNED for those that move the motor), every status the daemon publishes in (its
+// replies to anyone and its periodic one). Over LCM in `furuta`; tests put a daemon of their own,
+// in virtual time, behind it.
 
 #include <chrono>
 #include <optional>
 #include <string>
 
 #include "furuta/rig_command_t.hpp"
+#include "furuta/rig_signed_command_t.hpp"
 #include "furuta/rig_status_t.hpp"
 
 namespace furuta::app {
@@ -16,6 +18,8 @@ class DaemonChannel {
  public:
   virtual ~DaemonChannel() = default;
   virtual void send(const furuta::rig_command_t& command) = 0;
+  // A command that moves the motor, signed (RIG_COMMAND_SIGNED).
+  virtual void send_signed(const furuta::rig_signed_command_t& command) = 0;
   // The next status published, or nothing within `wait`.
   virtual std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) = 0;
   // Where the daemon is expected, for messages ("udpm://...").

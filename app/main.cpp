@@ -58,8 +58,12 @@ int main(int argc, char** argv) {
   };
   CLI::App* start_cmd = app.add_subcommand(
       "start",
-      "Start a session on the running daemon; waits until it runs (exit 0) or is refused (1)");
+      "Start a session on the running daemon; waits until it runs (exit 0) or is refused (1). "
+      "The command is signed with the rig's command key: members of group furuta only (77)");
   add_remote(start_cmd);
+  start_cmd->add_option("--command-key", remote.command_key,
+                        "The key to sign with (default: the configuration's [daemon] "
+                        "command_key_file)");
   add_session(start_cmd, start);
   add_wait(start_cmd,
            "the session to run or be refused, after the daemon accepted it (the pendulum must "

@@ -16,6 +16,7 @@
 
 #include "commands.hpp"
 #include "daemon_channel.hpp"
+#include "furuta/command_auth/command_auth.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
@@ -88,6 +89,11 @@ void print_status(const furuta::rig_status_t& s, std::ostream& out) {
         << "), " << s.sessions_since_fault << " session(s) ended well since";
   }
   if (!s.logs_problem.empty()) out << "; starts refused: cannot log a session: " << s.logs_problem;
+  if (s.refused_unauthenticated > 0) {
+    out << "; " << s.refused_unauthenticated
+        << " command(s) refused for their signature since start-up, the latest: "
+        << s.unauthenticated_reason;
+  }
   out << "\n";
 }
 
@@ -110,6 +116,9 @@ class LcmChannel final : public DaemonChannel {
   bool good() { return lcm_.good(); }
   void send(const furuta::rig_command_t& command) override {
     lcm_.publish(session_log::kChannelCommand, &command);
+  }
+  void send_signed(const furuta::rig_signed_command_t& command) override {
+    lcm_.publish(session_log::kChannelSignedCommand, &command);
   }
   std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) override {
     const auto deadline = std::chrono::steady_clock::now() + wait;
@@ -239,11 +248,24 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
   furuta::rig_command_t command{};
   command.request_id = new_request_id();
   const std::int64_t id = command.request_id;
+  std::optional<command_auth::CommandKey> key;
   switch (kind) {
-    case RemoteKind::start:
+    case RemoteKind::start: {
+      const config::RigConfig rig = config::load_rig_config(remote.config_path);
       command.kind = furuta::rig_command_t::KIND_START_SESSION;
-      fill_start_command(start, config::load_rig_config(remote.config_path).excitation, command);
+      fill_start_command(start, rig.excitation, command);
+      const std::filesystem::path key_path =
+          remote.command_key.empty() ? std::filesystem::path(rig.daemon.command_key_file)
+                                     : remote.command_key;
+      command_auth::KeyFile key_file = command_auth::read_command_key(key_path);
+      if (!key_file.key) {
+        err << name << ": " << (key_file.permission_denied ? "not in group furuta: " : "")
+            << "cannot start sessions; stop/estop/status still work (" << key_file.problem << ")\n";
+        return kExitNotPermitted;
+      }
+      key = key_file.key;
       break;
+    }
     case RemoteKind::stop:
       command.kind = furuta::rig_command_t::KIND_STOP;
       break;
@@ -254,7 +276,17 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
       command.kind = furuta::rig_command_t::KIND_STATUS_REQUEST;
       break;
   }
-  channel.send(command);
+  if (key) {
+    std::random_device entropy;
+    const auto nonce = static_cast<std::int64_t>((std::uint64_t{entropy()} << 32) ^ entropy());
+    const std::int64_t now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                    std::chrono::system_clock::now().time_since_epoch())
+                                    .count();
+    channel.send_signed(
+        command_auth::sign_command(command, *key, command_auth::this_sender(), now_ns, nonce));
+  } else {
+    channel.send(command);
+  }
   std::optional<furuta::rig_status_t> reply;
   const auto deadline = std::chrono::steady_clock::now() + millis(remote.reply_timeout_s);
   while (!reply && std::chrono::steady_clock::now() < deadline) {

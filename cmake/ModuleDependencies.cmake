@@ -9,13 +9,14 @@ set(FURUTA_MODULE_DEPENDENCIES
   "firmware_bridge:model"
   "config:firmware_bridge,model"
   "lcmtypes:"
+  "command_auth:lcmtypes"
   "session_log:lcmtypes,firmware_bridge"
-  "daemon:firmware_bridge,config,session_log,lcmtypes,model"
+  "daemon:firmware_bridge,config,session_log,lcmtypes,model,command_auth"
   "identification:model,interval,config,session_log"
   "validated:model,interval,common"
   "pipeline:identification,validated,session_log,config,model,interval"
   "report:pipeline,identification,validated,session_log,config,model,interval,common"
-  "app:firmware_bridge,config,daemon,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
+  "app:firmware_bridge,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
 )
 
 function(furuta_check_module_dependencies)

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <thread>
 
+#include "furuta/command_auth/command_auth.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
@@ -39,6 +40,8 @@ int main(int argc, char** argv) {
   bool require_rt = false;
   std::string logs_dir;
   std::string lcm_url;
+  std::string command_key;
+  bool create_command_key = false;
   app.add_option("-c,--config", config_path, "Rig configuration (TOML)")->check(CLI::ExistingFile);
   app.add_flag("--sim", simulated, "Drive the simulated rig instead of the USB boards");
   app.add_option("--replay", replay_log,
@@ -48,6 +51,12 @@ int main(int argc, char** argv) {
   app.add_flag("--require-rt", require_rt, "Fail if the real-time set-up is refused");
   app.add_option("--logs-dir", logs_dir, "Where session logs go (overrides the configuration)");
   app.add_option("--lcm-url", lcm_url, "LCM URL (overrides the configuration)");
+  app.add_option("--command-key", command_key,
+                 "The key starts are signed with (overrides [daemon] command_key_file); created "
+                 "when missing");
+  app.add_flag("--create-command-key", create_command_key,
+               "Create the command key if it is missing (mode 0640, group furuta), then exit: "
+               "what the package and the unit's ExecStartPre run as root");
   app.set_version_flag("--version", daemon::kSoftwareVersion);
   app.footer(
       "Exit status: 0 stopped as asked (a signal, or the end of --replay); 1 the control loop "
@@ -71,6 +80,31 @@ int main(int argc, char** argv) {
     if (!logs_dir.empty()) settings.recorder.logs_dir = logs_dir;
     if (lcm_url.empty()) lcm_url = rig.daemon.lcm_url;
     if (require_rt) settings.realtime.enabled = true;
+
+    // Who may start sessions (docs/security.md). A missing key is made here on first start (the
+    // unit makes it as root before, so it gets group furuta); one that cannot be read or made
+    // leaves the daemon running, since stop and e-stop need no key, but every start is refused.
+    if (command_key.empty()) command_key = rig.daemon.command_key_file;
+    const command_auth::KeyCreation creation =
+        command_auth::ensure_command_key(command_key, "furuta");
+    if (create_command_key) {
+      if (!creation.problem.empty()) {
+        std::cerr << "furutad: " << creation.problem << "\n";
+        return 2;
+      }
+      if (creation.created) std::cerr << "furutad: created the command key " << command_key << "\n";
+      return 0;
+    }
+    if (creation.created) std::cerr << "furutad: created the command key " << command_key << "\n";
+    command_auth::KeyFile key = command_auth::read_command_key(command_key);
+    if (!creation.problem.empty() && !key.key) key.problem = creation.problem;
+    if (key.key) {
+      settings.command_key = key.key;
+    } else {
+      settings.command_key_problem = key.problem;
+      std::cerr << "furutad: WARNING: " << key.problem
+                << "; every start is refused (stop, e-stop and status still work)\n";
+    }
 
     // A daemon that cannot log must say so now, not at the first start. It still comes up: it is
     // what writes the zero command to a 1065 left driving by a daemon killed mid-session, and a

@@ -69,6 +69,12 @@ DaemonConfig read_daemon(Section d) {
   dc.queue_capacity = d.integer(
       "queue_capacity", dc.queue_capacity, [](std::int64_t v) { return v >= 64 && v <= 1'000'000; },
       "in [64, 1000000]");
+  dc.command_key_file = d.text("command_key_file", dc.command_key_file);
+  if (dc.command_key_file.empty())
+    d.fail("command_key_file", d.node("command_key_file"), "must not be empty");
+  dc.command_window_s = d.number(
+      "command_window_s", dc.command_window_s, [](double v) { return v >= 1 && v <= 3600; },
+      "in [1, 3600]");
   read_realtime(d.child("realtime"), dc);
   d.reject_unknown_keys();
   return dc;

@@ -58,7 +58,9 @@ Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, br
     : settings_(std::move(settings)),
       lcm_(lcm),
       events_(settings_.queue_capacity),
-      validator_(settings_.command_limits) {
+      validator_(settings_.command_limits),
+      verifier_(settings_.command_key, settings_.command_key_problem, settings_.command_auth,
+                wall_now_ns()) {
   loop_ = std::make_unique<ControlLoop>(settings_.loop, motor, encoder, clock, events_);
   recorder_ = std::make_unique<SessionRecorder>(
       settings_.recorder, &lcm_,
@@ -68,6 +70,15 @@ Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, br
     if (on_logged_) on_logged_(path);
   });
   subscription_ = lcm_.subscribe(session_log::kChannelCommand, &Daemon::on_command, this);
+  signed_subscription_ =
+      lcm_.subscribe(session_log::kChannelSignedCommand, &Daemon::on_signed_command, this);
+}
+
+std::int64_t Daemon::wall_now_ns() const {
+  if (settings_.wall_clock_ns) return settings_.wall_clock_ns();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
 }
 
 Daemon::~Daemon() {
@@ -78,6 +89,7 @@ Daemon::~Daemon() {
     // The loop already wrote the zero command; a destructor cannot report more.
   }
   if (subscription_) lcm_.unsubscribe(subscription_);
+  if (signed_subscription_) lcm_.unsubscribe(signed_subscription_);
 }
 
 void Daemon::on_session_logged(std::function<void(const std::filesystem::path&)> callback) {
@@ -175,6 +187,8 @@ furuta::rig_status_t Daemon::status_message() {
   m.refused_request_id = h.refused_request_id;
   m.refused_reason = h.refused_reason;
   m.logs_problem = snapshot_.logs_problem;
+  m.refused_unauthenticated = refused_unauthenticated_.load();
+  m.unauthenticated_reason = unauthenticated_reason_;
   return m;
 }
 
@@ -231,8 +245,60 @@ void Daemon::lcm_thread_main() {
 
 void Daemon::on_command(const lcm::ReceiveBuffer*, const std::string&,
                         const furuta::rig_command_t* msg) {
-  const furuta::rig_status_t reply = handle_command(*msg);
+  const furuta::rig_status_t reply = handle_unsigned_command(*msg);
   lcm_.publish(session_log::kChannelStatus, &reply);
+}
+
+void Daemon::on_signed_command(const lcm::ReceiveBuffer*, const std::string&,
+                               const furuta::rig_signed_command_t* msg) {
+  const furuta::rig_status_t reply = handle_signed_command(*msg);
+  lcm_.publish(session_log::kChannelStatus, &reply);
+}
+
+furuta::rig_status_t Daemon::refuse_unauthenticated(std::int64_t request_id,
+                                                    const std::string& reason) {
+  refused_unauthenticated_.fetch_add(1);
+  {
+    std::lock_guard lock(snapshot_mutex_);
+    unauthenticated_reason_ = reason;
+  }
+  furuta::rig_status_t reply = status_message();
+  reply.reply_to_request_id = request_id;
+  reply.request_accepted = false;
+  reply.request_reason = reason;
+  return reply;
+}
+
+furuta::rig_status_t Daemon::handle_unsigned_command(const furuta::rig_command_t& command) {
+  if (command_auth::moves_motor(command)) {
+    return refuse_unauthenticated(
+        command.request_id,
+        "unsigned: a command that moves the motor must be signed with the rig's command key "
+        "(furuta start signs it when it may read the key; docs/security.md)");
+  }
+  return handle_command(command);
+}
+
+furuta::rig_status_t Daemon::handle_signed_command(const furuta::rig_signed_command_t& message) {
+  command_auth::Verdict verdict;
+  {
+    std::lock_guard lock(command_mutex_);
+    verdict = verifier_.verify(message, wall_now_ns());
+  }
+  if (!verdict.accepted) {
+    // The request id only addresses the reply; nothing else of an unverified command is used.
+    furuta::rig_command_t unverified{};
+    const bool decodable =
+        !message.command.empty() &&
+        unverified.decode(message.command.data(), 0, static_cast<int>(message.command.size())) > 0;
+    return refuse_unauthenticated(decodable ? unverified.request_id : 0, verdict.reason);
+  }
+  if (verdict.command.kind == furuta::rig_command_t::KIND_START_SESSION) {
+    std::vector<std::uint8_t> encoded(static_cast<std::size_t>(message.getEncodedSize()));
+    message.encode(encoded.data(), 0, static_cast<int>(encoded.size()));
+    recorder_->note_signed_start(verdict.command.request_id, std::move(encoded));
+  }
+  return handle_command(verdict.command);
 }
 
 bool Daemon::start_replayed_session(const furuta::rig_session_t& start) {

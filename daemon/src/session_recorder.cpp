@@ -133,6 +133,13 @@ void SessionRecorder::note_fault(std::string what) {
   if (!session_.empty()) session_faulted_ = true;
 }
 
+void SessionRecorder::note_signed_start(std::int64_t request_id,
+                                        std::vector<std::uint8_t> encoded) {
+  std::lock_guard lock(signed_starts_mutex_);
+  signed_starts_.emplace_back(request_id, std::move(encoded));
+  while (signed_starts_.size() > 8) signed_starts_.pop_front();
+}
+
 void SessionRecorder::start_session(const SessionStartEvent& start) {
   session_ = text_of(start.session);
   session_faulted_ = false;
@@ -169,6 +176,19 @@ void SessionRecorder::start_session(const SessionStartEvent& start) {
   m.arm_zero_counts = start.arm_zero_counts;
   m.pendulum_zero_counts = start.pendulum_zero_counts;
   publish_and_log(session_log::kChannelSession, m, start.monotonic_ns);
+  if (start.request_id != 0) {
+    std::vector<std::uint8_t> signed_start;
+    {
+      std::lock_guard lock(signed_starts_mutex_);
+      for (auto& [id, bytes] : signed_starts_) {
+        if (id == start.request_id) signed_start = std::move(bytes);
+      }
+    }
+    // Logged only: the command was on the bus already.
+    if (!signed_start.empty()) {
+      log_bytes(session_log::kChannelSignedCommand, signed_start, start.monotonic_ns);
+    }
+  }
   if (log_ && !log_failed_) {
     on_log_status(log_->sync_if_due(std::chrono::steady_clock::now(), /*force=*/true));
   }

@@ -91,6 +91,10 @@ SessionLog load_session_log(const std::filesystem::path& path) {
       furuta::rig_fault_t fault;
       decoded = decode_exactly(event.data, fault);
       if (decoded) log.faults.push_back(std::move(fault));
+    } else if (channel == kChannelSignedCommand) {
+      furuta::rig_signed_command_t command;
+      decoded = decode_exactly(event.data, command);
+      if (decoded && !log.start_command) log.start_command = std::move(command);
     } else {
       ++log.unknown_channel_events;
     }

@@ -17,6 +17,7 @@
 
 #include "commands.hpp"
 #include "daemon_channel.hpp"
+#include "furuta/command_auth/command_auth.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
@@ -161,6 +162,8 @@ class SteppedDaemon final : public DaemonChannel {
     settings_.recorder.logs_dir = logs_.path();
     settings_.loop.wait_when_queue_full = true;
     settings_.command_limits.max_commands_per_s = 1000;  // the polls are not under test
+    EXPECT_EQ(command_auth::ensure_command_key(key_path(), "").problem, "");
+    settings_.command_key = command_auth::read_command_key(key_path()).key;
     subscription_ = lcm_.subscribe(session_log::kChannelStatus, &SteppedDaemon::on_status, this);
     daemon_ = std::make_unique<daemon::Daemon>(settings_, *motor_, *encoder_, clock_, lcm_);
     daemon_->start();
@@ -190,6 +193,12 @@ class SteppedDaemon final : public DaemonChannel {
     lcm_.publish(session_log::kChannelCommand, &command);
     step_cycles(steps_per_command_);
   }
+  void send_signed(const furuta::rig_signed_command_t& command) override {
+    lcm_.publish(session_log::kChannelSignedCommand, &command);
+    step_cycles(steps_per_command_);
+  }
+  // The key this daemon checks starts with (furuta start signs with it).
+  fs::path key_path() const { return key_dir_.path() / "command.key"; }
   std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) override {
     std::unique_lock lock(mutex_);
     if (!arrived_.wait_for(lock, wait, [&] { return !statuses_.empty(); })) return std::nullopt;
@@ -209,6 +218,7 @@ class SteppedDaemon final : public DaemonChannel {
   }
 
   TempDir logs_{"furuta-remote"};
+  TempDir key_dir_{"furuta-key"};
   config::RigConfig config_ = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
   furuta::testing::SteppedClock clock_{1'000'000'000};
   std::unique_ptr<bridge::SimulatedRig> sim_;
@@ -235,6 +245,7 @@ struct Said {
 Said remote(SteppedDaemon& daemon, RemoteKind kind, StartOptions start = {},
             RemoteOptions options = {}) {
   options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  if (options.command_key.empty()) options.command_key = daemon.key_path();
   std::ostringstream out, err;
   Said said;
   said.code = run_remote_command(kind, daemon, options, start, out, err);

@@ -324,6 +324,8 @@ TEST(RigConfig, TheShippedFileStatesTheDefaults) {
   EXPECT_EQ(empty.daemon.period_ns, shipped.daemon.period_ns);
   EXPECT_EQ(empty.daemon.rest_check_s, shipped.daemon.rest_check_s);
   EXPECT_EQ(empty.daemon.reconnect_interval_ms, shipped.daemon.reconnect_interval_ms);
+  EXPECT_EQ(empty.daemon.command_key_file, shipped.daemon.command_key_file);
+  EXPECT_EQ(empty.daemon.command_window_s, shipped.daemon.command_window_s);
 }
 
 TEST(RigConfig, ALimitMisspelledOrInTheWrongSectionIsAnError) {

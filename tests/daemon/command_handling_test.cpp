@@ -6,6 +6,7 @@
 // the rate limiter's notion of time, and every count, is exact.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "daemon_test_support.hpp"
+#include "furuta/command_auth/command_auth.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
@@ -83,6 +85,16 @@ struct CommandRig {
   lcm::Subscription* subscription = nullptr;
   std::unique_ptr<Daemon> daemon;
   std::int64_t next_id = 1000;
+  // The rig's command key, and the wall clock signed commands are checked against (the test's).
+  command_auth::CommandKey key = key_filled_with(0x5a);
+  std::atomic<std::int64_t> wall_ns{1'800'000'000'000'000'000};
+  std::int64_t next_nonce = 1;
+
+  static command_auth::CommandKey key_filled_with(std::uint8_t value) {
+    command_auth::CommandKey k{};
+    k.fill(value);
+    return k;
+  }
 
   CommandRig() {
     sim = std::make_unique<bridge::SimulatedRig>(config.simulation, clock);
@@ -100,6 +112,8 @@ struct CommandRig {
     settings.recorder.motor_device = bridge::format_trace_device_line(motor_usb->device_info());
     settings.recorder.encoder_device = bridge::format_trace_device_line(encoder_usb->device_info());
     settings.loop.wait_when_queue_full = true;
+    settings.command_key = key;
+    settings.wall_clock_ns = [this] { return wall_ns.load(); };
     subscription = lcm.subscribe(session_log::kChannelStatus, &Inbox::on_status, &inbox);
   }
   ~CommandRig() {
@@ -130,11 +144,27 @@ struct CommandRig {
     }
   }
 
-  // Publishes a command on RIG_COMMAND (the daemon's LCM thread takes it); returns its id.
+  // Publishes a command as `furuta` would (the daemon's LCM thread takes it): signed with the
+  // rig's key on RIG_COMMAND_SIGNED when it moves the motor, else on RIG_COMMAND. Returns its id.
   std::int64_t send(rig_command_t command) {
+    if (command_auth::moves_motor(command)) return send_signed(command, key);
+    return send_unsigned(command);
+  }
+  std::int64_t send_unsigned(rig_command_t command) {
     command.request_id = next_id++;
     lcm.publish(session_log::kChannelCommand, &command);
     return command.request_id;
+  }
+  std::int64_t send_signed(rig_command_t command, const command_auth::CommandKey& with) {
+    command.request_id = next_id++;
+    const auto m =
+        command_auth::sign_command(command, with, "test@rig", wall_ns.load(), next_nonce++);
+    lcm.publish(session_log::kChannelSignedCommand, &m);
+    return command.request_id;
+  }
+  // A signed message as given (a capture sent again, one changed on the way).
+  void send_message(const furuta::rig_signed_command_t& m) {
+    lcm.publish(session_log::kChannelSignedCommand, &m);
   }
   rig_status_t ask(const rig_command_t& command) { return inbox.reply_to(send(command)); }
 };
@@ -302,14 +332,24 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   hostile.push_back(seed);
   hostile.push_back(testing::simple_command(std::numeric_limits<std::int8_t>::min()));
 
+  // Issue 21: starts that are valid but unsigned, or signed with another key, go in the flood
+  // too. They are refused for their signature before any check that spends the token bucket.
+  const command_auth::CommandKey wrong_key = CommandRig::key_filled_with(0x33);
+  const rig_command_t plausible = testing::start_command("bang_bang", 0.2, 10.0, "intruder");
+  const int kinds = static_cast<int>(hostile.size()) + 2;
+  auto send_kind = [&](int k) {
+    if (k < static_cast<int>(hostile.size())) return rig.send(hostile[k]);
+    if (k == static_cast<int>(hostile.size())) return rig.send_unsigned(plausible);
+    return rig.send_signed(plausible, wrong_key);
+  };
+
   // 63 cycles of 16 ms (about a second), 80 commands each: about 5000 a second.
   const int cycles = 63, per_cycle = 80;
-  int accepted = 0, rate_limited = 0, refused_with_field = 0;
+  int accepted = 0, rate_limited = 0, refused_with_field = 0, refused_unauthenticated = 0;
   std::vector<std::int64_t> ids;
   for (int c = 0; c < cycles; ++c) {
     ids.clear();
-    for (int i = 0; i < per_cycle; ++i)
-      ids.push_back(rig.send(hostile[(c * per_cycle + i) % hostile.size()]));
+    for (int i = 0; i < per_cycle; ++i) ids.push_back(send_kind((c * per_cycle + i) % kinds));
     for (const std::int64_t id : ids) {
       const rig_status_t reply = rig.inbox.reply_to(id);
       if (reply.request_accepted) {
@@ -320,6 +360,9 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
       ASSERT_LT(reply.request_reason.size(), 300u) << reply.request_reason;
       if (reply.request_reason.rfind("rate limit: ", 0) == 0) {
         ++rate_limited;
+      } else if (reply.request_reason.rfind("unsigned: ", 0) == 0 ||
+                 reply.request_reason.rfind("bad signature from ", 0) == 0) {
+        ++refused_unauthenticated;
       } else {
         ++refused_with_field;
       }
@@ -331,7 +374,11 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   const double seconds = cycles * rig.settings.loop.period_ns * 1e-9;
   EXPECT_LE(refused_with_field, 4 + static_cast<int>(seconds * 5) + 1);
   EXPECT_GE(refused_with_field, 4);
-  EXPECT_EQ(rate_limited + refused_with_field, cycles * per_cycle);
+  EXPECT_EQ(rate_limited + refused_with_field + refused_unauthenticated, cycles * per_cycle);
+  int unauthenticated_sent = 0;
+  for (int n = 0; n < cycles * per_cycle; ++n) unauthenticated_sent += n % kinds >= kinds - 2;
+  EXPECT_EQ(refused_unauthenticated, unauthenticated_sent);
+  EXPECT_EQ(rig.ask(status_request()).refused_unauthenticated, unauthenticated_sent);
   EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
 
   const rig_status_t estop = rig.ask(testing::simple_command(rig_command_t::KIND_ESTOP));
@@ -365,6 +412,94 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   EXPECT_GT(writes, cycles);
   EXPECT_EQ(peak, amplitude_raw);  // the session drove the motor at its amplitude, no further
   EXPECT_LE(peak, max_raw);
+}
+
+// Issue 21: only a start signed with the rig's key, fresh and not seen before, moves the motor.
+// Each other one is refused with its reason and counted, and the loop never sees it; stop and
+// e-stop need no signature. The log keeps the signed start, so it shows who started it.
+TEST(CommandHandling, OnlyAStartSignedWithTheRigsKeyMovesTheMotor) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_limits.max_commands_per_s = 1000;
+  rig.start(dir.path());
+  rig.step_cycles(70);             // past the rest check
+  rig.wall_ns += 120'000'000'000;  // the daemon has run for two minutes
+  const rig_command_t start = testing::start_command("bang_bang", 0.2, 30.0, "signed");
+  auto refused = [&](std::int64_t id, const std::string& reason_start) {
+    const rig_status_t reply = rig.inbox.reply_to(id);
+    EXPECT_FALSE(reply.request_accepted);
+    EXPECT_EQ(reply.request_reason.rfind(reason_start, 0), 0u) << reply.request_reason;
+    rig.step_cycles(2);
+    EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::idle);
+    return reply;
+  };
+  refused(rig.send_unsigned(start), "unsigned: a command that moves the motor must be signed");
+  refused(rig.send_signed(start, CommandRig::key_filled_with(0x33)),
+          "bad signature from \"test@rig\"");
+
+  // A signed start for 0.2 whose amplitude was raised to 0.6 on the way, its tag kept.
+  rig_command_t quiet = start;
+  quiet.request_id = 7001;
+  rig_command_t loud = quiet;
+  loud.amplitude_duty = 0.6;
+  auto tampered = command_auth::sign_command(quiet, rig.key, "test@rig", rig.wall_ns.load(), 77);
+  tampered.command =
+      command_auth::sign_command(loud, rig.key, "test@rig", rig.wall_ns.load(), 77).command;
+  rig.send_message(tampered);
+  refused(7001, "bad signature from");
+
+  // One signed a minute ago (captured then, sent now).
+  rig_command_t stale = start;
+  stale.request_id = 7002;
+  rig.send_message(command_auth::sign_command(stale, rig.key, "test@rig",
+                                              rig.wall_ns.load() - 60'000'000'000, 78));
+  refused(7002, "signed 60 s ago");
+
+  // The genuine one runs.
+  rig_command_t genuine = start;
+  genuine.request_id = 7003;
+  const auto captured =
+      command_auth::sign_command(genuine, rig.key, "ana@workstation", rig.wall_ns.load(), 79);
+  rig.send_message(captured);
+  const rig_status_t accepted = rig.inbox.reply_to(7003);
+  ASSERT_TRUE(accepted.request_accepted) << accepted.request_reason;
+  rig.step_cycles(3);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
+
+  // Stop needs no signature; the captured start sent again afterwards is a replay.
+  const rig_status_t stop = rig.ask(testing::simple_command(rig_command_t::KIND_STOP));
+  EXPECT_TRUE(stop.request_accepted) << stop.request_reason;
+  rig.step_cycles(2);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::idle);
+  rig.wall_ns += 5'000'000'000;
+  rig.send_message(captured);  // its reply has the id the first answer had: wait for the count
+  const rig_status_t status =
+      ask_until(rig, [](const rig_status_t& s) { return s.refused_unauthenticated == 5; });
+  rig.step_cycles(2);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::idle);
+  const rig_status_t estop = rig.ask(testing::simple_command(rig_command_t::KIND_ESTOP));
+  EXPECT_TRUE(estop.request_accepted) << estop.request_reason;
+
+  EXPECT_EQ(status.refused_unauthenticated, 5);
+  EXPECT_EQ(status.unauthenticated_reason, "replayed: this signed command was taken already");
+
+  // The one session's log holds the signed start: sender, tag and all, and the tag checks out.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (rig.daemon->sessions_logged() < 1 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(rig.daemon->sessions_logged(), 1);
+  fs::path log_path;
+  for (const auto& entry : fs::directory_iterator(dir.path())) {
+    if (entry.path().extension() == ".lcmlog") log_path = entry.path();
+  }
+  const session_log::SessionLog log = session_log::load_session_log(log_path);
+  ASSERT_TRUE(log.start_command.has_value());
+  EXPECT_EQ(log.start_command->sender, "ana@workstation");
+  EXPECT_EQ(log.start_command->nonce, 79);
+  const command_auth::CommandTag tag = command_auth::command_tag(rig.key, *log.start_command);
+  EXPECT_TRUE(std::equal(tag.begin(), tag.end(), log.start_command->tag));
+  EXPECT_EQ(log.unknown_channel_events, 0u);
 }
 
 TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {

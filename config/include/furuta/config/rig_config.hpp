@@ -34,6 +34,10 @@ struct DaemonConfig {
   double rest_check_s = 1.0;
   std::int64_t reconnect_interval_ms = 200;  // a lost board is asked for back this often
   std::int64_t queue_capacity = 4096;
+  // Commands that move the motor are signed with this key (docs/security.md); furutad creates it
+  // when missing. Signed commands are taken within this many seconds of the daemon's clock.
+  std::string command_key_file = "/etc/furuta/command.key";
+  double command_window_s = 30.0;
   bool realtime = false;
   int fifo_priority = 80;
   int cpu = -1;

@@ -12,10 +12,12 @@
 #include <string>
 #include <thread>
 
+#include "furuta/command_auth/command_auth.hpp"
 #include "furuta/daemon/control_loop.hpp"
 #include "furuta/daemon/session_recorder.hpp"
 #include "furuta/rig_command_t.hpp"
 #include "furuta/rig_session_t.hpp"
+#include "furuta/rig_signed_command_t.hpp"
 #include "furuta/rig_status_t.hpp"
 
 namespace furuta::daemon {
@@ -28,6 +30,14 @@ struct DaemonSettings {
   RealtimeOptions realtime;
   std::size_t queue_capacity = 4096;  // loop events: about a minute at 16 ms
   std::chrono::milliseconds status_interval{1000};
+  // Who may move the motor over LCM (docs/security.md): starts come signed with this key on
+  // RIG_COMMAND_SIGNED, within `command_auth.window` of `wall_clock_ns` and once. Without a key
+  // every start over LCM is refused with `command_key_problem`; stop, e-stop and status never
+  // need one.
+  std::optional<command_auth::CommandKey> command_key;
+  std::string command_key_problem = "no command key was given to the daemon";
+  command_auth::VerifierSettings command_auth;
+  std::function<std::int64_t()> wall_clock_ns;  // empty: the system's UTC clock
 };
 
 class Daemon {
@@ -48,8 +58,13 @@ class Daemon {
   // From any thread, e.g. a signal handler thread: ends any session with `reason`, then exits.
   void stop(StopReason reason);
 
-  // The same path an LCM command takes (validated, rate-limited, answered with status).
+  // A command from inside this process (furuta run, tests): trusted, then validated,
+  // rate-limited and answered like one from LCM.
   furuta::rig_status_t handle_command(const furuta::rig_command_t& command);
+  // What RIG_COMMAND takes: anyone's command, but none that moves the motor.
+  furuta::rig_status_t handle_unsigned_command(const furuta::rig_command_t& command);
+  // What RIG_COMMAND_SIGNED takes: a command whose tag, time and freshness check out.
+  furuta::rig_status_t handle_signed_command(const furuta::rig_signed_command_t& message);
   // Replay: start a session as a log's start record describes it (the same excitation and zeros).
   bool start_replayed_session(const furuta::rig_session_t& start);
 
@@ -83,6 +98,11 @@ class Daemon {
   void io_thread_main();
   void lcm_thread_main();
   void on_command(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_command_t* msg);
+  void on_signed_command(const lcm::ReceiveBuffer*, const std::string&,
+                         const furuta::rig_signed_command_t* msg);
+  // A command refused for its signature: counted, and the reply says why.
+  furuta::rig_status_t refuse_unauthenticated(std::int64_t request_id, const std::string& reason);
+  std::int64_t wall_now_ns() const;
   // An accepted command's action, under command_mutex_; a start may still be refused.
   CommandDecision carry_out(const furuta::rig_command_t& command);
 
@@ -92,6 +112,9 @@ class Daemon {
   std::unique_ptr<ControlLoop> loop_;
   std::unique_ptr<SessionRecorder> recorder_;
   CommandValidator validator_;
+  command_auth::CommandVerifier verifier_;  // under command_mutex_
+  std::atomic<std::int64_t> refused_unauthenticated_{0};
+  std::string unauthenticated_reason_;  // under snapshot_mutex_
   // Validator state and the loop's single-producer request queue: commands come from LCM and
   // from handle_command, replays from start_replayed_session.
   std::mutex command_mutex_;
@@ -108,6 +131,7 @@ class Daemon {
   std::thread io_thread_;
   std::thread lcm_thread_;
   lcm::Subscription* subscription_ = nullptr;
+  lcm::Subscription* signed_subscription_ = nullptr;
 };
 
 // "2026-11-21T10-04-05Z_label": sortable, safe as a file name (label reduced to [A-Za-z0-9_.-]).

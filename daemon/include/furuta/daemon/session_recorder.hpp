@@ -5,12 +5,16 @@
 
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "furuta/daemon/loop_events.hpp"
 #include "furuta/daemon/realtime.hpp"
@@ -44,6 +48,10 @@ class SessionRecorder {
   ~SessionRecorder();  // a session still open keeps its .part for recovery
 
   void handle(const LoopEvent& event);
+  // The signed command (encoded rig_signed_command_t) behind start request `request_id`: written
+  // into that session's log right after its start record, so the log shows who started it. From
+  // any thread; only the latest few are kept.
+  void note_signed_start(std::int64_t request_id, std::vector<std::uint8_t> encoded);
   void sync_if_due(std::chrono::steady_clock::time_point now);
 
   // Called with the final path of each log when its session ends.
@@ -104,6 +112,8 @@ class SessionRecorder {
   History history_;
   bool session_faulted_ = false;  // a fault was noted during the running session
   std::vector<std::uint8_t> buffer_;
+  std::mutex signed_starts_mutex_;
+  std::deque<std::pair<std::int64_t, std::vector<std::uint8_t>>> signed_starts_;
   furuta::rig_sample_t sample_msg_;
   furuta::rig_usb_report_t usb_msg_;
 };

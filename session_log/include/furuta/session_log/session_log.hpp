@@ -11,6 +11,7 @@
 #include "furuta/rig_fault_t.hpp"
 #include "furuta/rig_sample_t.hpp"
 #include "furuta/rig_session_t.hpp"
+#include "furuta/rig_signed_command_t.hpp"
 #include "furuta/rig_usb_report_t.hpp"
 #include "furuta/session_log/lcm_log.hpp"
 
@@ -20,6 +21,8 @@ inline constexpr const char* kChannelSample = "RIG_SAMPLE";
 inline constexpr const char* kChannelSession = "RIG_SESSION";
 inline constexpr const char* kChannelStatus = "RIG_STATUS";
 inline constexpr const char* kChannelCommand = "RIG_COMMAND";
+// Commands that move the motor, signed (docs/security.md); a log keeps the one that started it.
+inline constexpr const char* kChannelSignedCommand = "RIG_COMMAND_SIGNED";
 inline constexpr const char* kChannelUsb = "RIG_USB";
 inline constexpr const char* kChannelFault = "RIG_FAULT";
 
@@ -27,6 +30,9 @@ struct SessionLog {
   std::filesystem::path path;
   std::optional<furuta::rig_session_t> start;  // the first event
   std::optional<furuta::rig_session_t> end;    // absent when the session was cut short
+  // The signed command that started the session, tag and all (absent: started in-process, by a
+  // replay, or logged before commands were signed).
+  std::optional<furuta::rig_signed_command_t> start_command;
   std::vector<furuta::rig_sample_t> samples;
   std::vector<furuta::rig_usb_report_t> usb_reports;
   std::vector<furuta::rig_fault_t> faults;
