@@ -77,6 +77,11 @@ int run_log_info_command(const std::filesystem::path& path, std::ostream& out, s
     out << "  profile   " << s.profile << ", amplitude " << s.amplitude_duty << ", duration "
         << s.duration_s << " s, seed " << s.seed << ", period " << s.period_ns / 1000 << " us\n";
     out << "  software  " << s.software_version << "\n";
+    // Who started it: the signed start the daemon logged (its tag can be checked with the key).
+    out << "  started   "
+        << (log.start_command ? "by " + log.start_command->sender + " (signed command)"
+                              : std::string("unsigned (in-process, a replay, or an older furutad)"))
+        << "\n";
   } else {
     out << "  no session start record\n";
   }

@@ -35,6 +35,7 @@
 #include <thread>
 #include <vector>
 
+#include "furuta/command_auth/command_auth.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/rig_command_t.hpp"
 #include "furuta/rig_fault_t.hpp"
@@ -69,7 +70,11 @@ struct Options {
   int period_ms = 16;
   std::uint64_t fsize_bytes = 96 * 1024;
   bool verbose = false;
+  std::string command_key;  // <work>/command.key: starts are signed with it (docs/security.md)
 };
+
+// The key furutad is given and starts are signed with.
+command_auth::CommandKey g_command_key{};
 
 int g_failures = 0;
 void fail(const std::string& what) {
@@ -82,8 +87,10 @@ class DaemonProcess {
  public:
   DaemonProcess(const Options& options, const fs::path& logs_dir, const fs::path& output,
                 std::optional<std::uint64_t> fsize_limit = std::nullopt) {
-    std::vector<std::string> args{options.furutad, "--sim",           "-c",        options.config,
-                                  "--logs-dir",    logs_dir.string(), "--lcm-url", options.lcm_url};
+    std::vector<std::string> args{options.furutad,    "--sim",         "-c",
+                                  options.config,     "--logs-dir",    logs_dir.string(),
+                                  "--lcm-url",        options.lcm_url, "--command-key",
+                                  options.command_key};
     pid_ = ::fork();
     if (pid_ < 0) throw std::runtime_error("fork failed");
     if (pid_ == 0) {
@@ -201,7 +208,16 @@ class RigListener {
     command.duration_s = duration_s;
     command.label = label;
     command.seed = 7;
-    lcm_.publish(session_log::kChannelCommand, &command);
+    if (command_auth::moves_motor(command)) {
+      const auto now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                           std::chrono::system_clock::now().time_since_epoch())
+                           .count();
+      const auto signed_command = command_auth::sign_command(command, g_command_key, "crash-trials",
+                                                             now, command.request_id);
+      lcm_.publish(session_log::kChannelSignedCommand, &signed_command);
+    } else {
+      lcm_.publish(session_log::kChannelCommand, &command);
+    }
     return command.request_id;
   }
   std::optional<furuta::rig_status_t> reply(std::int64_t request_id) const {
@@ -750,6 +766,12 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", o.verbose);
   CLI11_PARSE(app, argc, argv);
   try {
+    o.command_key = (fs::path(o.work) / "command.key").string();
+    const command_auth::KeyCreation made = command_auth::ensure_command_key(o.command_key, "");
+    if (!made.problem.empty()) throw std::runtime_error(made.problem);
+    const command_auth::KeyFile key = command_auth::read_command_key(o.command_key);
+    if (!key.key) throw std::runtime_error(key.problem);
+    g_command_key = *key.key;
     if (o.scenario == "kill") return run_kill_trials(o);
     return run_disk_scenario(o);
   } catch (const std::exception& e) {

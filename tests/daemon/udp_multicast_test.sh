@@ -53,10 +53,12 @@ LOGS="$TMP/logs"
 sed -e "s|^lcm_url = .*|lcm_url = \"$URL\"|" \
     -e "s|^logs_dir = .*|logs_dir = \"$LOGS\"|" \
     -e "s|^rest_check_s = .*|rest_check_s = 0.0|" \
+    -e "s|^command_key_file = .*|command_key_file = \"$TMP/command.key\"|" \
     -e "s|^arm_switch_deg = [0-9.]*|arm_switch_deg = 20|" "$RIG_TOML" > "$CONFIG"
 grep -q "^lcm_url = \"$URL\"" "$CONFIG" || fail "could not set lcm_url in the [daemon] table"
 grep -q "^logs_dir = \"$LOGS\"" "$CONFIG" || fail "could not set logs_dir in the [daemon] table"
 grep -q "^rest_check_s = 0.0$" "$CONFIG" || fail "could not set rest_check_s in the [daemon] table"
+grep -q "^command_key_file = \"$TMP/command.key\"" "$CONFIG" || fail "could not set command_key_file"
 grep -q "^arm_switch_deg = 20 " "$CONFIG" || fail "could not set arm_switch_deg in [excitation]"
 
 cli() { "$FURUTA" "$@" --config "$CONFIG" --timeout 5; }
@@ -103,6 +105,9 @@ check_log() {
   grep -q "^  motor     last command duty 0, braking 1$" <<< "$info" \
     || fail "the last motor command in $log is not the zero"
   grep -q "sequence numbers missing" <<< "$info" && fail "$log misses samples"
+  # Started by `furuta start`, signed (issue 21): the log names who.
+  grep -q "^  started   by $(id -un)@.* (signed command)$" <<< "$info" \
+    || fail "$log does not name the signed start's sender"
   samples=$(sed -n 's/^  samples   \([0-9]*\).*/\1/p' <<< "$info")
   [ "${samples:-0}" -gt 0 ] || fail "$log has no samples"
   # lcm-logplayer reads every event (-v lists each) and publishes it.
@@ -110,6 +115,8 @@ check_log() {
     || fail "lcm-logplayer failed on $log: $(cat "$TMP/played.txt")"
   played=$(grep -c " Channel RIG_SAMPLE " "$TMP/played.txt")
   [ "$played" -eq "$samples" ] || fail "lcm-logplayer played $played samples of $samples"
+  grep -q " Channel RIG_COMMAND_SIGNED " "$TMP/played.txt" \
+    || fail "lcm-logplayer did not play the signed start of $log"
 }
 
 "$FURUTAD" --sim -c "$CONFIG" > "$TMP/furutad.log" 2>&1 &
@@ -117,6 +124,15 @@ DAEMON_PID=$!
 
 line=$(wait_for_status "state idle" 80) || fail "furutad did not come up"
 echo "furutad up: $line"
+
+# Only those who can read the key start sessions (issue 21): an unsigned start is refused with
+# its reason, a start without the key is not even sent (77), and both leave the rig idle.
+bad_key="$TMP/no-such.key"
+out=$(cli start --command-key "$bad_key" --profile free_decay --duration 1 --label nokey 2>&1)
+code=$?
+[ "$code" -eq 77 ] || fail "a start without the key exited $code (want 77): $out"
+grep -q "cannot start sessions; stop/estop/status still work" <<< "$out" \
+  || fail "a start without the key did not say why: $out"
 
 # Session 1: a free decay (zero duty, so the pendulum stays still for the next one), stopped by
 # `furuta stop`.
