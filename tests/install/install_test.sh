@@ -61,4 +61,23 @@ if [ "$(id -u)" -eq 0 ]; then
       fail "/var/lib/furuta/$d is not owned by the furuta user ($uid)"
   done
 fi
-echo "install test: files in place, units verified (systemd-analyze verify --root), user and directories created"
+
+# The command key (issue 21, docs/security.md): made by the install, 64 hex digits, mode 0640,
+# owner root, group furuta (the tmpfiles `z` line, applied inside the root, when not made by root
+# where the group already existed); a second install keeps it.
+key="$root/etc/furuta/command.key"
+[ -f "$key" ] || fail "cmake --install made no /etc/furuta/command.key"
+grep -qxE '[0-9a-f]{64}' "$key" || fail "/etc/furuta/command.key is not 64 hex digits"
+[ "$(stat -c %a "$key")" = 640 ] || fail "/etc/furuta/command.key has mode $(stat -c %a "$key"), not 640"
+if [ "$(id -u)" -eq 0 ]; then
+  gid=$(awk -F: '$1 == "furuta" { print $3 }' "$root/etc/group")
+  [ "$(stat -c %u:%g "$key")" = "0:$gid" ] ||
+    fail "/etc/furuta/command.key is owned by $(stat -c %u:%g "$key"), not root:furuta (0:$gid)"
+fi
+before=$(cat "$key")
+DESTDIR="$root" cmake --install "$1" --prefix /usr >/dev/null
+[ "$(cat "$key")" = "$before" ] || fail "a second cmake --install replaced the command key"
+# The unit makes it on first start when missing, as root.
+grep -q '^ExecStartPre=+/usr/sbin/furutad .*--create-command-key' "$root/$units/furutad.service" ||
+  fail "furutad.service does not make the command key before it starts"
+echo "install test: files in place, units verified (systemd-analyze verify --root), user, directories and command key created"

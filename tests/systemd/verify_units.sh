@@ -9,6 +9,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 for unit in "$units_dir"/*.service "$units_dir"/*.path; do
   sed -e "s|^ExecStart=/usr/sbin/furutad|ExecStart=$furutad|" \
+    -e "s|^ExecStartPre=+/usr/sbin/furutad|ExecStartPre=+$furutad|" \
     -e "s|^ExecStart=/usr/bin/furuta |ExecStart=$furuta |" "$unit" > "$work/$(basename "$unit")"
 done
 # Warnings about the machine (no udev-settle unit in a container, no furuta user) are not the unit's
