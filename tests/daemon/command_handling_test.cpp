@@ -162,6 +162,19 @@ struct CommandRig {
     lcm.publish(session_log::kChannelSignedCommand, &m);
     return command.request_id;
   }
+  // The log of the one session the daemon has finished ("" if it has not, within a hang guard).
+  fs::path only_log(const fs::path& logs_dir) {
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (daemon->sessions_logged() < 1 && std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    fs::path found;
+    if (daemon->sessions_logged() != 1) return found;
+    for (const auto& entry : fs::directory_iterator(logs_dir)) {
+      if (entry.path().extension() == ".lcmlog") found = entry.path();
+    }
+    return found;
+  }
   // A signed message as given (a capture sent again, one changed on the way).
   void send_message(const furuta::rig_signed_command_t& m) {
     lcm.publish(session_log::kChannelSignedCommand, &m);
@@ -387,15 +400,7 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   EXPECT_EQ(rig.daemon->loop().counters().last_stop.load(), StopReason::estop_command);
 
   // Every write to the 1065 during the session, from its log.
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (rig.daemon->sessions_logged() < 1 && std::chrono::steady_clock::now() < give_up) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  ASSERT_EQ(rig.daemon->sessions_logged(), 1);
-  fs::path log_path;
-  for (const auto& entry : fs::directory_iterator(dir.path())) {
-    if (entry.path().extension() == ".lcmlog") log_path = entry.path();
-  }
+  const fs::path log_path = rig.only_log(dir.path());
   ASSERT_FALSE(log_path.empty());
   const session_log::SessionLog log = session_log::load_session_log(log_path);
   const int max_raw = static_cast<int>(std::floor(rig.config.safety.max_duty * 255 + 1e-9));
@@ -484,15 +489,8 @@ TEST(CommandHandling, OnlyAStartSignedWithTheRigsKeyMovesTheMotor) {
   EXPECT_EQ(status.unauthenticated_reason, "replayed: this signed command was taken already");
 
   // The one session's log holds the signed start: sender, tag and all, and the tag checks out.
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (rig.daemon->sessions_logged() < 1 && std::chrono::steady_clock::now() < give_up) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  ASSERT_EQ(rig.daemon->sessions_logged(), 1);
-  fs::path log_path;
-  for (const auto& entry : fs::directory_iterator(dir.path())) {
-    if (entry.path().extension() == ".lcmlog") log_path = entry.path();
-  }
+  const fs::path log_path = rig.only_log(dir.path());
+  ASSERT_FALSE(log_path.empty());
   const session_log::SessionLog log = session_log::load_session_log(log_path);
   ASSERT_TRUE(log.start_command.has_value());
   EXPECT_EQ(log.start_command->sender, "ana@workstation");
