@@ -1,0 +1,123 @@
+#pragma once
+// Taylor models (issue 22): a polynomial of total degree <= k in n normalised variables z in
+// [-1, 1]^n with point coefficients, plus an interval remainder. A model stands for the set
+// { p(z) + r : z in [-1, 1]^n, r in R }; every operation returns a model whose set holds the
+// result for every z and every pair of values of its operands at that z (the operands must share
+// their variables: the same MonomialSpace). Rounding errors of the coefficients, the terms above
+// degree k and the Lagrange remainders of sin, cos and 1/x go into R.
+//
+// It is a scalar for TaylorRunner (taylor.hpp): T(0.0), T(Interval), + - * /, sqr, sin, cos.
+// A model without a space is a constant (its set is R alone); it mixes with any model.
+//
+//   auto space = std::make_shared<MonomialSpace>(2, 3);           // 2 variables, degree 3
+//   TaylorModel x = TaylorModel::variable(space, 0, Interval(0.9, 1.1));  // 1 + 0.1 z0
+//   TaylorModel y = sin(x) * x;   Interval range = y.bound();
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "furuta/interval/interval.hpp"
+
+namespace furuta::validated {
+
+using interval::Interval;
+
+// The monomials z^e of total degree <= order in `variables` variables, graded (1, z0, z1, ...,
+// z0^2, z0 z1, ...), with the table of their products.
+class MonomialSpace {
+ public:
+  // 1..16 variables, order 0..12, at most 2048 monomials (11 variables: order 4).
+  MonomialSpace(std::size_t variables, int order);
+
+  std::size_t variables() const { return variables_; }
+  int order() const { return order_; }
+  std::size_t size() const { return degrees_.size(); }
+  int degree(std::size_t m) const { return degrees_[m]; }
+  // The exponent of variable v in monomial m.
+  int exponent(std::size_t m, std::size_t v) const { return exponents_[m * variables_ + v]; }
+  // The monomial z_v (degree 1).
+  std::size_t variable(std::size_t v) const { return 1 + v; }
+  // The product of monomials a and b, or npos when its degree is above order().
+  std::size_t product(std::size_t a, std::size_t b) const { return products_[a * size() + b]; }
+  // The range of z^e over [-1, 1]^n: 1 for the constant, [0, 1] when every exponent is even,
+  // else [-1, 1].
+  const Interval& range(std::size_t m) const { return ranges_[m]; }
+  // The range of the product of monomials a and b (any degree).
+  Interval product_range(std::size_t a, std::size_t b) const;
+  // One past the last monomial of degree <= d (d >= order(): size()).
+  std::size_t end_of_degree(int d) const {
+    return d < 0 ? 0 : ends_[static_cast<std::size_t>(std::min(d, order_))];
+  }
+
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+
+ private:
+  std::size_t variables_;
+  int order_;
+  std::vector<std::uint8_t> exponents_;  // size() x variables_
+  std::vector<int> degrees_;
+  std::vector<Interval> ranges_;
+  std::vector<std::size_t> products_;  // size() x size()
+  std::vector<std::size_t> ends_;      // per degree 0..order_
+};
+
+class TaylorModel {
+ public:
+  TaylorModel() : TaylorModel(Interval(0.0)) {}
+  TaylorModel(double value) : TaylorModel(Interval(value)) {}  // NOLINT: constants mix in
+  TaylorModel(const Interval& value) : remainder_(value) {}    // NOLINT
+  // The constant `value` in `space` (its polynomial: mid(value), the rest in the remainder).
+  TaylorModel(std::shared_ptr<const MonomialSpace> space, const Interval& value);
+  // Variable v ranging over `range`: mid + rad z_v (the rounding of mid and rad in the remainder).
+  static TaylorModel variable(std::shared_ptr<const MonomialSpace> space, std::size_t v,
+                              const Interval& range);
+
+  const std::shared_ptr<const MonomialSpace>& space() const { return space_; }
+  // Coefficient of monomial m (0 for a constant model's m > 0).
+  double coefficient(std::size_t m) const;
+  const std::vector<double>& coefficients() const { return coefficients_; }
+  const Interval& remainder() const { return remainder_; }
+  // Every value the model takes: the polynomial's range over [-1, 1]^n plus the remainder. The
+  // polynomial's range is bounded term by term, except that the linear part is bounded exactly
+  // and each square z_v^2 with the linear term of z_v is bounded as one quadratic in z_v.
+  Interval bound() const;
+  Interval polynomial_bound() const;
+  // The value at a point z (each |z_v| <= 1): the polynomial at z plus the remainder.
+  Interval evaluate(const std::vector<double>& z) const;
+  // The model with its remainder widened to hold `extra` too.
+  TaylorModel& add_to_remainder(const Interval& extra);
+
+  TaylorModel& operator+=(const TaylorModel& y);
+  TaylorModel& operator-=(const TaylorModel& y);
+
+  friend TaylorModel operator+(const TaylorModel& a, const TaylorModel& b);
+  friend TaylorModel operator-(const TaylorModel& a, const TaylorModel& b);
+  friend TaylorModel operator-(const TaylorModel& a);
+  friend TaylorModel operator*(const TaylorModel& a, const TaylorModel& b);
+  friend TaylorModel operator*(const TaylorModel& a, const Interval& k);
+  friend TaylorModel operator/(const TaylorModel& a, const TaylorModel& b);
+  friend TaylorModel operator/(const TaylorModel& a, const Interval& k);
+  friend TaylorModel reciprocal(const TaylorModel& a);
+  friend TaylorModel sqr(const TaylorModel& a);
+  friend TaylorModel sin(const TaylorModel& a);
+  friend TaylorModel cos(const TaylorModel& a);
+
+ private:
+  // From interval coefficients: their midpoints, the rest over each monomial's range into the
+  // remainder.
+  static TaylorModel from_intervals(std::shared_ptr<const MonomialSpace> space,
+                                    const std::vector<Interval>& coefficients, Interval remainder);
+  // f(a) for f = sin, cos or 1/x: sum_{i<=k} d_i (a - c)^i + R, d_i = f^(i)(c) / i! (enclosed),
+  // R = `lagrange` (f^(k+1) over a's range / (k+1)!) times (a - c)'s range^(k+1).
+  static TaylorModel compose(const TaylorModel& a, const std::vector<Interval>& d,
+                             const Interval& lagrange);
+
+  std::shared_ptr<const MonomialSpace> space_;  // null: a constant (the remainder alone)
+  std::vector<double> coefficients_;            // space_->size() of them
+  Interval remainder_;
+};
+
+}  // namespace furuta::validated
