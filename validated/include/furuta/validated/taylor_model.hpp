@@ -87,6 +87,12 @@ class TaylorModel {
   Interval polynomial_bound() const;
   // The value at a point z (each |z_v| <= 1): the polynomial at z plus the remainder.
   Interval evaluate(const std::vector<double>& z) const;
+  // The polynomial alone (remainder 0).
+  TaylorModel polynomial() const {
+    TaylorModel out = *this;
+    out.remainder_ = Interval(0.0);
+    return out;
+  }
   // The model with its remainder widened to hold `extra` too.
   TaylorModel& add_to_remainder(const Interval& extra);
 

@@ -1,0 +1,66 @@
+#pragma once
+// Validated integration with the set as a Taylor model (issue 22, first version): every solution
+// from x0 = mid(x0) + rad(x0) z (z in [-1, 1]^n; the parameters carried as state are variables
+// like the rest) is at time t in p(z) + B r for some r in the interval vector r, where p is a
+// polynomial of order `space_order` in z. One step: the Taylor map of p computed in Taylor-model
+// arithmetic (TaylorRunner<TaylorModel>), the error part carried through the map's Jacobian over
+// the set in Lohner's frame (parallelepiped or QR, as the doubleton integrator), the models'
+// remainders and the Lagrange remainder going into the error part.
+//
+// It carries the start's and the parameters' influence to order `space_order` exactly, where the
+// doubleton integrator (integrator.hpp) stops at order 2; it does not yet shrink-wrap nor split.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "furuta/interval/box.hpp"
+#include "furuta/validated/integrator.hpp"
+#include "furuta/validated/taylor.hpp"
+#include "furuta/validated/taylor_model.hpp"
+
+namespace furuta::validated {
+
+struct TaylorModelFlowOptions {
+  // Steps (order = the Taylor order in time, tolerance, h_min, h_max, h_initial), max_width,
+  // max_inflation (1: the QR frame), t_start, t_end; quadratic_* and max_excess are not used.
+  IntegratorOptions integrator;
+  int space_order = 3;  // the models' order in z (1..4 for 11 variables: MonomialSpace's limit)
+};
+
+struct TaylorModelFlowStep {
+  double t0 = 0.0;
+  double t1 = 0.0;
+  Box over;                      // every solution over [t0, t1]
+  Box end;                       // every solution at t1
+  double remainder_width = 0.0;  // the widest component of the error part B r at t1
+};
+
+struct TaylorModelFlowResult {
+  std::vector<TaylorModelFlowStep> steps;
+  Box initial;
+  double t_start = 0.0;
+  IntegrationResult::Status status = IntegrationResult::Status::ok;
+  std::string reason;  // why it ended early
+  std::size_t rejected = 0;
+  double seconds = 0.0;
+
+  bool ok() const { return status == IntegrationResult::Status::ok; }
+  double t_reached() const { return steps.empty() ? t_start : steps.back().t1; }
+  // The step's end box at a step's end, its box over the step inside it; empty outside.
+  Box enclosure_at(double t) const;
+};
+
+// Invalid arguments (as integrate_tapes, plus space_order outside 1..12 or too many monomials)
+// throw std::invalid_argument; an integration that cannot go on is a status.
+TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
+                                              const std::vector<double>& switches, const Box& x0,
+                                              const TaylorModelFlowOptions& options);
+
+template <class System>
+TaylorModelFlowResult integrate_taylor_models(const System& system, const Box& x0,
+                                              const TaylorModelFlowOptions& options) {
+  return integrate_taylor_models(record_system(system), switch_times(system), x0, options);
+}
+
+}  // namespace furuta::validated
