@@ -321,13 +321,8 @@ TEST(Integrator, FurutaStateDynamicsSoundness) {
 TEST(Integrator, FurutaQuadraticModelSoundness) {
   const model::Parameters<double> p = model::paper_run1();
   const FurutaStateDynamics system(interval_parameters(p), Interval(0.0));
-  const double q2 = -100.0 * 3.14159265358979323846 / 180.0;
-  const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
-                  Interval(-1e-3, 1e-3)};
-  IntegratorOptions options;
-  options.t_end = 2.5;
-  options.tolerance = 1e-10;
-  options.max_inflation = 1.0;
+  const Box state = testing::scenario_a_state();
+  const IntegratorOptions options = testing::furuta_test_options(2.5);
   const IntegrationResult r = integrate(system, state, options);
   ASSERT_TRUE(r.ok()) << r.reason;
   std::mt19937_64 rng(77);
@@ -541,13 +536,8 @@ TEST(Integrator, FailuresAreReportedWithTimeAndReason) {
 // +-0.1 %, carried as state.
 TEST(Integrator, EveryStepsEndIsInsideItsBoxOverTheStep) {
   const model::Parameters<double> p = model::paper_run1();
-  const double q2 = -100.0 * 3.14159265358979323846 / 180.0;
-  const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
-                  Interval(-1e-3, 1e-3)};
-  IntegratorOptions options;
-  options.t_end = 1.0;
-  options.tolerance = 1e-10;
-  options.max_inflation = 1.0;
+  const Box state = testing::scenario_a_state();
+  IntegratorOptions options = testing::furuta_test_options(1.0);
   const IntegrationResult point =
       integrate(FurutaStateDynamics(interval_parameters(p), Interval(0.0)), state, options);
   options.t_end = 0.5;

@@ -192,4 +192,23 @@ std::vector<Point<N>> sample_box(const interval::Box& box, std::size_t count,
   return points;
 }
 
+// The start of the paper's scenario (a) as the tests take it: [0, 0, -100 deg, 0] +- 1e-3
+// (q2 +- 1.6e-3, the pendulum's encoder).
+inline interval::Box scenario_a_state() {
+  const double q2 = -100.0 * 3.14159265358979323846 / 180.0;
+  return interval::Box{interval::Interval(-1e-3, 1e-3), interval::Interval(-1e-3, 1e-3),
+                       interval::Interval(q2 - 1.6e-3, q2 + 1.6e-3),
+                       interval::Interval(-1e-3, 1e-3)};
+}
+
+// The integrator's options for the Furuta model in these tests: the QR frame (the damped arm), a
+// remainder tolerance of 1e-10, to t_end.
+inline IntegratorOptions furuta_test_options(double t_end) {
+  IntegratorOptions options;
+  options.t_end = t_end;
+  options.tolerance = 1e-10;
+  options.max_inflation = 1.0;
+  return options;
+}
+
 }  // namespace furuta::validated::testing

@@ -44,10 +44,8 @@ testing::SoundnessCount check_flow(const System& system, const TaylorModelFlowRe
 
 TaylorModelFlowOptions flow_options(double t_end) {
   TaylorModelFlowOptions o;
-  o.integrator.t_end = t_end;
+  o.integrator = testing::furuta_test_options(t_end);
   o.integrator.order = 8;
-  o.integrator.tolerance = 1e-10;
-  o.integrator.max_inflation = 1.0;
   o.integrator.max_width = 2.0 * kPi;
   o.space_order = 3;
   return o;
@@ -81,9 +79,7 @@ TEST(TaylorModelFlow, PendulumWideBoxIsSoundAndCarriedFurther) {
 // truth, and the bench box (mu's +-2 %, fv1 +-10 %, fv2 +-50 %), scenario (a).
 TEST(TaylorModelFlow, FurutaWithIntervalParametersIsSound) {
   const model::Parameters<double> truth = model::paper_run1();
-  const double q2 = -100.0 * kPi / 180.0;
-  const Box state{Interval(-1e-3, 1e-3), Interval(-1e-3, 1e-3), Interval(q2 - 1.6e-3, q2 + 1.6e-3),
-                  Interval(-1e-3, 1e-3)};
+  const Box state = testing::scenario_a_state();
   model::Parameters<Interval> bench = parameters_around(truth, 0.02);
   bench.fv1 = Interval(truth.fv1) * Interval(0.9, 1.1);
   bench.fv2 = Interval(truth.fv2) * Interval(0.5, 1.5);
