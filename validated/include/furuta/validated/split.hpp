@@ -32,7 +32,8 @@ struct SplitOptions {
   int threads = 0;  // TBB threads (0: every core)
   // Planned splitting, before any failure: the run goes to `planned_split_s` as one tube, then
   // its initial box is bisected `planned_depth` times (2^depth pieces, each bisection in the
-  // widest direction relative to x0 among those the field reads) and the pieces continue from
+  // direction with the largest share of the moving components' spread at that time, from the
+  // tube's first-order coefficients C) and the pieces continue from
   // there. Each piece's second-order leftovers (third order in its box) shrink with it, while
   // the error part inherited at the split is still small; the failure-driven splitting above
   // then works on the pieces. 0: none.
