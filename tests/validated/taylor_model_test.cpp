@@ -195,6 +195,21 @@ TEST(TaylorModel, TheRemainderShrinksWithTheOrderAndTheDependencyCancels) {
   EXPECT_LE(q.hi(), 1.0 + 1e-15);
 }
 
+// Where the linear part dominates, the linear-dominated bounder finds the corners: z0 + z1 +
+// 0.1 z0 z1 over [-1, 1]^2 ranges over [-1.9, 2.1]; term by term gives [-2.1, 2.1].
+TEST(TaylorModel, TheLinearDominatedBoundFindsTheCorners) {
+  const auto space = std::make_shared<const MonomialSpace>(2, 3);
+  const TaylorModel z0 = TaylorModel::variable(space, 0, Interval(-1.0, 1.0));
+  const TaylorModel z1 = TaylorModel::variable(space, 1, Interval(-1.0, 1.0));
+  const TaylorModel p = z0 + z1 + z0 * z1 * Interval(0.1);
+  EXPECT_LE(p.polynomial_bound().lo(), -2.1 + 1e-12);
+  const Interval b = p.bound();
+  EXPECT_LE(b.lo(), -1.9);
+  EXPECT_GT(b.lo(), -1.95);
+  EXPECT_GE(b.hi(), 2.1);
+  EXPECT_LT(b.hi(), 2.1 + 1e-9);
+}
+
 TEST(TaylorModel, ConstantsMixInAndDivisionByZeroIsEntire) {
   const auto space = std::make_shared<const MonomialSpace>(2, 3);
   const TaylorModel x = TaylorModel::variable(space, 0, Interval(-1.0, 1.0));

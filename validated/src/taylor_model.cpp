@@ -179,8 +179,66 @@ Interval TaylorModel::polynomial_bound() const {
   return sum;
 }
 
+namespace {
+
+// The terms of degree >= 2 over the box z (each a product of interval powers), and the constant and
+// linear terms over it.
+Interval nonlinear_over(const std::vector<double>& c, const MonomialSpace& s,
+                        const std::vector<Interval>& z) {
+  Interval sum(0.0);
+  for (std::size_t m = 1 + s.variables(); m < s.size(); ++m) {
+    if (c[m] == 0.0) continue;
+    Interval term(c[m]);
+    for (std::size_t v = 0; v < s.variables(); ++v) {
+      if (s.exponent(m, v) > 0) term = term * pow(z[v], s.exponent(m, v));
+    }
+    sum += term;
+  }
+  return sum;
+}
+
+// A lower bound of the polynomial over [-1, 1]^n by the linear-dominated bounder (Makino and
+// Berz): a minimiser z* lies, in each variable v, within (nu - nl) / |a_v| of the end where the
+// linear term a_v z_v is least ([nl, nu] the rest's range over the current box): farther away
+// the linear part alone rises by more than the rest can fall, above p at that corner, which is at
+// most the linear minimum plus nu. So the box shrinks towards that corner, and the bound over
+// the shrunk box (term by term) bounds the minimum. Every step rounds outwards or upwards.
+double linear_dominated_lower(const std::vector<double>& c, const MonomialSpace& s) {
+  const std::size_t n = s.variables();
+  std::vector<Interval> z(n, kUnit);
+  double best = -HUGE_VAL;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const Interval rest = nonlinear_over(c, s, z);
+    Interval linear(c[0]);
+    for (std::size_t v = 0; v < n; ++v) linear += Interval(c[s.variable(v)]) * z[v];
+    best = std::max(best, (linear + rest).lo());
+    if (!rest.is_bounded()) break;
+    const Interval spread = Interval(rest.hi()) - Interval(rest.lo());
+    bool shrunk = false;
+    for (std::size_t v = 0; v < n; ++v) {
+      const double a = c[s.variable(v)];
+      if (a == 0.0) continue;
+      const double d = (spread / Interval(std::abs(a))).hi();
+      if (!(d < z[v].width())) continue;
+      z[v] = a > 0.0 ? Interval(z[v].lo(), (Interval(z[v].lo()) + Interval(d)).hi())
+                     : Interval((Interval(z[v].hi()) - Interval(d)).lo(), z[v].hi());
+      shrunk = true;
+    }
+    if (!shrunk) break;
+  }
+  return best;
+}
+
+}  // namespace
+
 Interval TaylorModel::bound() const {
-  return polynomial_bound() + remainder_;
+  if (!space_) return remainder_;
+  // The quadratic-per-variable bound, cut by the linear-dominated bounds from below and above.
+  std::vector<double> negated(coefficients_.size());
+  for (std::size_t m = 0; m < negated.size(); ++m) negated[m] = -coefficients_[m];
+  const Interval linear_dominated(linear_dominated_lower(coefficients_, *space_),
+                                  -linear_dominated_lower(negated, *space_));
+  return intersect(polynomial_bound(), linear_dominated) + remainder_;
 }
 
 Interval TaylorModel::evaluate(const std::vector<double>& z) const {

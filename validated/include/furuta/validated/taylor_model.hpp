@@ -81,8 +81,10 @@ class TaylorModel {
   const std::vector<double>& coefficients() const { return coefficients_; }
   const Interval& remainder() const { return remainder_; }
   // Every value the model takes: the polynomial's range over [-1, 1]^n plus the remainder. The
-  // polynomial's range is bounded term by term, except that the linear part is bounded exactly
-  // and each square z_v^2 with the linear term of z_v is bounded as one quadratic in z_v.
+  // polynomial's range is the intersection of two bounds: term by term, except that each variable's
+  // linear and square terms are bounded as one quadratic in it (polynomial_bound(), what the
+  // products use), and the linear-dominated bounder's (the box shrunk towards the corners where
+  // the linear part is least and greatest).
   Interval bound() const;
   Interval polynomial_bound() const;
   // The value at a point z (each |z_v| <= 1): the polynomial at z plus the remainder.
