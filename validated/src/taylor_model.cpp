@@ -347,41 +347,44 @@ TaylorModel sqr(const TaylorModel& a) {
   return a * a;
 }
 
-TaylorModel TaylorModel::compose(const TaylorModel& a, const std::vector<Interval>& d,
-                                 const Interval& lagrange) {
-  // q = a - c, c its constant coefficient: q's polynomial has no constant term.
+TaylorModel TaylorModel::compose(const TaylorModel& a, const Expand& expand) {
+  // q = a - c, c its constant coefficient: q's polynomial has no constant term. xi of the
+  // Lagrange term lies between c and the value: in the hull of c and c + q's range.
   TaylorModel q = a;
   q.coefficients_[0] = 0.0;
   const Interval q_range = q.bound();
+  const double c = a.coefficients_[0];
   const int k = a.space_->order();
-  // Horner: (((d_k q + d_(k-1)) q + ...) q + d_0.
-  TaylorModel sum(a.space_, d[static_cast<std::size_t>(k)]);
-  for (int i = k - 1; i >= 0; --i)
-    sum = sum * q + TaylorModel(a.space_, d[static_cast<std::size_t>(i)]);
-  return sum.add_to_remainder(lagrange * pow(q_range, k + 1));
-}
-
-TaylorModel reciprocal(const TaylorModel& a) {
-  if (!a.space_) return TaylorModel(Interval(1.0) / a.remainder_);
-  // xi lies between the constant coefficient and the value: in the hull of both.
-  const Interval range = hull(a.bound(), Interval(a.coefficients_[0]));
-  if (range.contains_zero() || !range.is_bounded()) {
+  const std::optional<Expansion> e = expand(c, hull(Interval(c) + q_range, Interval(c)), k);
+  if (!e) {
     TaylorModel out(a.space_, Interval(0.0));
     out.remainder_ = Interval::entire();
     return out;
   }
+  // Horner: (((d_k q + d_(k-1)) q + ...) q + d_0.
+  TaylorModel sum(a.space_, e->d[static_cast<std::size_t>(k)]);
+  for (int i = k - 1; i >= 0; --i)
+    sum = sum * q + TaylorModel(a.space_, e->d[static_cast<std::size_t>(i)]);
+  return sum.add_to_remainder(e->lagrange * pow(q_range, k + 1));
+}
+
+TaylorModel reciprocal(const TaylorModel& a) {
+  if (!a.space_) return TaylorModel(Interval(1.0) / a.remainder_);
   // 1/x about c: d_i = (-1)^i / c^(i+1); the Lagrange term (-1)^(k+1) / xi^(k+2), xi in range.
-  const int k = a.space_->order();
-  const Interval c(a.coefficients_[0]);
-  std::vector<Interval> d(static_cast<std::size_t>(k) + 1);
-  Interval inv = Interval(1.0) / c;
-  Interval power = inv;
-  for (int i = 0; i <= k; ++i) {
-    d[static_cast<std::size_t>(i)] = i % 2 == 0 ? power : -power;
-    power = power * inv;
-  }
-  const Interval tail = Interval(1.0) / pow(range, k + 2);
-  return TaylorModel::compose(a, d, (k + 1) % 2 == 0 ? tail : -tail);
+  return TaylorModel::compose(
+      a, [](double c, const Interval& range, int k) -> std::optional<TaylorModel::Expansion> {
+        if (range.contains_zero() || !range.is_bounded()) return std::nullopt;
+        TaylorModel::Expansion e{std::vector<Interval>(static_cast<std::size_t>(k) + 1), {}};
+        const Interval inv = Interval(1.0) / Interval(c);
+        Interval power = inv;
+        for (int i = 0; i <= k; ++i) {
+          e.d[static_cast<std::size_t>(i)] = i % 2 == 0 ? power : -power;
+          power = power * inv;
+        }
+        const Interval tail = Interval(1.0) / pow(range, k + 2);
+        e.lagrange = (k + 1) % 2 == 0 ? tail : -tail;
+        return e;
+      });
 }
 
 TaylorModel operator/(const TaylorModel& a, const TaylorModel& b) {
@@ -391,47 +394,45 @@ TaylorModel operator/(const TaylorModel& a, const TaylorModel& b) {
 
 namespace {
 
-// f^(i)(x) / i! for f = sin (shift 0) or cos (shift 1), i = 0..k, and the Lagrange factor
+// f^(i)(c) / i! for f = sin (shift 0) or cos (shift 1), i = 0..k, and the Lagrange factor
 // f^(k+1)(range) / (k+1)!.
-std::pair<std::vector<Interval>, Interval> sin_cos_series(double c, const Interval& range, int k,
-                                                          int shift) {
-  // The derivatives cycle: sin, cos, -sin, -cos.
-  auto derivative = [&](const Interval& x, int i) {
-    switch ((i + shift) % 4) {
-      case 0:
-        return interval::sin(x);
-      case 1:
-        return interval::cos(x);
-      case 2:
-        return -interval::sin(x);
-      default:
-        return -interval::cos(x);
+TaylorModel::Expand sin_cos_expansion(int shift) {
+  return [shift](double c, const Interval& range, int k) -> std::optional<TaylorModel::Expansion> {
+    // The derivatives cycle: sin, cos, -sin, -cos.
+    auto derivative = [&](const Interval& x, int i) {
+      switch ((i + shift) % 4) {
+        case 0:
+          return interval::sin(x);
+        case 1:
+          return interval::cos(x);
+        case 2:
+          return -interval::sin(x);
+        default:
+          return -interval::cos(x);
+      }
+    };
+    TaylorModel::Expansion e{std::vector<Interval>(static_cast<std::size_t>(k) + 1), {}};
+    Interval factorial(1.0);
+    for (int i = 0; i <= k; ++i) {
+      if (i > 0) factorial = factorial * Interval(static_cast<double>(i));
+      e.d[static_cast<std::size_t>(i)] = derivative(Interval(c), i) / factorial;
     }
+    factorial = factorial * Interval(static_cast<double>(k + 1));
+    e.lagrange = derivative(range, k + 1) / factorial;
+    return e;
   };
-  std::vector<Interval> d(static_cast<std::size_t>(k) + 1);
-  Interval factorial(1.0);
-  for (int i = 0; i <= k; ++i) {
-    if (i > 0) factorial = factorial * Interval(static_cast<double>(i));
-    d[static_cast<std::size_t>(i)] = derivative(Interval(c), i) / factorial;
-  }
-  factorial = factorial * Interval(static_cast<double>(k + 1));
-  return {std::move(d), derivative(range, k + 1) / factorial};
 }
 
 }  // namespace
 
 TaylorModel sin(const TaylorModel& a) {
   if (!a.space_) return TaylorModel(interval::sin(a.remainder_));
-  const Interval range = hull(a.bound(), Interval(a.coefficients_[0]));
-  auto [d, lagrange] = sin_cos_series(a.coefficients_[0], range, a.space_->order(), 0);
-  return TaylorModel::compose(a, d, lagrange);
+  return TaylorModel::compose(a, sin_cos_expansion(0));
 }
 
 TaylorModel cos(const TaylorModel& a) {
   if (!a.space_) return TaylorModel(interval::cos(a.remainder_));
-  const Interval range = hull(a.bound(), Interval(a.coefficients_[0]));
-  auto [d, lagrange] = sin_cos_series(a.coefficients_[0], range, a.space_->order(), 1);
-  return TaylorModel::compose(a, d, lagrange);
+  return TaylorModel::compose(a, sin_cos_expansion(1));
 }
 
 }  // namespace furuta::validated

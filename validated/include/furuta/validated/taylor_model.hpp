@@ -16,7 +16,9 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "furuta/interval/interval.hpp"
@@ -98,6 +100,15 @@ class TaylorModel {
   // The model with its remainder widened to hold `extra` too.
   TaylorModel& add_to_remainder(const Interval& extra);
 
+  // f about the constant coefficient c: d_i = f^(i)(c) / i! (enclosed, i = 0..k) and the Lagrange
+  // factor f^(k+1)(range) / (k+1)!, range holding c and every value of a; nothing when f is not
+  // defined over range.
+  struct Expansion {
+    std::vector<Interval> d;
+    Interval lagrange;
+  };
+  using Expand = std::function<std::optional<Expansion>(double c, const Interval& range, int k)>;
+
   TaylorModel& operator+=(const TaylorModel& y);
   TaylorModel& operator-=(const TaylorModel& y);
 
@@ -118,10 +129,8 @@ class TaylorModel {
   // remainder.
   static TaylorModel from_intervals(std::shared_ptr<const MonomialSpace> space,
                                     const std::vector<Interval>& coefficients, Interval remainder);
-  // f(a) for f = sin, cos or 1/x: sum_{i<=k} d_i (a - c)^i + R, d_i = f^(i)(c) / i! (enclosed),
-  // R = `lagrange` (f^(k+1) over a's range / (k+1)!) times (a - c)'s range^(k+1).
-  static TaylorModel compose(const TaylorModel& a, const std::vector<Interval>& d,
-                             const Interval& lagrange);
+  // f(a) = sum_{i<=k} d_i (a - c)^i + lagrange (a - c)'s range^(k+1); a's range is bounded once.
+  static TaylorModel compose(const TaylorModel& a, const Expand& expand);
 
   std::shared_ptr<const MonomialSpace> space_;  // null: a constant (the remainder alone)
   std::vector<double> coefficients_;            // space_->size() of them
