@@ -277,13 +277,7 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
       break;
   }
   if (key) {
-    std::random_device entropy;
-    const auto nonce = static_cast<std::int64_t>((std::uint64_t{entropy()} << 32) ^ entropy());
-    const std::int64_t now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                    std::chrono::system_clock::now().time_since_epoch())
-                                    .count();
-    channel.send_signed(
-        command_auth::sign_command(command, *key, command_auth::this_sender(), now_ns, nonce));
+    channel.send_signed(command_auth::sign_command_now(command, *key, command_auth::this_sender()));
   } else {
     channel.send(command);
   }

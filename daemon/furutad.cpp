@@ -87,15 +87,12 @@ int main(int argc, char** argv) {
     if (command_key.empty()) command_key = rig.daemon.command_key_file;
     const command_auth::KeyCreation creation =
         command_auth::ensure_command_key(command_key, "furuta");
-    if (create_command_key) {
-      if (!creation.problem.empty()) {
-        std::cerr << "furutad: " << creation.problem << "\n";
-        return 2;
-      }
-      if (creation.created) std::cerr << "furutad: created the command key " << command_key << "\n";
-      return 0;
-    }
     if (creation.created) std::cerr << "furutad: created the command key " << command_key << "\n";
+    if (create_command_key) {
+      if (creation.problem.empty()) return 0;
+      std::cerr << "furutad: " << creation.problem << "\n";
+      return 2;
+    }
     command_auth::KeyFile key = command_auth::read_command_key(command_key);
     if (!creation.problem.empty() && !key.key) key.problem = creation.problem;
     if (key.key) {

@@ -9,8 +9,10 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <memory>
+#include <random>
 #include <sstream>
 #include <vector>
 
@@ -52,8 +54,7 @@ std::string octal_mode(mode_t mode) {
 }
 
 // Compares in time that does not depend on where the first difference is.
-bool same_tag(const CommandTag& a, const std::vector<std::uint8_t>& b) {
-  if (b.size() != a.size()) return false;
+bool same_tag(const CommandTag& a, const std::uint8_t (&b)[32]) {
   unsigned difference = 0;
   for (std::size_t i = 0; i < a.size(); ++i) difference |= a[i] ^ b[i];
   return difference == 0;
@@ -225,6 +226,16 @@ furuta::rig_signed_command_t sign_command(const furuta::rig_command_t& command,
   return m;
 }
 
+furuta::rig_signed_command_t sign_command_now(const furuta::rig_command_t& command,
+                                              const CommandKey& key, const std::string& sender) {
+  std::random_device entropy;
+  const auto nonce = static_cast<std::int64_t>((std::uint64_t{entropy()} << 32) ^ entropy());
+  const std::int64_t now_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                  std::chrono::system_clock::now().time_since_epoch())
+                                  .count();
+  return sign_command(command, key, sender, now_ns, nonce);
+}
+
 std::string this_sender() {
   std::string user = std::to_string(::geteuid());
   struct passwd entry {};
@@ -260,7 +271,7 @@ Verdict CommandVerifier::verify(const furuta::rig_signed_command_t& message,
     return verdict;
   }
   const CommandTag expected = command_tag(*key_, message);
-  if (!same_tag(expected, std::vector<std::uint8_t>(message.tag, message.tag + 32))) {
+  if (!same_tag(expected, message.tag)) {
     verdict.reason = "bad signature from \"" + message.sender +
                      "\": not signed with this rig's command key, or changed on the way";
     return verdict;

@@ -209,11 +209,8 @@ class RigListener {
     command.label = label;
     command.seed = 7;
     if (command_auth::moves_motor(command)) {
-      const auto now = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                           std::chrono::system_clock::now().time_since_epoch())
-                           .count();
-      const auto signed_command = command_auth::sign_command(command, g_command_key, "crash-trials",
-                                                             now, command.request_id);
+      const auto signed_command =
+          command_auth::sign_command_now(command, g_command_key, "crash-trials");
       lcm_.publish(session_log::kChannelSignedCommand, &signed_command);
     } else {
       lcm_.publish(session_log::kChannelCommand, &command);

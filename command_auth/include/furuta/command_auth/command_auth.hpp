@@ -47,6 +47,10 @@ furuta::rig_signed_command_t sign_command(const furuta::rig_command_t& command,
                                           const CommandKey& key, const std::string& sender,
                                           std::int64_t signed_wall_ns, std::int64_t nonce);
 
+// Signed now (the system's UTC clock) with a random nonce, as `sender`.
+furuta::rig_signed_command_t sign_command_now(const furuta::rig_command_t& command,
+                                              const CommandKey& key, const std::string& sender);
+
 // "user@host" of this process, for the sender field.
 std::string this_sender();
 
