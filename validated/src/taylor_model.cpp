@@ -257,6 +257,23 @@ Interval TaylorModel::evaluate(const std::vector<double>& z) const {
   return sum;
 }
 
+TaylorModel TaylorModel::reduced_to(std::shared_ptr<const MonomialSpace> lower) const {
+  if (!lower) throw std::invalid_argument("TaylorModel::reduced_to: no space");
+  if (!space_) return *this;
+  if (lower->variables() != space_->variables() || lower->order() > space_->order()) {
+    throw std::invalid_argument("TaylorModel::reduced_to: not a lower order of the same variables");
+  }
+  // Graded monomials: the lower space's are a prefix of this one's, in the same order.
+  const std::size_t kept = lower->size();
+  TaylorModel high = *this;
+  std::fill(high.coefficients_.begin(), high.coefficients_.begin() + static_cast<long>(kept), 0.0);
+  TaylorModel out;
+  out.space_ = std::move(lower);
+  out.coefficients_.assign(coefficients_.begin(), coefficients_.begin() + static_cast<long>(kept));
+  out.remainder_ = remainder_ + high.polynomial_bound();
+  return out;
+}
+
 TaylorModel& TaylorModel::add_to_remainder(const Interval& extra) {
   remainder_ += extra;
   return *this;
@@ -294,7 +311,8 @@ TaylorModel operator-(const TaylorModel& a) {
 }
 
 TaylorModel operator*(const TaylorModel& a, const Interval& k) {
-  if (!a.space_) return TaylorModel(a.remainder_ * k);
+  // An exact zero (the derivatives a gradient starts with) stays a constant: p 0 + R 0 = 0.
+  if (!a.space_ || (k.lo() == 0.0 && k.hi() == 0.0)) return TaylorModel(a.remainder_ * k);
   std::vector<Interval> c(a.coefficients_.size(), Interval(0.0));
   for (std::size_t m = 0; m < c.size(); ++m) c[m] = Interval(a.coefficients_[m]) * k;
   return TaylorModel::from_intervals(a.space_, c, a.remainder_ * k);

@@ -97,6 +97,9 @@ class TaylorModel {
     out.remainder_ = Interval(0.0);
     return out;
   }
+  // The same set in `lower`, a space of the same variables and a lower order: the terms above
+  // lower's order bounded into the remainder.
+  TaylorModel reduced_to(std::shared_ptr<const MonomialSpace> lower) const;
   // The model with its remainder widened to hold `extra` too.
   TaylorModel& add_to_remainder(const Interval& extra);
 

@@ -26,6 +26,9 @@ struct TaylorModelFlowOptions {
   // max_inflation (1: the QR frame), t_start, t_end; quadratic_* and max_excess are not used.
   IntegratorOptions integrator;
   int space_order = 3;  // the models' order in z (1..4 for 11 variables: MonomialSpace's limit)
+  // The order in z of the Taylor models the error part's Jacobian is computed in (0: over the
+  // set's box in intervals only; at most space_order).
+  int jacobian_order = 1;
 };
 
 struct TaylorModelFlowStep {
