@@ -52,27 +52,36 @@ TaylorModelFlowOptions flow_options(double t_end) {
 }
 
 // The pendulum from a box 10x the benchmark's (one doubleton tube passes a turn's width at about
-// 2 s; the split run needs 26 pieces for 3 s).
+// 2 s; the split run needs 26 pieces for 3 s), with and without shrink wrapping.
 TEST(TaylorModelFlow, PendulumWideBoxIsSoundAndCarriedFurther) {
   const SimplePendulum pendulum;
   const Box x0{Interval(-1.845, -1.645), Interval(-0.1, 0.1)};
   TaylorModelFlowOptions o = flow_options(3.0);
   o.space_order = 4;
   const TaylorModelFlowResult r = integrate_taylor_models(pendulum, x0, o);
+  TaylorModelFlowOptions unwrapped = o;
+  unwrapped.shrink_wrap_max_delta = 0.0;
+  const TaylorModelFlowResult u = integrate_taylor_models(pendulum, x0, unwrapped);
   IntegratorOptions doubleton = o.integrator;
   doubleton.max_inflation = 20.0;
   const IntegrationResult d = integrate(pendulum, x0, doubleton);
   std::mt19937_64 rng(31);
   const testing::SoundnessCount c =
       check_flow(pendulum, r, testing::sample_box<2>(x0, 200, rng), 8);
+  const testing::SoundnessCount cu =
+      check_flow(pendulum, u, testing::sample_box<2>(x0, 200, rng), 8);
   EXPECT_EQ(c.violations, 0U);
+  EXPECT_EQ(cu.violations, 0U);
   EXPECT_GT(c.checks, 1000U);
   std::printf(
-      "[ measured ] pendulum +-0.1, Taylor models order 4: %.3f s of 3 s (%s), %zu steps, "
-      "%.3f s wall; doubleton %.3f s; %zu checks, %zu violations\n",
-      r.t_reached(), r.ok() ? "ok" : r.reason.c_str(), r.steps.size(), r.seconds, d.tube.t_end(),
-      c.checks, c.violations);
-  EXPECT_GT(r.t_reached(), d.tube.t_end());
+      "[ measured ] pendulum +-0.1, Taylor models order 4: %.3f s of 3 s (%s), %zu steps (%zu "
+      "shrink-wrapped), %.3f s wall; without shrink wrapping %.3f s; doubleton %.3f s; %zu "
+      "checks, %zu violations\n",
+      r.t_reached(), r.ok() ? "ok" : r.reason.c_str(), r.steps.size(), r.shrink_wraps, r.seconds,
+      u.t_reached(), d.tube.t_end(), c.checks + cu.checks, c.violations + cu.violations);
+  EXPECT_GT(r.shrink_wraps, 20U);
+  EXPECT_GT(r.t_reached(), u.t_reached());
+  EXPECT_GT(u.t_reached(), d.tube.t_end());
 }
 
 // The Furuta model with its seven parameters carried as state (11 variables): +-0.1 % of the
@@ -103,9 +112,11 @@ TEST(TaylorModelFlow, FurutaWithIntervalParametersIsSound) {
     const Box end = r.enclosure_at(r.t_reached());
     std::printf(
         "[ measured ] Furuta 11-dim %s, Taylor models order 3: %.3f s of %.1f s (%s), %zu "
-        "steps, %.2f s wall, q2 width %.3g; doubleton %.3f s; %zu checks, %zu violations\n",
-        k.name, r.t_reached(), k.t_end, r.ok() ? "ok" : r.reason.c_str(), r.steps.size(), r.seconds,
-        end[FurutaDynamics::q2].width(), d.tube.t_end(), c.checks, c.violations);
+        "steps (%zu shrink-wrapped), %.2f s wall, q2 width %.3g; doubleton %.3f s; %zu checks, "
+        "%zu violations\n",
+        k.name, r.t_reached(), k.t_end, r.ok() ? "ok" : r.reason.c_str(), r.steps.size(),
+        r.shrink_wraps, r.seconds, end[FurutaDynamics::q2].width(), d.tube.t_end(), c.checks,
+        c.violations);
   }
 }
 

@@ -274,6 +274,42 @@ TaylorModel TaylorModel::reduced_to(std::shared_ptr<const MonomialSpace> lower) 
   return out;
 }
 
+TaylorModel TaylorModel::rescaled(const std::vector<double>& s) const {
+  if (!space_) return *this;
+  const MonomialSpace& sp = *space_;
+  if (s.size() != sp.variables()) throw std::invalid_argument("TaylorModel::rescaled: dimension");
+  std::vector<Interval> c(sp.size(), Interval(0.0));
+  for (std::size_t m = 0; m < sp.size(); ++m) {
+    if (coefficients_[m] == 0.0) continue;
+    Interval term(coefficients_[m]);
+    for (std::size_t v = 0; v < sp.variables(); ++v) {
+      if (sp.exponent(m, v) > 0) term = term * pow(Interval(s[v]), sp.exponent(m, v));
+    }
+    c[m] = term;
+  }
+  return from_intervals(space_, c, remainder_);
+}
+
+Interval TaylorModel::partial_over(std::size_t v, const std::vector<Interval>& box) const {
+  if (!space_) return Interval(0.0);
+  const MonomialSpace& sp = *space_;
+  if (box.size() != sp.variables() || v >= sp.variables()) {
+    throw std::invalid_argument("TaylorModel::partial_over: dimension");
+  }
+  Interval sum(0.0);
+  for (std::size_t m = 0; m < sp.size(); ++m) {
+    const int ev = sp.exponent(m, v);
+    if (coefficients_[m] == 0.0 || ev == 0) continue;
+    Interval term = Interval(coefficients_[m]) * Interval(static_cast<double>(ev));
+    for (std::size_t w = 0; w < sp.variables(); ++w) {
+      const int e = sp.exponent(m, w) - (w == v ? 1 : 0);
+      if (e > 0) term = term * pow(box[w], e);
+    }
+    sum += term;
+  }
+  return sum;
+}
+
 TaylorModel& TaylorModel::add_to_remainder(const Interval& extra) {
   remainder_ += extra;
   return *this;

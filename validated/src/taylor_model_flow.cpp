@@ -21,6 +21,7 @@
 #include "jets.hpp"
 #include "lohner_frame.hpp"
 #include "reason.hpp"
+#include "shrink_wrap.hpp"
 
 namespace furuta::validated {
 
@@ -140,6 +141,11 @@ TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
   internal::LiveSet live(tapes, n);
   if (live.live.size() < n && !internal::confined_to_live(b, r, live.is_live)) live.all();
 
+  // The start variables the error part can be wrapped into: the live components' own.
+  std::vector<std::size_t> wrap_slots;
+  for (std::size_t v : live.live) {
+    if (!x0[v].is_point()) wrap_slots.push_back(v);
+  }
   TaylorRunner<Interval> runner;
   TaylorRunner<TaylorModel> models;
   TaylorRunner<Grad<kN>> gradients;
@@ -220,6 +226,15 @@ TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
                         internal::describe(o.max_width) + " at t = " + internal::describe(step.t1));
     }
     result.steps.push_back(std::move(step));
+    if (options.shrink_wrap_max_delta > 0.0) {
+      const internal::ShrinkWrap wrap = internal::shrink_wrap(
+          p_next, frame.box, live.live, wrap_slots, options.shrink_wrap_max_delta);
+      if (wrap.done) {
+        ++result.shrink_wraps;
+        frame.b = Matrix::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+        frame.r = wrap.rest;
+      }
+    }
     p = std::move(p_next);
     b = std::move(frame.b);
     r = std::move(frame.r);

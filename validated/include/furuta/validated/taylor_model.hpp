@@ -100,6 +100,12 @@ class TaylorModel {
   // The same set in `lower`, a space of the same variables and a lower order: the terms above
   // lower's order bounded into the remainder.
   TaylorModel reduced_to(std::shared_ptr<const MonomialSpace> lower) const;
+  // The model of x(z) = this(s_0 z_0, s_1 z_1, ...) (the polynomial's coefficients times the
+  // powers of s, their rounding into the remainder; the remainder unchanged).
+  TaylorModel rescaled(const std::vector<double>& s) const;
+  // The polynomial's partial derivative in z_v over `box` (each z_w in box[w], which may reach
+  // beyond [-1, 1]), term by term.
+  Interval partial_over(std::size_t v, const std::vector<Interval>& box) const;
   // The model with its remainder widened to hold `extra` too.
   TaylorModel& add_to_remainder(const Interval& extra);
 

@@ -29,6 +29,9 @@ struct TaylorModelFlowOptions {
   // The order in z of the Taylor models the error part's Jacobian is computed in (0: over the
   // set's box in intervals only; at most space_order).
   int jacobian_order = 1;
+  // Shrink wrapping after each step when the start variables need widening by at most this
+  // (0: never): the error part goes into the polynomial (shrink_wrap.hpp).
+  double shrink_wrap_max_delta = 1.0;
 };
 
 struct TaylorModelFlowStep {
@@ -46,6 +49,7 @@ struct TaylorModelFlowResult {
   IntegrationResult::Status status = IntegrationResult::Status::ok;
   std::string reason;  // why it ended early
   std::size_t rejected = 0;
+  std::size_t shrink_wraps = 0;  // steps whose error part was wrapped into the polynomial
   double seconds = 0.0;
 
   bool ok() const { return status == IntegrationResult::Status::ok; }

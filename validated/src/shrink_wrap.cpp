@@ -1,0 +1,99 @@
+// Shrink wrapping of the Taylor-model flow's error part (see shrink_wrap.hpp). Why the test on
+// delta is enough: for z and e fixed, G(z') = z' - A (p(z') - p(z) - e) over z' in
+// Z = z_s + [-delta, delta] (the other variables at z) is
+//   G(z') - z_s = (I - A M)(z' - z_s) + A e,  M the mean-value matrix of p's rows in the slots,
+// whose entries lie in the slots' partial derivatives over the widened box W = [-(1 + delta),
+// 1 + delta] x [-1, 1]. So |G(z') - z_s| <= |I - A M| delta + |A e| <= delta: G maps Z into itself,
+// Brouwer gives z' in Z with G(z') = z'. The test is strict, C delta + a < delta with delta > 0
+// and C = |I - A M| >= 0, so C's spectral radius is below 1 (Perron-Frobenius): every A M is
+// invertible, A with it, and G(z') = z' means p(z') = p(z) + e. Each row has its own mean-value
+// point, on the segment from z_s to z', inside W. With z' = q w, w in [-1, 1]: p(q w) = p(z) + e.
+
+#include "shrink_wrap.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace furuta::validated::internal {
+
+ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                       const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
+                       double max_delta) {
+  ShrinkWrap out;
+  const std::size_t m = rows.size();
+  if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
+  const MonomialSpace& space = *p.front().space();
+  const std::size_t nv = space.variables();
+  const auto em = static_cast<Eigen::Index>(m);
+  Eigen::MatrixXd l(em, em);
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t j = 0; j < m; ++j) {
+      l(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+          p[rows[i]].coefficient(space.variable(slots[j]));
+    }
+  }
+  const Eigen::MatrixXd a = l.fullPivLu().inverse();
+  if (!a.allFinite()) return out;
+  // |A e|, the error in the slots' units.
+  std::vector<double> ae(m, 0.0);
+  for (std::size_t i = 0; i < m; ++i) {
+    Interval s(0.0);
+    for (std::size_t k = 0; k < m; ++k) {
+      s += Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k))) * e[rows[k]];
+    }
+    ae[i] = s.mag();
+    if (!std::isfinite(ae[i])) return out;
+  }
+  // delta from a little above |A e|, raised to a little above C delta + a until it holds.
+  std::vector<double> delta = ae;
+  for (double& d : delta) d *= 1.05;
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    for (double& d : delta) d = std::max(d, 1e-300);
+    if (*std::max_element(delta.begin(), delta.end()) > max_delta) return out;
+    std::vector<Interval> box(nv, Interval(-1.0, 1.0));
+    for (std::size_t j = 0; j < m; ++j) {
+      const double w = (Interval(1.0) + Interval(delta[j])).hi();
+      box[slots[j]] = Interval(-w, w);
+    }
+    // M: the slots' partial derivatives of the rows over the widened box; C = |I - A M|.
+    std::vector<std::vector<Interval>> mm(m, std::vector<Interval>(m));
+    for (std::size_t k = 0; k < m; ++k) {
+      for (std::size_t j = 0; j < m; ++j) mm[k][j] = p[rows[k]].partial_over(slots[j], box);
+    }
+    std::vector<double> next(m, 0.0);  // C delta + a, rounded up
+    for (std::size_t i = 0; i < m; ++i) {
+      Interval s = Interval(ae[i]);
+      for (std::size_t j = 0; j < m; ++j) {
+        Interval am(i == j ? 1.0 : 0.0);
+        for (std::size_t k = 0; k < m; ++k) {
+          am -= Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k))) * mm[k][j];
+        }
+        s += Interval(am.mag()) * Interval(delta[j]);
+      }
+      next[i] = s.hi();
+    }
+    bool inside = true;
+    for (std::size_t i = 0; i < m; ++i) inside = inside && next[i] < delta[i];
+    if (inside) {
+      std::vector<double> scale(nv, 1.0);
+      out.widening.assign(m, 1.0);
+      for (std::size_t j = 0; j < m; ++j) {
+        scale[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
+        out.widening[j] = scale[slots[j]];
+      }
+      out.rest.assign(p.size(), Interval(0.0));
+      for (std::size_t v = 0; v < p.size(); ++v) {
+        TaylorModel q = p[v].rescaled(scale);
+        out.rest[v] = q.remainder();
+        p[v] = q.polynomial();
+      }
+      out.done = true;
+      return out;
+    }
+    for (std::size_t i = 0; i < m; ++i) delta[i] = 1.05 * std::max(next[i], delta[i]);
+  }
+  return out;
+}
+
+}  // namespace furuta::validated::internal

@@ -1,0 +1,34 @@
+#pragma once
+// Shrink wrapping (Makino and Berz) for the Taylor-model flow: the error part B r taken into the
+// polynomial by widening its start variables, so that it is carried with the flow's dependence on
+// every variable instead of through an interval Jacobian. Internal to the validated library.
+
+#include <cstddef>
+#include <vector>
+
+#include "furuta/interval/interval.hpp"
+#include "furuta/validated/taylor_model.hpp"
+#include "interval_matrix.hpp"
+
+namespace furuta::validated::internal {
+
+struct ShrinkWrap {
+  bool done = false;
+  std::vector<double> widening;  // 1 + delta per slot (variables slots[i])
+  std::vector<Interval> rest;    // the new error part (identity frame): the rounding only
+};
+
+// For p (polynomials, no remainder) and the error part e (an interval per component, 0 off
+// `rows`): q with p(q z_s, z_theta) + rest holding p(z) + e for every z and every e in e, where
+// z_s are the variables `slots` (as many as `rows`, p's rows `rows` depend on them linearly
+// through an invertible matrix) and q_i = 1 + delta_i. It is found by Krawczyk's argument: with
+// A ~ L^-1 (L the slots' linear coefficients in the rows), G(z') = z' - A (p(z') - p(z) - e)
+// maps z + [-delta, delta] into itself when |I - A M| delta + |A e| < delta, M the slots'
+// derivatives over the widened box; a fixed point solves p(z') = p(z) + e (shrink_wrap.cpp says
+// why). Nothing is done (done = false) when no delta <= max_delta passes; p is rescaled in place
+// when done.
+ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                       const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
+                       double max_delta);
+
+}  // namespace furuta::validated::internal
