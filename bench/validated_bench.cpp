@@ -20,6 +20,7 @@
 #include "furuta/model/model.hpp"
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/split.hpp"
+#include "furuta/validated/taylor_model_flow.hpp"
 #include "reference.hpp"
 
 namespace {
@@ -274,6 +275,55 @@ void BM_FurutaOneIntervalParameter(benchmark::State& state) {
 }
 BENCHMARK(BM_FurutaOneIntervalParameter)
     ->ArgsProduct({{0, 1, 2, 3, 4, 5, 6}, {0, 1, 2, 3}})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+// (3c) The interval-parameter box of (3) (second argument: every half-width divided by
+// 10^decades) carried as Taylor models (taylor_model_flow.hpp: order 3 in the 11 variables, the
+// Jacobian as order-1 models, shrink wrapping, the arm's collapsed velocity left out when needed;
+// FURUTA_SHRINK_WRAP=0 and FURUTA_WRAP_WITHOUT_COLLAPSED=0 turn them off), one tube, to 4 s or
+// until it fails.
+void BM_FurutaTaylorModels(benchmark::State& state) {
+  const Scenario& s = kScenarios[state.range(0)];
+  const furuta::model::Parameters<double> truth = furuta::model::paper_run1();
+  const double scale = std::pow(10.0, -static_cast<double>(state.range(1)));
+  furuta::model::Parameters<furuta::interval::Interval> p =
+      v::parameters_around(truth, 0.02 * scale);
+  p.fv1 = Interval(truth.fv1) * (Interval(1.0) + Interval(-0.1 * scale, 0.1 * scale));
+  p.fv2 = Interval(truth.fv2) * (Interval(1.0) + Interval(-0.5 * scale, 0.5 * scale));
+  const Box state_box = initial_state(s);
+  const Box x0 = v::FurutaDynamics::initial_box(state_box, p);
+  const v::FurutaDynamics system(Interval(s.tau_nm));
+  v::TaylorModelFlowOptions options;
+  options.integrator = furuta_options();
+  options.integrator.order = 8;
+  // The Lagrange remainder's target: the models' truncation is far above it (1e-9 to 1e-3 a
+  // step), and 1e-10 or 1e-6 reach the same times.
+  options.integrator.tolerance = 1e-8;
+  options.integrator.max_width = 2.0 * std::numbers::pi;
+  options.shrink_wrap_max_delta = env_or("FURUTA_SHRINK_WRAP", 1.0);
+  options.wrap_without_collapsed = env_or("FURUTA_WRAP_WITHOUT_COLLAPSED", 1.0) != 0.0;
+  v::TaylorModelFlowResult r;
+  for (auto _ : state) {
+    r = v::integrate_taylor_models(system, x0, options);
+    benchmark::DoNotOptimize(r);
+  }
+  const double reached = r.t_reached();
+  state.counters["t_reached"] = reached;
+  state.counters["steps"] = static_cast<double>(r.steps.size());
+  state.counters["wrapped"] = static_cast<double>(r.shrink_wraps);
+  state.counters["partial"] = static_cast<double>(r.partial_wraps);
+  state.counters["wall_s"] = r.seconds;
+  if (reached > 0.0) {
+    const std::vector<Q2Width> w =
+        q2_against_spread(r, s, state_box, p, {0.5 * reached, 0.9 * reached});
+    state.counters["ratio_half"] = w[0].ratio;
+    state.counters["ratio_late"] = w[1].ratio;
+  }
+}
+BENCHMARK(BM_FurutaTaylorModels)
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

@@ -279,6 +279,35 @@ TEST(TaylorModel, ReducedToALowerOrderHoldsEveryValue) {
   EXPECT_THROW(f.reduced_to(std::make_shared<const MonomialSpace>(3, 5)), std::invalid_argument);
 }
 
+// rescaled(s) is p(s z): at sampled z its set holds p's value at s z; partial_over(v, box) holds
+// the derivative at every point of a box that reaches beyond [-1, 1] (central differences).
+TEST(TaylorModel, RescaledAndPartialDerivativesHoldTheirValues) {
+  const auto space = std::make_shared<const MonomialSpace>(2, 3);
+  const TaylorModel x = TaylorModel::variable(space, 0, Interval(0.1, 0.5));
+  const TaylorModel y = TaylorModel::variable(space, 1, Interval(-1.0, 0.2));
+  const TaylorModel p = (sin(x * y) + sqr(y) * x).polynomial();
+  const std::vector<double> s = {0.7, 1.3};
+  const TaylorModel q = p.rescaled(s);
+  const std::vector<Interval> box = {Interval(-1.25, 1.25), Interval(-1.0, 1.0)};
+  const Interval d0 = p.partial_over(0, box);
+  const Interval d1 = p.partial_over(1, box);
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int k = 0; k < 300; ++k) {
+    const std::vector<double> z = {unit(rng), unit(rng)};
+    const Interval exact = p.evaluate({s[0] * z[0], s[1] * z[1]});
+    EXPECT_TRUE(exact.intersects(q.evaluate(z))) << z[0] << " " << z[1];
+    const std::vector<double> w = {1.25 * z[0], z[1]};
+    const double eps = 1e-6;
+    const double f0 = (p.evaluate({w[0] + eps, w[1]}).mid() - p.evaluate({w[0] - eps, w[1]}).mid());
+    const double f1 = (p.evaluate({w[0], w[1] + eps}).mid() - p.evaluate({w[0], w[1] - eps}).mid());
+    EXPECT_TRUE(Interval(f0 / (2 * eps)).is_subset(d0 + Interval(-1e-6, 1e-6)));
+    EXPECT_TRUE(Interval(f1 / (2 * eps)).is_subset(d1 + Interval(-1e-6, 1e-6)));
+  }
+  EXPECT_THROW(p.rescaled({1.0}), std::invalid_argument);
+  EXPECT_THROW(p.partial_over(2, box), std::invalid_argument);
+}
+
 // Grad<N, TaylorModel>: the Taylor coefficients' gradients of the Furuta model with its seven
 // parameters as state (the bench box: mu's +-2 %, fv1 +-10 %, fv2 +-50 %) as order-1 models in
 // the box's deviations. At sampled points of the box they hold the point's gradients, and bounded

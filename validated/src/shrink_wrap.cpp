@@ -17,24 +17,47 @@
 
 namespace furuta::validated::internal {
 
-ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
-                       const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                       double max_delta) {
+namespace {
+
+constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+
+// One attempt; `kept` (an index into slots, or kNone) names a slot that is not widened: its
+// column in L and M is the unit vector of its row times `scale`, an unknown c in [-delta, delta]
+// whose part, scale c, stays in the error part on that row.
+ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
+                        double max_delta, std::size_t kept, std::size_t* worst) {
   ShrinkWrap out;
   const std::size_t m = rows.size();
   if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
   const MonomialSpace& space = *p.front().space();
   const std::size_t nv = space.variables();
   const auto em = static_cast<Eigen::Index>(m);
+  const double scale = kept == kNone ? 0.0 : std::max(e[rows[kept]].mag(), 1e-300);
   Eigen::MatrixXd l(em, em);
   for (std::size_t i = 0; i < m; ++i) {
     for (std::size_t j = 0; j < m; ++j) {
       l(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-          p[rows[i]].coefficient(space.variable(slots[j]));
+          j == kept ? (i == j ? scale : 0.0) : p[rows[i]].coefficient(space.variable(slots[j]));
     }
   }
   const Eigen::MatrixXd a = l.fullPivLu().inverse();
   if (!a.allFinite()) return out;
+  if (worst != nullptr) {
+    // The slot behind A's largest row when its column has collapsed (8x shorter than the
+    // longest): the one L can least do without.
+    double largest = -1.0;
+    std::size_t i_largest = 0;
+    for (std::size_t i = 0; i < m; ++i) {
+      const double row = a.row(static_cast<Eigen::Index>(i)).cwiseAbs().sum();
+      if (row > largest) {
+        largest = row;
+        i_largest = i;
+      }
+    }
+    const auto column = static_cast<Eigen::Index>(i_largest);
+    if (8.0 * l.col(column).norm() <= l.colwise().norm().maxCoeff()) *worst = i_largest;
+  }
   // |A e|, the error in the slots' units.
   std::vector<double> ae(m, 0.0);
   for (std::size_t i = 0; i < m; ++i) {
@@ -50,16 +73,22 @@ ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>&
   for (double& d : delta) d *= 1.05;
   for (int attempt = 0; attempt < 12; ++attempt) {
     for (double& d : delta) d = std::max(d, 1e-300);
-    if (*std::max_element(delta.begin(), delta.end()) > max_delta) return out;
+    for (std::size_t j = 0; j < m; ++j) {
+      if (j != kept && delta[j] > max_delta) return out;
+    }
     std::vector<Interval> box(nv, Interval(-1.0, 1.0));
     for (std::size_t j = 0; j < m; ++j) {
+      if (j == kept) continue;
       const double w = (Interval(1.0) + Interval(delta[j])).hi();
       box[slots[j]] = Interval(-w, w);
     }
     // M: the slots' partial derivatives of the rows over the widened box; C = |I - A M|.
     std::vector<std::vector<Interval>> mm(m, std::vector<Interval>(m));
     for (std::size_t k = 0; k < m; ++k) {
-      for (std::size_t j = 0; j < m; ++j) mm[k][j] = p[rows[k]].partial_over(slots[j], box);
+      for (std::size_t j = 0; j < m; ++j) {
+        mm[k][j] =
+            j == kept ? Interval(k == j ? scale : 0.0) : p[rows[k]].partial_over(slots[j], box);
+      }
     }
     std::vector<double> next(m, 0.0);  // C delta + a, rounded up
     for (std::size_t i = 0; i < m; ++i) {
@@ -76,17 +105,22 @@ ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>&
     bool inside = true;
     for (std::size_t i = 0; i < m; ++i) inside = inside && next[i] < delta[i];
     if (inside) {
-      std::vector<double> scale(nv, 1.0);
+      std::vector<double> widen(nv, 1.0);
       out.widening.assign(m, 1.0);
       for (std::size_t j = 0; j < m; ++j) {
-        scale[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
-        out.widening[j] = scale[slots[j]];
+        if (j == kept) continue;
+        widen[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
+        out.widening[j] = widen[slots[j]];
       }
       out.rest.assign(p.size(), Interval(0.0));
       for (std::size_t v = 0; v < p.size(); ++v) {
-        TaylorModel q = p[v].rescaled(scale);
+        TaylorModel q = p[v].rescaled(widen);
         out.rest[v] = q.remainder();
         p[v] = q.polynomial();
+      }
+      if (kept != kNone) {
+        out.rest[rows[kept]] += Interval(scale) * Interval(-delta[kept], delta[kept]);
+        out.kept = kept;
       }
       out.done = true;
       return out;
@@ -94,6 +128,17 @@ ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>&
     for (std::size_t i = 0; i < m; ++i) delta[i] = 1.05 * std::max(next[i], delta[i]);
   }
   return out;
+}
+
+}  // namespace
+
+ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                       const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
+                       double max_delta, bool leave_out_collapsed) {
+  std::size_t worst = kNone;
+  ShrinkWrap out = attempt_wrap(p, e, rows, slots, max_delta, kNone, &worst);
+  if (out.done || !leave_out_collapsed || worst == kNone || rows.size() < 2) return out;
+  return attempt_wrap(p, e, rows, slots, max_delta, worst, nullptr);
 }
 
 }  // namespace furuta::validated::internal

@@ -15,7 +15,10 @@ namespace furuta::validated::internal {
 struct ShrinkWrap {
   bool done = false;
   std::vector<double> widening;  // 1 + delta per slot (variables slots[i])
-  std::vector<Interval> rest;    // the new error part (identity frame): the rounding only
+  std::vector<Interval> rest;    // the new error part (identity frame)
+  // The slot (index into slots) left out when the whole error part could not be wrapped: its
+  // start variable keeps its scale and the error along its own row stays in `rest`.
+  std::size_t kept = static_cast<std::size_t>(-1);
 };
 
 // For p (polynomials, no remainder) and the error part e (an interval per component, 0 off
@@ -25,10 +28,13 @@ struct ShrinkWrap {
 // A ~ L^-1 (L the slots' linear coefficients in the rows), G(z') = z' - A (p(z') - p(z) - e)
 // maps z + [-delta, delta] into itself when |I - A M| delta + |A e| < delta, M the slots'
 // derivatives over the widened box; a fixed point solves p(z') = p(z) + e (shrink_wrap.cpp says
-// why). Nothing is done (done = false) when no delta <= max_delta passes; p is rescaled in place
-// when done.
+// why). When that fails, `leave_out_collapsed` is set and the slot behind A's largest row has a
+// collapsed column (8x shorter than the longest: the arm's damped velocity, decaying at 227 /s),
+// once more with that slot left out: its column
+// replaced by its row's unit vector, whose part stays in the error part. Nothing is done
+// (done = false) when no delta <= max_delta passes; p is rescaled in place when done.
 ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                       double max_delta);
+                       double max_delta, bool leave_out_collapsed);
 
 }  // namespace furuta::validated::internal

@@ -2,10 +2,12 @@
 // taylor_model_flow.hpp). Why it is sound, one step from t to t1 = t + h:
 //   every solution is at t in y + d, y = p(z) (z its start's normalised deviation), d = B r;
 //   x(t1) = T(y + d) + L, T the order-k Taylor map and L = h^(k+1) x_[k+1](A), A the a priori box
-//   over the step; T(y + d) = T(y) + J d with J the Taylor map's Jacobian over the box X of the
-//   set (mean value theorem, row by row); T(y) is in the Taylor models' polynomial at z plus
-//   their remainders e. So x(t1) is in p'(z) + (J B r + e + L), and Lohner's step writes the
-//   bracket as B' r' with r' = (B'^-1 J B) r + B'^-1 (e + L), B'^-1 enclosed.
+//   over the step; T(y + d) = T(y) + J d with J the Taylor map's Jacobian at points between y and
+//   y + d (mean value theorem, row by row), enclosed over the box of the set and, cut by it, as
+//   Taylor models in z; T(y) is in the Taylor models' polynomial at z plus their remainders e. So
+//   x(t1) is in p'(z) + (J B r + e + L), and Lohner's step writes the bracket as B' r' with
+//   r' = (B'^-1 J B) r + B'^-1 (e + L), B'^-1 enclosed. Shrink wrapping (shrink_wrap.cpp) may
+//   then replace p'(z) + B' r' by p'(q z_s, z_theta) + (its rounding).
 
 #include "furuta/validated/taylor_model_flow.hpp"
 
@@ -14,6 +16,7 @@
 #include <cmath>
 #include <memory>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 #include "a_priori.hpp"
@@ -44,11 +47,25 @@ Box box_of(const std::vector<TaylorModel>& p, const Matrix& b, const std::vector
   return x;
 }
 
+// sum_i c(i) s^i for i = 0..k (Horner) at s = h and over s in [0, h]: a Jacobian entry of the
+// Taylor map from its Taylor coefficients' derivatives.
+template <class T, class Coefficient>
+std::pair<T, T> at_and_over(const Coefficient& c, int k, const Interval& h) {
+  const Interval s_over(0.0, h.hi());
+  T at = c(k);
+  T over = at;
+  for (int i = k - 1; i >= 0; --i) {
+    at = at * h + c(i);
+    over = over * s_over + c(i);
+  }
+  return {at, over};
+}
+
 // J (over the step's end) and J over [0, h] cut by the same Jacobians as Taylor models in z: the
 // Taylor map's gradient run from p(z) + [0, 1] B r, p reduced to `jacobian_space`, and each entry
 // bounded over z. The interval run evaluates the field over the set's box, where the components'
 // dependence on each other and on the parameters is lost; this one keeps it to the first order
-// and is 10-40x narrower on the bench box (why the error part grew: docs in bench/README.md).
+// (bench/README.md, "Taylor models II", compares them with the range sampled over the set).
 void tighten_jacobians(TaylorRunner<Grad<kN, TaylorModel>>& runner, const Tape& tape,
                        const std::vector<TaylorModel>& p, const Matrix& b,
                        const std::vector<Interval>& r,
@@ -63,17 +80,12 @@ void tighten_jacobians(TaylorRunner<Grad<kN, TaylorModel>>& runner, const Tape& 
     g[v] = Grad<kN, TaylorModel>::variable(x, v);
   }
   runner.run(tape, g, k);
-  const Interval s_over(0.0, hi.hi());
   for (std::size_t v = 0; v < n; ++v) {
     for (std::size_t w = 0; w < n; ++w) {
-      TaylorModel jv = runner.coefficient(v, k).d[w];
-      TaylorModel jv_over = jv;
-      for (int i = k - 1; i >= 0; --i) {
-        jv = jv * hi + runner.coefficient(v, i).d[w];
-        jv_over = jv_over * s_over + runner.coefficient(v, i).d[w];
-      }
-      j(v, w) = intersect(j(v, w), jv.bound());
-      j_over(v, w) = intersect(j_over(v, w), jv_over.bound());
+      const auto [at, over] =
+          at_and_over<TaylorModel>([&](int i) { return runner.coefficient(v, i).d[w]; }, k, hi);
+      j(v, w) = intersect(j(v, w), at.bound());
+      j_over(v, w) = intersect(j_over(v, w), over.bound());
     }
   }
 }
@@ -188,14 +200,8 @@ TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
       p_next[v] = sum.polynomial();
       over[v] = sum_over + pow(s_over, k + 1) * enclosure.remainder_coefficient[v];
       for (std::size_t w = 0; w < n; ++w) {
-        Interval jv = gradients.coefficient(v, k).d[w];
-        Interval jv_over = jv;
-        for (int i = k - 1; i >= 0; --i) {
-          jv = jv * hi + gradients.coefficient(v, i).d[w];
-          jv_over = jv_over * s_over + gradients.coefficient(v, i).d[w];
-        }
-        j(v, w) = jv;
-        j_over(v, w) = jv_over;
+        std::tie(j(v, w), j_over(v, w)) =
+            at_and_over<Interval>([&](int i) { return gradients.coefficient(v, i).d[w]; }, k, hi);
       }
     }
     if (options.jacobian_order > 0) {
@@ -227,10 +233,12 @@ TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
     }
     result.steps.push_back(std::move(step));
     if (options.shrink_wrap_max_delta > 0.0) {
-      const internal::ShrinkWrap wrap = internal::shrink_wrap(
-          p_next, frame.box, live.live, wrap_slots, options.shrink_wrap_max_delta);
+      const internal::ShrinkWrap wrap =
+          internal::shrink_wrap(p_next, frame.box, live.live, wrap_slots,
+                                options.shrink_wrap_max_delta, options.wrap_without_collapsed);
       if (wrap.done) {
         ++result.shrink_wraps;
+        result.partial_wraps += wrap.kept < wrap_slots.size();
         frame.b = Matrix::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
         frame.r = wrap.rest;
       }
