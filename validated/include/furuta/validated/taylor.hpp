@@ -4,9 +4,9 @@
 // - `Taylor<T>`: a truncated power series in t (coefficients c[0..order]) with + - * / sqr sin cos.
 //   Every operation is built on the per-coefficient recurrences of namespace `series`, which give
 //   coefficient i of a result from coefficients 0..i of its operands (and 0..i-1 of itself).
-// - `Grad<N>`: a forward-mode gradient (value and N partial derivatives, all intervals). Taylor
-//   coefficients computed with T = Grad<N> carry their derivatives with respect to the initial
-//   state: the Jacobian of the Taylor map.
+// - `Grad<N, S>`: a forward-mode gradient (value and N partial derivatives, of scalar S: intervals
+//   by default, or Taylor models). Taylor coefficients computed with T = Grad<N> carry their
+//   derivatives with respect to the initial state: the Jacobian of the Taylor map.
 // - `Jet2<N>`: a second-order directional jet (value, first and second coefficient in a scalar s
 //   along an uncertain direction, linear in N interval coordinates): the second-order term of the
 //   Taylor map over a set.
