@@ -181,18 +181,24 @@ Interval TaylorModel::polynomial_bound() const {
 
 namespace {
 
+// z^e of monomial m over the box z, with one power of variable `less` taken off (npos: none).
+Interval powers_over(const MonomialSpace& s, std::size_t m, const std::vector<Interval>& z,
+                     std::size_t less = MonomialSpace::npos) {
+  Interval product(1.0);
+  for (std::size_t v = 0; v < s.variables(); ++v) {
+    const int e = s.exponent(m, v) - (v == less ? 1 : 0);
+    if (e > 0) product = product * pow(z[v], e);
+  }
+  return product;
+}
+
 // The terms of degree >= 2 over the box z (each a product of interval powers), and the constant and
 // linear terms over it.
 Interval nonlinear_over(const std::vector<double>& c, const MonomialSpace& s,
                         const std::vector<Interval>& z) {
   Interval sum(0.0);
   for (std::size_t m = 1 + s.variables(); m < s.size(); ++m) {
-    if (c[m] == 0.0) continue;
-    Interval term(c[m]);
-    for (std::size_t v = 0; v < s.variables(); ++v) {
-      if (s.exponent(m, v) > 0) term = term * pow(z[v], s.exponent(m, v));
-    }
-    sum += term;
+    if (c[m] != 0.0) sum += Interval(c[m]) * powers_over(s, m, z);
   }
   return sum;
 }
@@ -278,14 +284,10 @@ TaylorModel TaylorModel::rescaled(const std::vector<double>& s) const {
   if (!space_) return *this;
   const MonomialSpace& sp = *space_;
   if (s.size() != sp.variables()) throw std::invalid_argument("TaylorModel::rescaled: dimension");
+  const std::vector<Interval> scale(s.begin(), s.end());
   std::vector<Interval> c(sp.size(), Interval(0.0));
   for (std::size_t m = 0; m < sp.size(); ++m) {
-    if (coefficients_[m] == 0.0) continue;
-    Interval term(coefficients_[m]);
-    for (std::size_t v = 0; v < sp.variables(); ++v) {
-      if (sp.exponent(m, v) > 0) term = term * pow(Interval(s[v]), sp.exponent(m, v));
-    }
-    c[m] = term;
+    if (coefficients_[m] != 0.0) c[m] = Interval(coefficients_[m]) * powers_over(sp, m, scale);
   }
   return from_intervals(space_, c, remainder_);
 }
@@ -300,12 +302,8 @@ Interval TaylorModel::partial_over(std::size_t v, const std::vector<Interval>& b
   for (std::size_t m = 0; m < sp.size(); ++m) {
     const int ev = sp.exponent(m, v);
     if (coefficients_[m] == 0.0 || ev == 0) continue;
-    Interval term = Interval(coefficients_[m]) * Interval(static_cast<double>(ev));
-    for (std::size_t w = 0; w < sp.variables(); ++w) {
-      const int e = sp.exponent(m, w) - (w == v ? 1 : 0);
-      if (e > 0) term = term * pow(box[w], e);
-    }
-    sum += term;
+    sum +=
+        Interval(coefficients_[m]) * Interval(static_cast<double>(ev)) * powers_over(sp, m, box, v);
   }
   return sum;
 }
