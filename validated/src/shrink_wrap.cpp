@@ -106,11 +106,9 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
     for (std::size_t i = 0; i < m; ++i) inside = inside && next[i] < delta[i];
     if (inside) {
       std::vector<double> widen(nv, 1.0);
-      out.widening.assign(m, 1.0);
       for (std::size_t j = 0; j < m; ++j) {
         if (j == kept) continue;
         widen[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
-        out.widening[j] = widen[slots[j]];
       }
       out.rest.assign(p.size(), Interval(0.0));
       for (std::size_t v = 0; v < p.size(); ++v) {

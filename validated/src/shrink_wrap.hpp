@@ -14,8 +14,7 @@ namespace furuta::validated::internal {
 
 struct ShrinkWrap {
   bool done = false;
-  std::vector<double> widening;  // 1 + delta per slot (variables slots[i])
-  std::vector<Interval> rest;    // the new error part (identity frame)
+  std::vector<Interval> rest;  // the new error part (identity frame)
   // The slot (index into slots) left out when the whole error part could not be wrapped: its
   // start variable keeps its scale and the error along its own row stays in `rest`.
   std::size_t kept = static_cast<std::size_t>(-1);
