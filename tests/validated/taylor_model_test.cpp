@@ -308,6 +308,36 @@ TEST(TaylorModel, RescaledAndPartialDerivativesHoldTheirValues) {
   EXPECT_THROW(p.partial_over(2, box), std::invalid_argument);
 }
 
+// restricted: the model over a part of one variable's range holds, at every z, the original's
+// value at the mapped point, and its halves' ranges are inside the whole's and narrower.
+TEST(TaylorModel, RestrictedHoldsItsValuesOverThePart) {
+  const auto space = std::make_shared<const MonomialSpace>(3, 3);
+  const TaylorModel x = TaylorModel::variable(space, 0, Interval(0.1, 0.5));
+  const TaylorModel y = TaylorModel::variable(space, 1, Interval(-1.0, 0.2));
+  const TaylorModel w = TaylorModel::variable(space, 2, Interval(2.0, 3.0));
+  const TaylorModel p = sin(x * y) * w + sqr(y) * x - cos(w) * y;
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const std::vector<std::pair<double, double>> parts = {{-0.5, 0.5}, {0.5, 0.5}, {0.3, 0.6}};
+  for (std::size_t v = 0; v < 3; ++v) {
+    for (const auto& [centre, scale] : parts) {
+      const TaylorModel q = p.restricted(v, centre, scale);
+      EXPECT_TRUE(p.remainder().is_subset(q.remainder()));
+      // Only the re-expansion's rounding is added.
+      EXPECT_LT(q.remainder().width() - p.remainder().width(), 1e-13);
+      EXPECT_LT(q.bound().width(), p.bound().width()) << v << " " << centre;
+      for (int k = 0; k < 200; ++k) {
+        std::vector<double> z = {unit(rng), unit(rng), unit(rng)};
+        std::vector<double> mapped = z;
+        mapped[v] = centre + scale * z[v];
+        EXPECT_TRUE(q.evaluate(z).intersects(p.evaluate(mapped))) << v << " " << centre;
+      }
+    }
+  }
+  EXPECT_THROW(p.restricted(3, 0.5, 0.5), std::invalid_argument);
+  EXPECT_THROW(p.restricted(0, 0.75, 0.5), std::invalid_argument);
+}
+
 // Grad<N, TaylorModel>: the Taylor coefficients' gradients of the Furuta model with its seven
 // parameters as state (the bench box: mu's +-2 %, fv1 +-10 %, fv2 +-50 %) as order-1 models in
 // the box's deviations. At sampled points of the box they hold the point's gradients, and bounded

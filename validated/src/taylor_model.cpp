@@ -292,6 +292,41 @@ TaylorModel TaylorModel::rescaled(const std::vector<double>& s) const {
   return from_intervals(space_, c, remainder_);
 }
 
+TaylorModel TaylorModel::restricted(std::size_t v, double centre, double scale) const {
+  if (!space_) return *this;
+  const MonomialSpace& sp = *space_;
+  if (v >= sp.variables()) throw std::invalid_argument("TaylorModel::restricted: variable");
+  if (!(std::abs(centre) + std::abs(scale) <= 1.0)) {
+    throw std::invalid_argument("TaylorModel::restricted: centre, scale reach outside [-1, 1]");
+  }
+  // lower[m]: the monomial m / z_v (npos when z_v does not divide m).
+  std::vector<std::size_t> lower(sp.size(), MonomialSpace::npos);
+  for (std::size_t m = 0; m < sp.size(); ++m) {
+    const std::size_t up = sp.product(m, sp.variable(v));
+    if (up != MonomialSpace::npos) lower[up] = m;
+  }
+  // a z^e z_v^k = a z^e (c + s z_v)^k = a z^e sum_j binom(k, j) c^(k-j) s^j z_v^j: the term j
+  // lands on m divided k - j times by z_v.
+  const Interval c(centre);
+  const Interval s(scale);
+  std::vector<Interval> out(sp.size(), Interval(0.0));
+  for (std::size_t m = 0; m < sp.size(); ++m) {
+    if (coefficients_[m] == 0.0) continue;
+    const int k = sp.exponent(m, v);
+    std::size_t target = m;
+    Interval binomial(1.0);
+    for (int j = k; j >= 0; --j) {
+      out[target] += Interval(coefficients_[m]) * binomial * pow(c, k - j) * pow(s, j);
+      if (j > 0) {
+        binomial =
+            binomial * Interval(static_cast<double>(j)) / Interval(static_cast<double>(k - j + 1));
+        target = lower[target];
+      }
+    }
+  }
+  return from_intervals(space_, out, remainder_);
+}
+
 Interval TaylorModel::partial_over(std::size_t v, const std::vector<Interval>& box) const {
   if (!space_) return Interval(0.0);
   const MonomialSpace& sp = *space_;

@@ -15,16 +15,14 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
 
-#include "a_priori.hpp"
-#include "interval_matrix.hpp"
-#include "jets.hpp"
-#include "lohner_frame.hpp"
 #include "reason.hpp"
 #include "shrink_wrap.hpp"
+#include "taylor_model_flow_core.hpp"
 
 namespace furuta::validated {
 
@@ -102,11 +100,13 @@ Box TaylorModelFlowResult::enclosure_at(double t) const {
   return it->t1 == t ? it->end : it->over;
 }
 
-TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
-                                              const std::vector<double>& switches, const Box& x0,
-                                              const TaylorModelFlowOptions& options) {
+namespace internal {
+
+TaylorModelFlowSetup::TaylorModelFlowSetup(const std::vector<Tape>& tapes_,
+                                           const std::vector<double>& switches_, const Box& x0,
+                                           const TaylorModelFlowOptions& options_)
+    : tapes(tapes_), switches(switches_), options(options_), n(x0.size()) {
   const IntegratorOptions& o = options.integrator;
-  const std::size_t n = x0.size();
   if (n == 0 || n > kN) throw std::invalid_argument("x0: dimension must be 1..16");
   if (x0.is_empty() || !is_bounded(x0)) throw std::invalid_argument("x0: empty or unbounded");
   if (tapes.size() != switches.size() + 1) throw std::invalid_argument("tapes: one per piece");
@@ -123,133 +123,161 @@ TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
   if (options.jacobian_order < 0 || options.jacobian_order > options.space_order) {
     throw std::invalid_argument("options.jacobian_order: 0..space_order");
   }
-  const auto space = std::make_shared<const MonomialSpace>(n, options.space_order);
-  const auto jacobian_space = std::make_shared<const MonomialSpace>(n, options.jacobian_order);
+  space = std::make_shared<const MonomialSpace>(n, options.space_order);
+  jacobian_space = std::make_shared<const MonomialSpace>(n, options.jacobian_order);
+  // The start variables the error part can be wrapped into: the live components' own.
+  for (std::size_t v : LiveSet(tapes, n).live) {
+    if (!x0[v].is_point()) wrap_slots.push_back(v);
+  }
+}
 
+TaylorModelFlowState initial_flow_state(const TaylorModelFlowSetup& setup, const Box& x0) {
+  const std::size_t n = setup.n;
+  TaylorModelFlowState state{
+      {},
+      Matrix::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n)),
+      std::vector<Interval>(n, Interval(0.0)),
+      LiveSet(setup.tapes, n)};
+  for (std::size_t v = 0; v < n; ++v) {
+    state.p.push_back(x0[v].is_point() ? TaylorModel(setup.space, x0[v])
+                                       : TaylorModel::variable(setup.space, v, x0[v]));
+  }
+  // The start's rounding (mid and rad of each component) goes into the error part at once.
+  for (std::size_t v = 0; v < n; ++v) {
+    state.r[v] = state.p[v].remainder();
+    state.p[v] = state.p[v].polynomial();
+  }
+  if (state.live.live.size() < n && !confined_to_live(state.b, state.r, state.live.is_live)) {
+    state.live.all();
+  }
+  state.t = setup.options.integrator.t_start;
+  state.h_next = setup.options.integrator.h_initial;
+  return state;
+}
+
+std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFlowSetup& setup,
+                                                             TaylorModelFlowRunners& runners,
+                                                             TaylorModelFlowState& state,
+                                                             TaylorModelFlowResult& result) {
+  const TaylorModelFlowOptions& options = setup.options;
+  const IntegratorOptions& o = options.integrator;
+  const std::size_t n = setup.n;
+  const std::vector<TaylorModel>& p = state.p;
+  const int k = o.order;
+  const std::size_t piece = piece_at(setup.switches, state.t);
+  const Tape& tape = setup.tapes[piece];
+  const double t_limit =
+      std::min(o.t_end, piece < setup.switches.size() ? setup.switches[piece] : o.t_end);
+  const Box x = box_of(p, state.b, state.r);
+  const StepEnclosure enclosure =
+      enclose_step(runners.intervals, tape, x, state.t, t_limit, state.h_next, o, result.rejected);
+  if (!enclosure.failure.empty()) {
+    return TaylorModelFlowFailure{IntegrationResult::Status::step_not_validated, enclosure.failure};
+  }
+  const Interval& hi = enclosure.hi;
+  const Interval s_over(0.0, hi.hi());
+
+  // The Taylor map of the polynomial part, in Taylor models; its Jacobian over the set's box.
+  runners.models.run(tape, p, k);
+  std::vector<Grad<kN>> g(n);
+  for (std::size_t v = 0; v < n; ++v) g[v] = Grad<kN>::variable(x[v], v);
+  runners.gradients.run(tape, g, k);
+
+  std::vector<TaylorModel> p_next(n);
+  std::vector<Interval> rest(n);
+  IMatrix j(n);
+  IMatrix j_over(n);  // over s in [0, h], for the box over the step
+  Box over(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    TaylorModel sum = runners.models.coefficient(v, k);
+    Interval sum_over = runners.models.coefficient(v, k).bound();
+    for (int i = k - 1; i >= 0; --i) {
+      sum = sum * hi + runners.models.coefficient(v, i);
+      sum_over = sum_over * s_over + runners.models.coefficient(v, i).bound();
+    }
+    rest[v] = sum.remainder() + enclosure.remainder[v];
+    p_next[v] = sum.polynomial();
+    over[v] = sum_over + pow(s_over, k + 1) * enclosure.remainder_coefficient[v];
+    for (std::size_t w = 0; w < n; ++w) {
+      std::tie(j(v, w), j_over(v, w)) = at_and_over<Interval>(
+          [&](int i) { return runners.gradients.coefficient(v, i).d[w]; }, k, hi);
+    }
+  }
+  if (options.jacobian_order > 0) {
+    tighten_jacobians(runners.model_gradients, tape, p, state.b, state.r, setup.jacobian_space, k,
+                      hi, j, j_over);
+  }
+  const IMatrix jb = j * from_point(state.b);
+  const std::vector<Interval> br_over = (j_over * from_point(state.b)) * state.r;
+  for (std::size_t v = 0; v < n; ++v) {
+    over[v] = intersect(over[v] + br_over[v], enclosure.apriori[v]);
+  }
+  LiveSet live = state.live;
+  Frame frame = choose_frame(j, jb, state.r, rest, live, o.max_inflation);
+
+  TaylorModelFlowStep step;
+  step.t0 = state.t;
+  step.t1 = enclosure.t1;
+  step.over = over;
+  step.end = intersect(box_of(p_next, frame.b, frame.r), over);
+  for (const Interval& e : frame.box)
+    step.remainder_width = std::max(step.remainder_width, e.width());
+  if (step.end.is_empty()) {
+    return TaylorModelFlowFailure{
+        IntegrationResult::Status::step_not_validated,
+        "empty enclosure at t = " + describe(step.t1) + " (internal error)"};
+  }
+  const double width = is_bounded(step.end) ? step.end.max_width() : HUGE_VAL;
+  if (!(width <= o.max_width)) {
+    return TaylorModelFlowFailure{IntegrationResult::Status::width_exceeded,
+                                  "enclosure width " + describe(width) + " > max_width " +
+                                      describe(o.max_width) + " at t = " + describe(step.t1)};
+  }
+  result.steps.push_back(std::move(step));
+  state.wrapped = false;
+  if (options.shrink_wrap_max_delta > 0.0) {
+    const ShrinkWrap wrap =
+        shrink_wrap(p_next, frame.box, live.live, setup.wrap_slots, options.shrink_wrap_max_delta,
+                    options.wrap_without_collapsed);
+    if (wrap.done) {
+      ++result.shrink_wraps;
+      result.partial_wraps += wrap.kept < setup.wrap_slots.size();
+      state.wrapped = wrap.kept >= setup.wrap_slots.size();
+      frame.b = Matrix::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+      frame.r = wrap.rest;
+    }
+  }
+  state.p = std::move(p_next);
+  state.b = std::move(frame.b);
+  state.r = std::move(frame.r);
+  state.live = std::move(live);
+  state.t = enclosure.t1;
+  state.h_next = next_step_size(enclosure, state.h_next, o);
+  return std::nullopt;
+}
+
+}  // namespace internal
+
+TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
+                                              const std::vector<double>& switches, const Box& x0,
+                                              const TaylorModelFlowOptions& options) {
+  const internal::TaylorModelFlowSetup setup(tapes, switches, x0, options);
   const auto started = std::chrono::steady_clock::now();
   TaylorModelFlowResult result;
   result.initial = x0;
-  result.t_start = o.t_start;
-  auto finish = [&](IntegrationResult::Status status, std::string reason) {
-    result.status = status;
-    result.reason = std::move(reason);
-    result.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    return result;
-  };
-
-  std::vector<TaylorModel> p;
-  for (std::size_t v = 0; v < n; ++v) {
-    p.push_back(x0[v].is_point() ? TaylorModel(space, x0[v])
-                                 : TaylorModel::variable(space, v, x0[v]));
+  result.t_start = options.integrator.t_start;
+  internal::TaylorModelFlowState state = internal::initial_flow_state(setup, x0);
+  internal::TaylorModelFlowRunners runners;
+  while (state.t < options.integrator.t_end) {
+    if (auto failure = internal::taylor_model_flow_step(setup, runners, state, result)) {
+      result.status = failure->status;
+      result.reason = std::move(failure->reason);
+      break;
+    }
   }
-  // The start's rounding (mid and rad of each component) goes into the error part at once.
-  std::vector<Interval> r(n, Interval(0.0));
-  for (std::size_t v = 0; v < n; ++v) {
-    r[v] = p[v].remainder();
-    p[v] = p[v].polynomial();
-  }
-  Matrix b = Matrix::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-  internal::LiveSet live(tapes, n);
-  if (live.live.size() < n && !internal::confined_to_live(b, r, live.is_live)) live.all();
-
-  // The start variables the error part can be wrapped into: the live components' own.
-  std::vector<std::size_t> wrap_slots;
-  for (std::size_t v : live.live) {
-    if (!x0[v].is_point()) wrap_slots.push_back(v);
-  }
-  TaylorRunner<Interval> runner;
-  TaylorRunner<TaylorModel> models;
-  TaylorRunner<Grad<kN>> gradients;
-  TaylorRunner<Grad<kN, TaylorModel>> model_gradients;
-  const int k = o.order;
-  double t = o.t_start;
-  double h_next = o.h_initial;
-  while (t < o.t_end) {
-    const std::size_t piece = piece_at(switches, t);
-    const Tape& tape = tapes[piece];
-    const double t_limit = std::min(o.t_end, piece < switches.size() ? switches[piece] : o.t_end);
-    const Box x = box_of(p, b, r);
-    const internal::StepEnclosure enclosure =
-        internal::enclose_step(runner, tape, x, t, t_limit, h_next, o, result.rejected);
-    if (!enclosure.failure.empty()) {
-      return finish(IntegrationResult::Status::step_not_validated, enclosure.failure);
-    }
-    const Interval& hi = enclosure.hi;
-    const Interval s_over(0.0, hi.hi());
-
-    // The Taylor map of the polynomial part, in Taylor models; its Jacobian over the set's box.
-    models.run(tape, p, k);
-    std::vector<Grad<kN>> g(n);
-    for (std::size_t v = 0; v < n; ++v) g[v] = Grad<kN>::variable(x[v], v);
-    gradients.run(tape, g, k);
-
-    std::vector<TaylorModel> p_next(n);
-    std::vector<Interval> rest(n);
-    IMatrix j(n);
-    IMatrix j_over(n);  // over s in [0, h], for the box over the step
-    Box over(n);
-    for (std::size_t v = 0; v < n; ++v) {
-      TaylorModel sum = models.coefficient(v, k);
-      Interval sum_over = models.coefficient(v, k).bound();
-      for (int i = k - 1; i >= 0; --i) {
-        sum = sum * hi + models.coefficient(v, i);
-        sum_over = sum_over * s_over + models.coefficient(v, i).bound();
-      }
-      rest[v] = sum.remainder() + enclosure.remainder[v];
-      p_next[v] = sum.polynomial();
-      over[v] = sum_over + pow(s_over, k + 1) * enclosure.remainder_coefficient[v];
-      for (std::size_t w = 0; w < n; ++w) {
-        std::tie(j(v, w), j_over(v, w)) =
-            at_and_over<Interval>([&](int i) { return gradients.coefficient(v, i).d[w]; }, k, hi);
-      }
-    }
-    if (options.jacobian_order > 0) {
-      tighten_jacobians(model_gradients, tape, p, b, r, jacobian_space, k, hi, j, j_over);
-    }
-    const IMatrix jb = j * internal::from_point(b);
-    const std::vector<Interval> br_over = (j_over * internal::from_point(b)) * r;
-    for (std::size_t v = 0; v < n; ++v) {
-      over[v] = intersect(over[v] + br_over[v], enclosure.apriori[v]);
-    }
-    internal::Frame frame = internal::choose_frame(j, jb, r, rest, live, o.max_inflation);
-
-    TaylorModelFlowStep step;
-    step.t0 = t;
-    step.t1 = enclosure.t1;
-    step.over = over;
-    step.end = intersect(box_of(p_next, frame.b, frame.r), over);
-    for (const Interval& e : frame.box)
-      step.remainder_width = std::max(step.remainder_width, e.width());
-    if (step.end.is_empty()) {
-      return finish(IntegrationResult::Status::step_not_validated,
-                    "empty enclosure at t = " + internal::describe(step.t1) + " (internal error)");
-    }
-    const double width = is_bounded(step.end) ? step.end.max_width() : HUGE_VAL;
-    if (!(width <= o.max_width)) {
-      return finish(IntegrationResult::Status::width_exceeded,
-                    "enclosure width " + internal::describe(width) + " > max_width " +
-                        internal::describe(o.max_width) + " at t = " + internal::describe(step.t1));
-    }
-    result.steps.push_back(std::move(step));
-    if (options.shrink_wrap_max_delta > 0.0) {
-      const internal::ShrinkWrap wrap =
-          internal::shrink_wrap(p_next, frame.box, live.live, wrap_slots,
-                                options.shrink_wrap_max_delta, options.wrap_without_collapsed);
-      if (wrap.done) {
-        ++result.shrink_wraps;
-        result.partial_wraps += wrap.kept < wrap_slots.size();
-        frame.b = Matrix::Identity(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-        frame.r = wrap.rest;
-      }
-    }
-    p = std::move(p_next);
-    b = std::move(frame.b);
-    r = std::move(frame.r);
-    t = enclosure.t1;
-    h_next = internal::next_step_size(enclosure, h_next, o);
-  }
-  return finish(IntegrationResult::Status::ok, "");
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return result;
 }
 
 }  // namespace furuta::validated

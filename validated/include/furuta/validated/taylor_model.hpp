@@ -103,6 +103,10 @@ class TaylorModel {
   // The model of x(z) = this(s_0 z_0, s_1 z_1, ...) (the polynomial's coefficients times the
   // powers of s, their rounding into the remainder; the remainder unchanged).
   TaylorModel rescaled(const std::vector<double>& s) const;
+  // The model of x(z) = this(..., centre + scale z_v, ...): the set over a part of z_v's range
+  // (centre -+ 0.5, scale 0.5: its halves), the polynomial re-expanded in the new z_v (its
+  // rounding into the remainder; the remainder unchanged). |centre| + |scale| <= 1.
+  TaylorModel restricted(std::size_t v, double centre, double scale) const;
   // The polynomial's partial derivative in z_v over `box` (each z_w in box[w], which may reach
   // beyond [-1, 1]), term by term.
   Interval partial_over(std::size_t v, const std::vector<Interval>& box) const;
