@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <numbers>
 #include <random>
@@ -21,6 +22,7 @@
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/split.hpp"
 #include "furuta/validated/taylor_model_flow.hpp"
+#include "furuta/validated/taylor_model_split.hpp"
 #include "reference.hpp"
 
 namespace {
@@ -284,29 +286,39 @@ BENCHMARK(BM_FurutaOneIntervalParameter)
 // Jacobian as order-1 models, shrink wrapping, the arm's collapsed velocity left out when needed;
 // FURUTA_SHRINK_WRAP=0 and FURUTA_WRAP_WITHOUT_COLLAPSED=0 turn them off), one tube, to 4 s or
 // until it fails.
-void BM_FurutaTaylorModels(benchmark::State& state) {
-  const Scenario& s = kScenarios[state.range(0)];
-  const furuta::model::Parameters<double> truth = furuta::model::paper_run1();
-  const double scale = std::pow(10.0, -static_cast<double>(state.range(1)));
-  furuta::model::Parameters<furuta::interval::Interval> p =
-      v::parameters_around(truth, 0.02 * scale);
-  p.fv1 = Interval(truth.fv1) * (Interval(1.0) + Interval(-0.1 * scale, 0.1 * scale));
-  p.fv2 = Interval(truth.fv2) * (Interval(1.0) + Interval(-0.5 * scale, 0.5 * scale));
-  const Box state_box = initial_state(s);
-  const Box x0 = v::FurutaDynamics::initial_box(state_box, p);
-  const v::FurutaDynamics system(Interval(s.tau_nm));
+struct TaylorModelCase {
+  furuta::model::Parameters<furuta::interval::Interval> p;
+  Box state_box;
+  Box x0;
   v::TaylorModelFlowOptions options;
-  options.integrator = furuta_options();
-  options.integrator.order = 8;
+};
+TaylorModelCase taylor_model_case(const Scenario& s, std::int64_t decades) {
+  const furuta::model::Parameters<double> truth = furuta::model::paper_run1();
+  const double scale = std::pow(10.0, -static_cast<double>(decades));
+  TaylorModelCase c;
+  c.p = v::parameters_around(truth, 0.02 * scale);
+  c.p.fv1 = Interval(truth.fv1) * (Interval(1.0) + Interval(-0.1 * scale, 0.1 * scale));
+  c.p.fv2 = Interval(truth.fv2) * (Interval(1.0) + Interval(-0.5 * scale, 0.5 * scale));
+  c.state_box = initial_state(s);
+  c.x0 = v::FurutaDynamics::initial_box(c.state_box, c.p);
+  c.options.integrator = furuta_options();
+  c.options.integrator.order = 8;
   // The Lagrange remainder's target: the models' truncation is far above it (1e-9 to 1e-3 a
   // step), and 1e-10 or 1e-6 reach the same times.
-  options.integrator.tolerance = 1e-8;
-  options.integrator.max_width = 2.0 * std::numbers::pi;
-  options.shrink_wrap_max_delta = env_or("FURUTA_SHRINK_WRAP", 1.0);
-  options.wrap_without_collapsed = env_or("FURUTA_WRAP_WITHOUT_COLLAPSED", 1.0) != 0.0;
+  c.options.integrator.tolerance = 1e-8;
+  c.options.integrator.max_width = 2.0 * std::numbers::pi;
+  c.options.shrink_wrap_max_delta = env_or("FURUTA_SHRINK_WRAP", 1.0);
+  c.options.wrap_without_collapsed = env_or("FURUTA_WRAP_WITHOUT_COLLAPSED", 1.0) != 0.0;
+  return c;
+}
+
+void BM_FurutaTaylorModels(benchmark::State& state) {
+  const Scenario& s = kScenarios[state.range(0)];
+  const TaylorModelCase c = taylor_model_case(s, state.range(1));
+  const v::FurutaDynamics system(Interval(s.tau_nm));
   v::TaylorModelFlowResult r;
   for (auto _ : state) {
-    r = v::integrate_taylor_models(system, x0, options);
+    r = v::integrate_taylor_models(system, c.x0, c.options);
     benchmark::DoNotOptimize(r);
   }
   const double reached = r.t_reached();
@@ -317,13 +329,57 @@ void BM_FurutaTaylorModels(benchmark::State& state) {
   state.counters["wall_s"] = r.seconds;
   if (reached > 0.0) {
     const std::vector<Q2Width> w =
-        q2_against_spread(r, s, state_box, p, {0.5 * reached, 0.9 * reached});
+        q2_against_spread(r, s, c.state_box, c.p, {0.5 * reached, 0.9 * reached});
     state.counters["ratio_half"] = w[0].ratio;
     state.counters["ratio_late"] = w[1].ratio;
   }
 }
 BENCHMARK(BM_FurutaTaylorModels)
     ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+// (3d) (3c) split where a tube fails (taylor_model_split.hpp), to at most the third argument's
+// pieces, on every core (FURUTA_TM_THREADS to set). The counters name how often each variable was
+// cut (cut_<component>, components of FurutaDynamics) and the q2 ratio at each half second.
+void BM_FurutaTaylorModelsSplit(benchmark::State& state) {
+  const Scenario& s = kScenarios[state.range(0)];
+  TaylorModelCase c = taylor_model_case(s, state.range(1));
+  c.options.integrator.t_end = env_or("FURUTA_TM_T_END", c.options.integrator.t_end);
+  const v::FurutaDynamics system(Interval(s.tau_nm));
+  v::TaylorModelSplitOptions split;
+  split.max_pieces = static_cast<std::size_t>(state.range(2));
+  split.max_depth = 16;
+  split.restart_back = env_or("FURUTA_TM_RESTART_BACK", split.restart_back);
+  split.threads = static_cast<int>(env_or("FURUTA_TM_THREADS", 0.0));
+  v::TaylorModelSplitResult r;
+  for (auto _ : state) {
+    r = v::integrate_taylor_models_split(system, c.x0, c.options, split);
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["t_reached"] = r.t_reached;
+  state.counters["pieces"] = static_cast<double>(r.pieces.size());
+  state.counters["runs"] = static_cast<double>(r.runs);
+  state.counters["steps"] = static_cast<double>(r.steps);
+  state.counters["wall_s"] = r.seconds;
+  for (std::size_t i = 0; i < r.cuts.size(); ++i) {
+    if (r.cuts[i] > 0) state.counters["cut_" + std::to_string(i)] = static_cast<double>(r.cuts[i]);
+  }
+  std::vector<double> times;
+  for (double t = 0.5; t <= r.t_reached; t += 0.5) times.push_back(t);
+  times.push_back(0.9 * r.t_reached);
+  if (r.t_reached > 0.0) {
+    const std::vector<Q2Width> w = q2_against_spread(r, s, c.state_box, c.p, times);
+    for (std::size_t k = 0; k + 1 < w.size(); ++k) {
+      state.counters["ratio_" + std::to_string(times[k]).substr(0, 3) + "s"] = w[k].ratio;
+    }
+    state.counters["ratio_late"] = w.back().ratio;
+  }
+}
+BENCHMARK(BM_FurutaTaylorModelsSplit)
+    ->ArgsProduct({{0, 1, 2, 3}, {0}, {16}})
+    ->ArgsProduct({{0, 1, 2, 3}, {1}, {4}})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

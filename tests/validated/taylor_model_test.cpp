@@ -338,6 +338,58 @@ TEST(TaylorModel, RestrictedHoldsItsValuesOverThePart) {
   EXPECT_THROW(p.restricted(0, 0.75, 0.5), std::invalid_argument);
 }
 
+// derivative: the polynomial's partial derivative holds its difference quotients' limit at
+// sampled points; bounded_in: the model left in the other variables holds every value with the
+// named variables anywhere in their ranges (here reaching beyond [-1, 1]).
+TEST(TaylorModel, DerivativeAndBoundedInHoldTheirValues) {
+  const auto space = std::make_shared<const MonomialSpace>(3, 3);
+  const TaylorModel x = TaylorModel::variable(space, 0, Interval(0.1, 0.5));
+  const TaylorModel y = TaylorModel::variable(space, 1, Interval(-1.0, 0.2));
+  const TaylorModel w = TaylorModel::variable(space, 2, Interval(2.0, 3.0));
+  const TaylorModel p = (sin(x * y) * w + sqr(y) * x * w - y).polynomial();
+  const std::vector<Interval> ranges = {Interval(-1.3, 1.3), Interval(-1.0, 1.0),
+                                        Interval(-0.5, 0.25)};
+  const TaylorModel in_x1 = p.bounded_in({1}, ranges);
+  const TaylorModel in_x02 = p.bounded_in({0, 2}, ranges);
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double eps = 1e-6;
+  for (std::size_t v = 0; v < 3; ++v) {
+    const TaylorModel d = p.derivative(v);
+    for (int k = 0; k < 200; ++k) {
+      const std::vector<double> z = {unit(rng), unit(rng), unit(rng)};
+      std::vector<double> up = z;
+      std::vector<double> down = z;
+      up[v] += eps;
+      down[v] -= eps;
+      const double quotient = (p.evaluate(up).mid() - p.evaluate(down).mid()) / (2 * eps);
+      EXPECT_TRUE(Interval(quotient).is_subset(d.evaluate(z) + Interval(-1e-6, 1e-6))) << v;
+    }
+  }
+  for (int k = 0; k < 300; ++k) {
+    const std::vector<double> z = {1.3 * unit(rng), unit(rng), 0.375 * unit(rng) - 0.125};
+    const Interval value = p.evaluate(z);
+    // The kept variables at z (within [-1, 1]), the bounded ones anywhere in their ranges (the
+    // value given for them is not read: their terms are gone).
+    if (std::abs(z[0]) <= 1.0) {
+      EXPECT_TRUE(value.intersects(in_x1.evaluate({z[0], 0.7, z[2]})));
+    }
+    EXPECT_TRUE(value.intersects(in_x02.evaluate({-0.3, z[1], 0.9})));
+  }
+  // Nothing of the bounded variables is left in the polynomial.
+  for (std::size_t m = 0; m < space->size(); ++m) {
+    if (space->exponent(m, 1) > 0) {
+      EXPECT_EQ(in_x1.coefficient(m), 0.0);
+    }
+    if (space->exponent(m, 0) > 0 || space->exponent(m, 2) > 0) {
+      EXPECT_EQ(in_x02.coefficient(m), 0.0);
+    }
+  }
+  EXPECT_THROW(p.derivative(3), std::invalid_argument);
+  EXPECT_THROW(p.bounded_in({3}, ranges), std::invalid_argument);
+  EXPECT_THROW(p.bounded_in({0}, {Interval(0.0)}), std::invalid_argument);
+}
+
 // Grad<N, TaylorModel>: the Taylor coefficients' gradients of the Furuta model with its seven
 // parameters as state (the bench box: mu's +-2 %, fv1 +-10 %, fv2 +-50 %) as order-1 models in
 // the box's deviations. At sampled points of the box they hold the point's gradients, and bounded

@@ -60,6 +60,22 @@ std::vector<std::size_t> live_components(const std::vector<Tape>& tapes, std::si
   return live;
 }
 
+std::vector<bool> read_components(const std::vector<Tape>& tapes, std::size_t n) {
+  std::vector<bool> read(n, false);
+  for (const Tape& tape : tapes) {
+    auto mark = [&](int node) {
+      if (node >= 0 && static_cast<std::size_t>(node) < n)
+        read[static_cast<std::size_t>(node)] = true;
+    };
+    for (std::size_t i = n; i < tape.nodes.size(); ++i) {
+      mark(tape.nodes[i].a);
+      mark(tape.nodes[i].b);
+    }
+    for (int out : tape.outputs) mark(out);
+  }
+  return read;
+}
+
 bool confined_to_live(const Matrix& b, const std::vector<Interval>& r,
                       const std::vector<bool>& is_live) {
   const std::size_t n = r.size();

@@ -40,6 +40,10 @@ Matrix qr_frame(const Matrix& p, const std::vector<Interval>& r);
 // all are (the frame then spans everything, as for a field without constant components).
 std::vector<std::size_t> live_components(const std::vector<Tape>& tapes, std::size_t n);
 
+// The components that the field reads (q1 of the Furuta model is read by nothing: its direction
+// is a pure translation of the solutions, splitting it changes nothing).
+std::vector<bool> read_components(const std::vector<Tape>& tapes, std::size_t n);
+
 // Whether the error part B r is confined to the live components: B block-diagonal with the
 // identity on the constant ones (no coupling either way) and their r exactly 0.
 bool confined_to_live(const Matrix& b, const std::vector<Interval>& r,

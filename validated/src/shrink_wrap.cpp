@@ -8,6 +8,16 @@
 // and C = |I - A M| >= 0, so C's spectral radius is below 1 (Perron-Frobenius): every A M is
 // invertible, A with it, and G(z') = z' means p(z') = p(z) + e. Each row has its own mean-value
 // point, on the segment from z_s to z', inside W. With z' = q w, w in [-1, 1]: p(q w) = p(z) + e.
+//
+// A may depend on anything held fixed in that argument, the other variables z_theta (the
+// parameters) among them: the argument runs for each z_theta on its own. Taking A(z_theta) as the
+// first-order inverse of the slots' linear coefficients L(z_theta) leaves in I - A M only what
+// L's first-order dependence on the parameters does not explain, so C is bounded as a Taylor
+// model in z_theta (the rows' own points in the slots bounded into each entry's remainder). With
+// a constant A, the parameters' +-2 % to +-50 % of the bench box made C pass 1 after 23 steps; with
+// A(z_theta) the parameter part of C stays below 0.2 and the slots' own nonlinear terms, which each
+// wrap multiplies by (1 + delta)^(degree - 1) against the linear ones, are what end it
+// (bench/README.md, "Taylor models III").
 
 #include "shrink_wrap.hpp"
 
@@ -58,14 +68,57 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
     const auto column = static_cast<Eigen::Index>(i_largest);
     if (8.0 * l.col(column).norm() <= l.colwise().norm().maxCoeff()) *worst = i_largest;
   }
-  // |A e|, the error in the slots' units.
+  // A(z) = A0 - A0 L1(z) A0, L1(z) the slots' linear coefficients' first-order dependence on the
+  // other variables (the parameters): the inverse of L(z) to first order, so that I - A M is left
+  // with only what L(z) does not explain (shrink_wrap.hpp says why A may depend on them).
+  std::vector<std::size_t> others;
+  for (std::size_t w = 0; w < nv; ++w) {
+    if (std::find(slots.begin(), slots.end(), w) == slots.end()) others.push_back(w);
+  }
+  std::vector<std::vector<TaylorModel>> derivatives(m, std::vector<TaylorModel>(m));
+  for (std::size_t k = 0; k < m; ++k) {
+    for (std::size_t j = 0; j < m; ++j) {
+      if (j != kept) derivatives[k][j] = p[rows[k]].derivative(slots[j]);
+    }
+  }
+  const auto space_ptr = p.front().space();
+  std::vector<std::vector<TaylorModel>> am(m, std::vector<TaylorModel>(m));
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t k = 0; k < m; ++k) {
+      am[i][k] = TaylorModel(
+          space_ptr, Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k))));
+    }
+  }
+  for (std::size_t w : others) {
+    Eigen::MatrixXd l1 = Eigen::MatrixXd::Zero(em, em);
+    for (std::size_t k = 0; k < m; ++k) {
+      for (std::size_t j = 0; j < m; ++j) {
+        if (j != kept) {
+          l1(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j)) =
+              derivatives[k][j].coefficient(space.variable(w));
+        }
+      }
+    }
+    if (l1.isZero(0.0)) continue;
+    const Eigen::MatrixXd a1 = -(a * l1 * a);
+    const TaylorModel zw = TaylorModel::variable(space_ptr, w, Interval(-1.0, 1.0));
+    for (std::size_t i = 0; i < m; ++i) {
+      for (std::size_t k = 0; k < m; ++k) {
+        const double c = a1(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k));
+        if (c != 0.0 && std::isfinite(c)) am[i][k] += zw * Interval(c);
+      }
+    }
+  }
+  // |A e|, the error in the slots' units, over every value of the other variables.
   std::vector<double> ae(m, 0.0);
+  std::vector<std::vector<double>> a_mag(m, std::vector<double>(m));
   for (std::size_t i = 0; i < m; ++i) {
     Interval s(0.0);
     for (std::size_t k = 0; k < m; ++k) {
-      s += Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k))) * e[rows[k]];
+      a_mag[i][k] = am[i][k].bound().mag();
+      s += Interval(a_mag[i][k]) * Interval(e[rows[k]].mag());
     }
-    ae[i] = s.mag();
+    ae[i] = s.hi();
     if (!std::isfinite(ae[i])) return out;
   }
   // delta from a little above |A e|, raised to a little above C delta + a until it holds.
@@ -82,23 +135,23 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
       const double w = (Interval(1.0) + Interval(delta[j])).hi();
       box[slots[j]] = Interval(-w, w);
     }
-    // M: the slots' partial derivatives of the rows over the widened box; C = |I - A M|.
-    std::vector<std::vector<Interval>> mm(m, std::vector<Interval>(m));
+    // M: the slots' derivatives of the rows over the widened box, each row at its own point of
+    // it (the slots' terms bounded into each entry's remainder), the other variables common to
+    // all rows; C = |I - A M| bounded over them.
+    std::vector<std::vector<TaylorModel>> mm(m, std::vector<TaylorModel>(m));
     for (std::size_t k = 0; k < m; ++k) {
       for (std::size_t j = 0; j < m; ++j) {
-        mm[k][j] =
-            j == kept ? Interval(k == j ? scale : 0.0) : p[rows[k]].partial_over(slots[j], box);
+        mm[k][j] = j == kept ? TaylorModel(Interval(k == j ? scale : 0.0))
+                             : derivatives[k][j].bounded_in(slots, box);
       }
     }
     std::vector<double> next(m, 0.0);  // C delta + a, rounded up
     for (std::size_t i = 0; i < m; ++i) {
       Interval s = Interval(ae[i]);
       for (std::size_t j = 0; j < m; ++j) {
-        Interval am(i == j ? 1.0 : 0.0);
-        for (std::size_t k = 0; k < m; ++k) {
-          am -= Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k))) * mm[k][j];
-        }
-        s += Interval(am.mag()) * Interval(delta[j]);
+        TaylorModel entry(i == j ? 1.0 : 0.0);
+        for (std::size_t k = 0; k < m; ++k) entry -= am[i][k] * mm[k][j];
+        s += Interval(entry.bound().mag()) * Interval(delta[j]);
       }
       next[i] = s.hi();
     }

@@ -30,24 +30,6 @@ struct Job {
   std::string path;
 };
 
-// The components that the field reads (q1 of the Furuta model is read by nothing: its direction
-// is a pure translation of the solutions, splitting it changes nothing).
-std::vector<bool> read_components(const std::vector<Tape>& tapes, std::size_t n) {
-  std::vector<bool> read(n, false);
-  for (const Tape& tape : tapes) {
-    auto mark = [&](int node) {
-      if (node >= 0 && static_cast<std::size_t>(node) < n)
-        read[static_cast<std::size_t>(node)] = true;
-    };
-    for (std::size_t i = n; i < tape.nodes.size(); ++i) {
-      mark(tape.nodes[i].a);
-      mark(tape.nodes[i].b);
-    }
-    for (int out : tape.outputs) mark(out);
-  }
-  return read;
-}
-
 // The widths of C r0 + P(r0) and B r (the exactly carried and the error part of the doubleton)
 // at a step's t0.
 void part_widths(const TubeStep& s, std::size_t n, std::vector<double>& exact,
@@ -207,7 +189,7 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
     throw std::invalid_argument("split options: planned_split_s in [t_start, t_end)");
   }
   const auto started = std::chrono::steady_clock::now();
-  const std::vector<bool> read = read_components(tapes, x0.size());
+  const std::vector<bool> read = internal::read_components(tapes, x0.size());
   std::vector<bool> moving(x0.size(), false);
   for (std::size_t v : internal::live_components(tapes, x0.size())) moving[v] = true;
   tbb::task_arena arena(split.threads > 0 ? split.threads : tbb::task_arena::automatic);

@@ -327,6 +327,41 @@ TaylorModel TaylorModel::restricted(std::size_t v, double centre, double scale) 
   return from_intervals(space_, out, remainder_);
 }
 
+TaylorModel TaylorModel::derivative(std::size_t v) const {
+  if (!space_) return TaylorModel(0.0);
+  const MonomialSpace& sp = *space_;
+  if (v >= sp.variables()) throw std::invalid_argument("TaylorModel::derivative: variable");
+  std::vector<Interval> out(sp.size(), Interval(0.0));
+  for (std::size_t m = 0; m < sp.size(); ++m) {
+    const std::size_t up = sp.product(m, sp.variable(v));
+    if (up == MonomialSpace::npos || coefficients_[up] == 0.0) continue;
+    out[m] = Interval(coefficients_[up]) * Interval(static_cast<double>(sp.exponent(up, v)));
+  }
+  return from_intervals(space_, out, Interval(0.0));
+}
+
+TaylorModel TaylorModel::bounded_in(const std::vector<std::size_t>& vars,
+                                    const std::vector<Interval>& ranges) const {
+  if (!space_) return *this;
+  const MonomialSpace& sp = *space_;
+  if (ranges.size() != sp.variables()) throw std::invalid_argument("TaylorModel::bounded_in");
+  std::vector<Interval> box(sp.variables(), kUnit);
+  for (std::size_t w : vars) {
+    if (w >= sp.variables()) throw std::invalid_argument("TaylorModel::bounded_in: variable");
+    box[w] = ranges[w];
+  }
+  TaylorModel out = *this;
+  for (std::size_t m = 0; m < sp.size(); ++m) {
+    if (coefficients_[m] == 0.0) continue;
+    const bool in_vars =
+        std::any_of(vars.begin(), vars.end(), [&](std::size_t w) { return sp.exponent(m, w) > 0; });
+    if (!in_vars) continue;
+    out.remainder_ += Interval(coefficients_[m]) * powers_over(sp, m, box);
+    out.coefficients_[m] = 0.0;
+  }
+  return out;
+}
+
 Interval TaylorModel::partial_over(std::size_t v, const std::vector<Interval>& box) const {
   if (!space_) return Interval(0.0);
   const MonomialSpace& sp = *space_;

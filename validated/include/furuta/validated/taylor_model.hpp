@@ -107,6 +107,14 @@ class TaylorModel {
   // (centre -+ 0.5, scale 0.5: its halves), the polynomial re-expanded in the new z_v (its
   // rounding into the remainder; the remainder unchanged). |centre| + |scale| <= 1.
   TaylorModel restricted(std::size_t v, double centre, double scale) const;
+  // The polynomial's partial derivative in z_v, as a model (its rounding in the remainder; this
+  // model's remainder is not differentiated: it is dropped).
+  TaylorModel derivative(std::size_t v) const;
+  // The model with the terms in `vars` bounded into the remainder, z_w in ranges[w] for w in
+  // `vars` (ranges may reach beyond [-1, 1]) and in [-1, 1] otherwise: a model in the other
+  // variables that holds the values for every z_vars in their ranges.
+  TaylorModel bounded_in(const std::vector<std::size_t>& vars,
+                         const std::vector<Interval>& ranges) const;
   // The polynomial's partial derivative in z_v over `box` (each z_w in box[w], which may reach
   // beyond [-1, 1]), term by term.
   Interval partial_over(std::size_t v, const std::vector<Interval>& box) const;
