@@ -340,6 +340,15 @@ BENCHMARK(BM_FurutaTaylorModels)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();
 
+void report_split(benchmark::State& state, const v::TaylorModelSplitResult& r) {
+  state.counters["t_reached"] = r.t_reached;
+  state.counters["pieces"] = static_cast<double>(r.pieces.size());
+  state.counters["runs"] = static_cast<double>(r.runs);
+  state.counters["steps"] = static_cast<double>(r.steps);
+  state.counters["wall_s"] = r.seconds;
+  state.counters["critical_s"] = r.critical_path_seconds;
+}
+
 // (3d) (3c) split where a tube fails (taylor_model_split.hpp), to at most the third argument's
 // pieces, on every core (FURUTA_TM_THREADS to set). The counters name how often each variable was
 // cut (cut_<component>, components of FurutaDynamics) and the q2 ratio at each half second.
@@ -358,11 +367,7 @@ void BM_FurutaTaylorModelsSplit(benchmark::State& state) {
     r = v::integrate_taylor_models_split(system, c.x0, c.options, split);
     benchmark::DoNotOptimize(r);
   }
-  state.counters["t_reached"] = r.t_reached;
-  state.counters["pieces"] = static_cast<double>(r.pieces.size());
-  state.counters["runs"] = static_cast<double>(r.runs);
-  state.counters["steps"] = static_cast<double>(r.steps);
-  state.counters["wall_s"] = r.seconds;
+  report_split(state, r);
   for (std::size_t i = 0; i < r.cuts.size(); ++i) {
     if (r.cuts[i] > 0) state.counters["cut_" + std::to_string(i)] = static_cast<double>(r.cuts[i]);
   }
@@ -380,6 +385,36 @@ void BM_FurutaTaylorModelsSplit(benchmark::State& state) {
 BENCHMARK(BM_FurutaTaylorModelsSplit)
     ->ArgsProduct({{0, 1, 2, 3}, {0}, {16}})
     ->ArgsProduct({{0, 1, 2, 3}, {1}, {4}})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+// (3e) The split Taylor-model flow on the pendulum from a box 30x the benchmark's (+-0.3 in both
+// components, order 3, to 3 s), to at most the first argument's pieces on the second argument's
+// threads: how far splitting carries a tube that fails for want of width, and what the second core
+// gives. `critical_s` is the sum over the cutting tree's generations of their longest run: the wall
+// time with a core per run.
+void BM_PendulumTaylorModelsSplit(benchmark::State& state) {
+  const v::SimplePendulum pendulum;
+  const Box x0{Interval(-2.045, -1.445), Interval(-0.3, 0.3)};
+  v::TaylorModelFlowOptions o;
+  o.integrator.t_end = 3.0;
+  o.integrator.order = 8;
+  o.integrator.tolerance = 1e-10;
+  o.integrator.max_inflation = 1.0;
+  o.integrator.max_width = 2.0 * std::numbers::pi;
+  v::TaylorModelSplitOptions split;
+  split.max_pieces = static_cast<std::size_t>(state.range(0));
+  split.threads = static_cast<int>(state.range(1));
+  v::TaylorModelSplitResult r;
+  for (auto _ : state) {
+    r = v::integrate_taylor_models_split(pendulum, x0, o, split);
+    benchmark::DoNotOptimize(r);
+  }
+  report_split(state, r);
+}
+BENCHMARK(BM_PendulumTaylorModelsSplit)
+    ->ArgsProduct({{1, 8, 32}, {1, 2}})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

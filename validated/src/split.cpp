@@ -2,8 +2,6 @@
 
 #include "furuta/validated/split.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -14,8 +12,8 @@
 #include <stdexcept>
 #include <utility>
 
-#include "furuta/common/tsan.hpp"
 #include "lohner_frame.hpp"
+#include "parallel_runs.hpp"
 
 namespace furuta::validated {
 namespace {
@@ -245,24 +243,13 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
     // Each job's run depends only on the job: the generation's results do not depend on the
     // schedule.
     std::vector<std::shared_ptr<const IntegrationResult>> results(jobs.size());
-    ParallelEdges edges;  // for ThreadSanitizer only (furuta/common/tsan.hpp)
-    edges.start();
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 1),
-                        [&](const tbb::blocked_range<std::size_t>& range) {
-                          edges.body_begins();
-                          for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                            const Job& job = jobs[i];
-                            results[i] = std::make_shared<const IntegrationResult>(
-                                job.parent == nullptr
-                                    ? integrate_tapes(tapes, switches, job.box, options)
-                                    : integrate_sub_box(tapes, switches, job.parent->tube, job.step,
-                                                        job.box, options));
-                          }
-                          edges.body_ends();
-                        });
+    internal::parallel_runs(arena, jobs.size(), [&](std::size_t i) {
+      const Job& job = jobs[i];
+      results[i] = std::make_shared<const IntegrationResult>(
+          job.parent == nullptr
+              ? integrate_tapes(tapes, switches, job.box, options)
+              : integrate_sub_box(tapes, switches, job.parent->tube, job.step, job.box, options));
     });
-    edges.finish();
     std::vector<Job> next;
     for (std::size_t i = 0; i < jobs.size(); ++i) {
       const IntegrationResult& r = *results[i];

@@ -2,8 +2,6 @@
 
 #include "furuta/validated/taylor_model_split.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <Eigen/Dense>
@@ -13,7 +11,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "furuta/common/tsan.hpp"
+#include "parallel_runs.hpp"
 #include "taylor_model_flow_core.hpp"
 
 namespace furuta::validated {
@@ -170,19 +168,11 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
   std::size_t leaves = 1;
   while (!jobs.empty()) {
     std::vector<Run> runs(jobs.size());
-    ParallelEdges edges;  // for ThreadSanitizer only (furuta/common/tsan.hpp)
-    edges.start();
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs.size(), 1),
-                        [&](const tbb::blocked_range<std::size_t>& range) {
-                          edges.body_begins();
-                          for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                            runs[i] = run_job(setup, x0, jobs[i]);
-                          }
-                          edges.body_ends();
-                        });
-    });
-    edges.finish();
+    internal::parallel_runs(arena, jobs.size(),
+                            [&](std::size_t i) { runs[i] = run_job(setup, x0, jobs[i]); });
+    double longest = 0.0;
+    for (const Run& run : runs) longest = std::max(longest, run.result.seconds);
+    out.critical_path_seconds += longest;
     std::vector<Job> next;
     for (std::size_t i = 0; i < jobs.size(); ++i) {
       Run& run = runs[i];

@@ -50,6 +50,9 @@ struct TaylorModelSplitResult {
   std::size_t runs = 0;           // runs (pieces and their ancestors)
   std::size_t steps = 0;          // steps over all runs (shared prefixes counted once)
   double seconds = 0.0;           // wall time
+  // The sum over the cutting tree's generations of their longest run: the wall time with a core
+  // for every run of a generation.
+  double critical_path_seconds = 0.0;
 
   bool ok() const { return status == IntegrationResult::Status::ok; }
   // The hull of the pieces' enclosures at t; empty outside [t_start, t_reached].
