@@ -38,8 +38,9 @@ struct TaylorModelSplitOptions {
 };
 
 struct TaylorModelSplitResult {
-  // Each piece's run from t_start (its ancestors' steps before its cut included), in the order of
-  // the cutting tree ('0' the lower half); paths[i] is pieces[i]'s path.
+  // Each piece's run from t_start (its ancestors' steps before its cut included; its counters,
+  // rejected, shrink_wraps, partial_wraps and seconds, its own run's alone), in the order of the
+  // cutting tree ('0' the lower half); paths[i] is pieces[i]'s path.
   std::vector<TaylorModelFlowResult> pieces;
   std::vector<std::string> paths;
   IntegrationResult::Status status = IntegrationResult::Status::ok;  // ok when all reached t_end
