@@ -15,8 +15,8 @@
 // L's first-order dependence on the parameters does not explain, so C is bounded as a Taylor
 // model in z_theta (the rows' own points in the slots bounded into each entry's remainder). With
 // a constant A, the parameters' +-2 % to +-50 % of the bench box made C pass 1 after 23 steps; with
-// A(z_theta) the parameter part of C stays below 0.2 and the slots' own nonlinear terms, which each
-// wrap multiplies by (1 + delta)^(degree - 1) against the linear ones, are what end it
+// A(z_theta) the parameter part of C is 0.17 when C passes 1, and the slots' own nonlinear terms,
+// which each wrap multiplies by (1 + delta)^(degree - 1) against the linear ones, are what end it
 // (bench/README.md, "Taylor models III").
 
 #include "shrink_wrap.hpp"
@@ -70,7 +70,7 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
   }
   // A(z) = A0 - A0 L1(z) A0, L1(z) the slots' linear coefficients' first-order dependence on the
   // other variables (the parameters): the inverse of L(z) to first order, so that I - A M is left
-  // with only what L(z) does not explain (shrink_wrap.hpp says why A may depend on them).
+  // with only what L(z) does not explain (the file's head says why A may depend on them).
   std::vector<std::size_t> others;
   for (std::size_t w = 0; w < nv; ++w) {
     if (std::find(slots.begin(), slots.end(), w) == slots.end()) others.push_back(w);
@@ -111,12 +111,10 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
   }
   // |A e|, the error in the slots' units, over every value of the other variables.
   std::vector<double> ae(m, 0.0);
-  std::vector<std::vector<double>> a_mag(m, std::vector<double>(m));
   for (std::size_t i = 0; i < m; ++i) {
     Interval s(0.0);
     for (std::size_t k = 0; k < m; ++k) {
-      a_mag[i][k] = am[i][k].bound().mag();
-      s += Interval(a_mag[i][k]) * Interval(e[rows[k]].mag());
+      s += Interval(am[i][k].bound().mag()) * Interval(e[rows[k]].mag());
     }
     ae[i] = s.hi();
     if (!std::isfinite(ae[i])) return out;
