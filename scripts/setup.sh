@@ -28,6 +28,9 @@ packages=(
   clang libclang-rt-14-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the arm64 build (scripts/test_arm64.sh): cross compilers, and qemu-user for its tests; its
+  # libraries are arm64 packages unpacked into a sysroot (scripts/arm64_sysroot.sh)
+  crossbuild-essential-arm64 qemu-user-static
   # benchmarks: the LP bound of the seven-unknown problem (bench/sivia_lp_hull)
   libglpk-dev
 )
@@ -41,9 +44,13 @@ else
   exit 1
 fi
 
+# Installed for this machine's architecture (or for all): an arm64 package of the same name is not
+# the host's.
+native=$(dpkg --print-architecture)
 missing=()
 for p in "${packages[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+  if ! dpkg-query -W -f='${Status} ${Architecture}\n' "$p" 2>/dev/null |
+    grep -qE "^install ok installed ($native|all)$"; then
     missing+=("$p")
   fi
 done

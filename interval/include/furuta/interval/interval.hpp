@@ -102,6 +102,10 @@ class Interval {
 // implementation detail, not API.
 namespace detail {
 
+// The error bound of glibc's sin, cos, asin and acos, in ulps of the computed value, by which
+// their results are widened (interval.cpp; the MPFR tests measure it on each architecture).
+inline constexpr int kLibmErrorUlps = 4;
+
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kMax = std::numeric_limits<double>::max();
 inline constexpr double kMinSubnormal = std::numeric_limits<double>::denorm_min();
@@ -173,15 +177,16 @@ Interval sqr_general(const Interval& x);
 }
 
 // a*b - p exactly, for p = fl(a*b), |a|, |b| <= 2^500 and |p| >= 2^-900 (so that nothing in it
-// overflows or underflows). With FMA in the instruction set (__FMA__: -mfma, -march=haswell or
-// later) it is one fused multiply-add. Without it (the project's default x86-64 build), std::fma is
+// overflows or underflows). With FMA in the instruction set (x86-64 with -mfma or -march=haswell or
+// later; every aarch64) it is one fused multiply-add. Without it (the x86-64 baseline), std::fma is
 // a call into libm, so Dekker's TwoProduct is used instead: Veltkamp's splitting cuts each factor
 // into two halves of at most 26 significant bits, every partial product and partial sum below is
 // then exact (all are multiples of ulp(a) ulp(b) >= |a b| 2^-106 >= 2^-1006, none overflows), and
-// so is the result (Dekker 1971; Boldo 2006 for a formal proof that covers underflow). This code
-// is compiled only for targets without an FMA instruction, so no a*b + c in it can be contracted.
+// so is the result (Dekker 1971; Boldo 2006 for a formal proof that covers underflow). It needs
+// every a*b + c evaluated as written: the project compiles with -ffp-contract=off (CMakeLists.txt),
+// so GCC does not fuse them on an FMA target either.
 [[gnu::always_inline]] inline double mul_residual(double a, double b, double p) {
-#if defined(__FMA__)
+#if defined(__FMA__) || defined(__ARM_FEATURE_FMA)
   return std::fma(a, b, -p);
 #else
   constexpr double kSplit = 0x1p27 + 1;
