@@ -31,8 +31,9 @@ elif ! apt-cache show --no-all-versions liblcm-dev:arm64 >/dev/null 2>&1; then
   "${as_root[@]}" apt-get update -q
 fi
 
-# The package set: the closure apt computes for an empty arm64 system. Its names and versions
-# are the stamp that says whether the root is up to date.
+# The package set: the closure apt computes for an empty arm64 system (its own status file), with
+# the downloads in the build tree (as root, not apt's sandbox user, who may not write there). Its
+# names and versions are the stamp that says whether the root is up to date.
 mkdir -p "$dir/apt/archives/partial" "$dir/apt/cache"
 : >"$dir/apt/status"
 apt_options=(
