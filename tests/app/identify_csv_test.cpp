@@ -96,6 +96,9 @@ class IdentifyCsv : public ::testing::Test {
     options_.csvs = {a_, b_};
     options_.import_spec = spec_;
     options_.output_dir = dir_.path() / "out";
+    // The output-error refinement is what the OutputError* and negative-lag tests are about; the
+    // others test the command around it, and run in a fraction of the time without it.
+    options_.no_output_error = true;
   }
   int run() { return run_identify_command(options_, out_, err_); }
 
@@ -165,6 +168,7 @@ nlohmann::json expect_refined_voltage_rig(const fs::path& output_dir, const std:
 // neither noise nor quantisation, so the sd are tiny, and linear chords shrink the voltage's
 // peaks.)
 TEST_F(IdentifyCsv, OutputErrorRefinesTheVoltageRig) {
+  options_.no_output_error = false;
   options_.validate = c_;
   ASSERT_EQ(run(), 0) << err_.str();
   expect_refined_voltage_rig(options_.output_dir, "the voltage rig's CSV", false);
@@ -175,6 +179,7 @@ TEST_F(IdentifyCsv, OutputErrorRefinesTheVoltageRig) {
 // 5 ms after it was recorded; the refinement comes within the same bounds as on the simulated rig,
 // the truth within 3 of its standard deviations, and finds the lag.
 TEST_F(IdentifyCsv, OutputErrorRecoversAQuantisedLaggedVoltageRig) {
+  options_.no_output_error = false;
   const furuta::testing::CsvEncoders encoders{2000, 4096};
   const auto recorded = [&](const char* name, double phase) {
     return furuta::testing::write_voltage_rig_csv(dir_.path() / name, phase, -5e-3, {}, 10,
@@ -333,6 +338,7 @@ TEST_F(IdentifyCsv, SiviaWithoutErrorBoundsIsRefused) {
 
 // Before: a negative lag was used without a word.
 TEST_F(IdentifyCsv, ANegativeEstimatedInputLagIsAWarning) {
+  options_.no_output_error = false;
   // The volts written 5 ms late: the angles lead the input column.
   a_ = record(dir_.path(), "a.csv", 0.0, 5e-3);
   b_ = record(dir_.path(), "b.csv", 1.3, 5e-3);

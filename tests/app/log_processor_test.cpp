@@ -40,10 +40,10 @@ std::string read_file(const fs::path& path) {
   return text.str();
 }
 
-// A session as `furuta run --sim --virtual-time --label LABEL` makes it.
+// A session as `furuta run --sim --virtual-time --label LABEL --config CONFIG` makes it.
 fs::path session(const fs::path& logs, const std::string& label, std::int64_t seed,
-                 double duration_s) {
-  return furuta::testing::simulated_session_log(logs, label, seed, duration_s);
+                 double duration_s, const fs::path& config) {
+  return furuta::testing::simulated_session_log(logs, label, seed, duration_s, {}, {}, config);
 }
 
 std::vector<std::string> logs_in(const fs::path& dir) {
@@ -74,18 +74,21 @@ std::vector<fs::path> identifications_in(const fs::path& dir) {
 }
 
 // Sessions made once (virtual time), copied into each test's logs directory: four fitted, two
-// held out, and one too short to identify.
+// held out, and one too short to identify. They carry a configuration without the output-error
+// refinement, which takes most of an identification's time (the trigger is under test here; the
+// refinement has tests of its own, and the identify command's tests run it on simulated logs).
 class Trigger : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     made_ = std::make_unique<TempDir>("furuta-trigger-logs");
+    config_ = furuta::testing::rig_config_without_output_error(made_->path());
     for (std::int64_t seed = 1; seed <= 4; ++seed) {
-      fits_.push_back(session(made_->path(), "bang-bang", seed, 6.0));
+      fits_.push_back(session(made_->path(), "bang-bang", seed, 6.0, config_));
     }
     for (std::int64_t seed = 5; seed <= 6; ++seed) {
-      validations_.push_back(session(made_->path(), "validation", seed, 4.0));
+      validations_.push_back(session(made_->path(), "validation", seed, 4.0, config_));
     }
-    too_short_ = session(made_->path(), "bang-bang", 7, 0.1);
+    too_short_ = session(made_->path(), "bang-bang", 7, 0.1, config_);
   }
   static void TearDownTestSuite() {
     fits_.clear();
@@ -114,6 +117,7 @@ class Trigger : public ::testing::Test {
   }
 
   static std::unique_ptr<TempDir> made_;
+  static fs::path config_;
   static std::vector<fs::path> fits_, validations_;
   static fs::path too_short_;
   TempDir dir_;
@@ -121,6 +125,7 @@ class Trigger : public ::testing::Test {
   std::ostringstream out_, err_;
 };
 std::unique_ptr<TempDir> Trigger::made_;
+fs::path Trigger::config_;
 std::vector<fs::path> Trigger::fits_, Trigger::validations_;
 fs::path Trigger::too_short_;
 
@@ -302,7 +307,7 @@ TEST_F(Trigger, ABatchWhoseIdentificationFailsGoesToFailedTogether) {
 TEST_F(Trigger, LogsWaitForTheRestOfTheirBatchAndOtherLabelsAreLeftOut) {
   land(fits_[0]);
   land(validations_[0]);
-  const fs::path other = session(dir_.path() / "other", "free-play", 9, 0.5);
+  const fs::path other = session(dir_.path() / "other", "free-play", 9, 0.5, config_);
   land(other);
   ProcessingPass p = pass();
   EXPECT_TRUE(p.identifications.empty());
@@ -338,7 +343,7 @@ TEST_F(Trigger, LogsWaitForTheRestOfTheirBatchAndOtherLabelsAreLeftOut) {
 // The command as the README's example leaves it: a session labelled run1 is not identified, and
 // the command says so per log and in its summary, and exits 0 (nothing failed).
 TEST_F(Trigger, TheCommandSaysWhichLogsItLeftAloneAndWhy) {
-  land(session(dir_.path() / "other", "run1", 9, 0.5));
+  land(session(dir_.path() / "other", "run1", 9, 0.5, config_));
   land(fits_[0]);
   ProcessLogsOptions command;
   command.logs_dir = options_.logs_dir;
