@@ -18,7 +18,7 @@ constexpr ProfileKind kAllProfiles[] = {ProfileKind::bang_bang, ProfileKind::fre
                                         ProfileKind::chirp,     ProfileKind::multisine};
 
 // Shortest round-trip form, so a value just above a limit never prints as the limit itself.
-std::string show(double value) {
+std::string shortest_text(double value) {
   char buffer[64];
   const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
   return std::string(buffer, result.ptr);
@@ -26,7 +26,7 @@ std::string show(double value) {
 
 // A string from the wire, made safe to echo into a status reply or a log line: bounded, and every
 // byte outside printable ASCII escaped.
-std::string quoted(std::string_view text) {
+std::string printable_quoted(std::string_view text) {
   constexpr std::size_t kMaxShown = 40;
   std::string out = "\"";
   for (std::size_t i = 0; i < text.size() && i < kMaxShown; ++i) {
@@ -56,9 +56,10 @@ std::string known_profiles() {
 // "" when value is a finite number in (0, limit].
 std::string check_positive_up_to(std::string_view field, double value, double limit) {
   const std::string name(field);
-  if (!std::isfinite(value)) return name + ": " + show(value) + " is not a finite number";
-  if (!(value > 0.0)) return name + ": " + show(value) + " is not above 0";
-  if (!(value <= limit)) return name + ": " + show(value) + " above the limit " + show(limit);
+  if (!std::isfinite(value)) return name + ": " + shortest_text(value) + " is not a finite number";
+  if (!(value > 0.0)) return name + ": " + shortest_text(value) + " is not above 0";
+  if (!(value <= limit))
+    return name + ": " + shortest_text(value) + " above the limit " + shortest_text(limit);
   return {};
 }
 
@@ -74,7 +75,7 @@ bool allowed_in_label(char c) {
 
 std::string check_start_session(const rig_command_t& command, const CommandLimits& limits) {
   if (!parse_profile_kind(command.profile)) {
-    return "profile: " + quoted(command.profile) + " is not one of " + known_profiles();
+    return "profile: " + printable_quoted(command.profile) + " is not one of " + known_profiles();
   }
   if (auto problem =
           check_positive_up_to("amplitude_duty", command.amplitude_duty, amplitude_limit(limits));
@@ -94,7 +95,7 @@ std::string check_start_session(const rig_command_t& command, const CommandLimit
     if (!allowed_in_label(command.label[i])) {
       char byte[8];
       std::snprintf(byte, sizeof byte, "0x%02x", static_cast<unsigned char>(command.label[i]));
-      return "label: " + quoted(command.label) + " has " + byte + " at position " +
+      return "label: " + printable_quoted(command.label) + " has " + byte + " at position " +
              std::to_string(i) +
              "; only letters, digits, '-', '_', '.' and ' ' are allowed (the label becomes part "
              "of a file name)";
@@ -188,8 +189,8 @@ CommandDecision CommandValidator::validate(const rig_command_t& command, std::in
 ExcitationSpec spec_from_command(const rig_command_t& command, const ExcitationSpec& defaults) {
   const auto kind = parse_profile_kind(command.profile);
   if (!kind) {
-    throw std::invalid_argument("profile: " + quoted(command.profile) + " is not one of " +
-                                known_profiles());
+    throw std::invalid_argument("profile: " + printable_quoted(command.profile) +
+                                " is not one of " + known_profiles());
   }
   if (command.seed < 0) {
     throw std::invalid_argument("seed: " + std::to_string(command.seed) +
@@ -214,8 +215,8 @@ std::string check_spec_limits(const ExcitationSpec& spec, const CommandLimits& l
     return problem;
   }
   if (spec.kind == ProfileKind::bang_bang && !(spec.arm_switch_rad <= limits.max_arm_switch_rad)) {
-    return "arm_switch_rad: " + show(spec.arm_switch_rad) + " above the limit " +
-           show(limits.max_arm_switch_rad);
+    return "arm_switch_rad: " + shortest_text(spec.arm_switch_rad) + " above the limit " +
+           shortest_text(limits.max_arm_switch_rad);
   }
   return {};
 }

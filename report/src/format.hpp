@@ -4,12 +4,16 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <numbers>
 #include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
 
 namespace furuta::report {
+
+// The figures and tables show the pendulum's angle in degrees.
+inline constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // std::scientific with `digits` decimals ("nan" and "inf" as the stream writes them).
 inline std::string sci(double v, int digits) {

@@ -3,7 +3,6 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
-#include <numbers>
 #include <sstream>
 
 #include "format.hpp"
@@ -13,10 +12,6 @@
 #include "furuta/report/tables.hpp"
 
 namespace furuta::report {
-
-namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-}  // namespace
 
 std::string svg_scenario(const validated::ScenarioResult& r) {
   const double width = 860, height = 440;

@@ -3,16 +3,11 @@
 
 #include <cmath>
 #include <iomanip>
-#include <numbers>
 #include <sstream>
 
 #include "format.hpp"
 
 namespace furuta::report {
-
-namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-}  // namespace
 
 std::string scenario_label(const validated::Scenario& s) {
   if (s.number >= 1 && s.number <= 26) {

@@ -20,7 +20,7 @@
 #include "temp_dir.hpp"
 #include "voltage_rig_csv.hpp"
 
-namespace furuta::app {
+namespace furuta::app::identify_physical_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -177,4 +177,4 @@ TEST_F(IdentifyPhysical, InputSignFlipped) {
 }
 
 }  // namespace
-}  // namespace furuta::app
+}  // namespace furuta::app::identify_physical_test

@@ -15,7 +15,7 @@
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
-namespace furuta::app {
+namespace furuta::app::log_commands_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -262,4 +262,4 @@ TEST_F(LogCommands, IdentifyRefusesASessionTooShortNamingTheLogAndTheLengthNeede
 }
 
 }  // namespace
-}  // namespace furuta::app
+}  // namespace furuta::app::log_commands_test

@@ -25,7 +25,7 @@
 
 extern char** environ;
 
-namespace furuta::app {
+namespace furuta::app::log_processor_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -507,4 +507,4 @@ TEST_F(Trigger, WatchingIdentifiesLogsAsTheyLand) {
 }
 
 }  // namespace
-}  // namespace furuta::app
+}  // namespace furuta::app::log_processor_test

@@ -8,7 +8,7 @@
 #include "furuta/daemon/excitation.hpp"
 #include "furuta/daemon/safety.hpp"
 
-namespace furuta::daemon {
+namespace furuta::daemon::command_validator_test {
 namespace {
 
 using furuta::rig_command_t;
@@ -419,4 +419,4 @@ TEST(CheckSpecLimits, NamesTheFieldBeyondTheCommandLimits) {
 }
 
 }  // namespace
-}  // namespace furuta::daemon
+}  // namespace furuta::daemon::command_validator_test

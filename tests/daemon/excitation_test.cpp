@@ -15,7 +15,7 @@
 
 #include "allocation_counter.hpp"
 
-namespace furuta::daemon {
+namespace furuta::daemon::excitation_test {
 namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
@@ -679,4 +679,4 @@ TEST(Excitation, DutyDoesNotAllocate) {
 }
 
 }  // namespace
-}  // namespace furuta::daemon
+}  // namespace furuta::daemon::excitation_test

@@ -19,7 +19,7 @@
 #include "furuta/firmware_bridge/usb_backends.hpp"
 #include "furuta/firmware_bridge/usb_device.hpp"
 
-namespace furuta::bridge {
+namespace furuta::bridge::usb_transport_test {
 namespace {
 
 using std::chrono::milliseconds;
@@ -267,4 +267,4 @@ TEST(UsbDiscovery, ListsTheSimulatedBoardsWithTheVendorsFirmwareVersions) {
 }
 
 }  // namespace
-}  // namespace furuta::bridge
+}  // namespace furuta::bridge::usb_transport_test

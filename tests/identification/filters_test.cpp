@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-namespace furuta::identification {
+namespace furuta::identification::filters_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -561,4 +561,4 @@ TEST(FilterChainTest, ACubicDifferentiatesToItsDerivativeInside) {
 }
 
 }  // namespace
-}  // namespace furuta::identification
+}  // namespace furuta::identification::filters_test

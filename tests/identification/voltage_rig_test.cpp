@@ -22,7 +22,7 @@
 #include "furuta/model/model.hpp"
 #include "temp_dir.hpp"
 
-namespace furuta::identification {
+namespace furuta::identification::voltage_rig_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -216,4 +216,4 @@ TEST(VoltageRig, WithoutTheMotorTheVoltageCannotBecomeATorque) {
 }
 
 }  // namespace
-}  // namespace furuta::identification
+}  // namespace furuta::identification::voltage_rig_test

@@ -24,7 +24,7 @@
 #include "furuta/interval/interval.hpp"
 #include "interval_reference.hpp"
 
-namespace furuta::interval {
+namespace furuta::interval::interval_fast_test {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -419,4 +419,4 @@ TEST(IntervalFast, FiniteBoundsAreTheExactValuesRoundedOutward) {
 }
 
 }  // namespace
-}  // namespace furuta::interval
+}  // namespace furuta::interval::interval_fast_test

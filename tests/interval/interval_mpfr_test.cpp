@@ -28,7 +28,7 @@
 #include "furuta/interval/interval.hpp"
 #include "mpfr_oracle.hpp"
 
-namespace furuta::interval {
+namespace furuta::interval::interval_mpfr_test {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -769,4 +769,4 @@ TEST(IntervalMpfr, LibmIsWithinTheErrorBoundTheEnclosuresWiden) {
 }
 
 }  // namespace
-}  // namespace furuta::interval
+}  // namespace furuta::interval::interval_mpfr_test

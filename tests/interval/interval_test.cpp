@@ -14,7 +14,7 @@
 #include <sstream>
 #include <string>
 
-namespace furuta::interval {
+namespace furuta::interval::interval_test {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -711,4 +711,4 @@ TEST(IntervalBackward, EmptyInputsGiveEmpty) {
 }
 
 }  // namespace
-}  // namespace furuta::interval
+}  // namespace furuta::interval::interval_test

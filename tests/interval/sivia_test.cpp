@@ -17,7 +17,7 @@
 #include <thread>
 #include <vector>
 
-namespace furuta::interval {
+namespace furuta::interval::sivia_test {
 namespace {
 
 const Interval kRing(1.0, 4.0);
@@ -549,4 +549,4 @@ TEST(Sivia, ExceptionFromTheTestPropagates) {
 }
 
 }  // namespace
-}  // namespace furuta::interval
+}  // namespace furuta::interval::sivia_test

@@ -20,7 +20,7 @@
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
-namespace furuta::report {
+namespace furuta::report::report_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -541,4 +541,4 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
 }
 
 }  // namespace
-}  // namespace furuta::report
+}  // namespace furuta::report::report_test

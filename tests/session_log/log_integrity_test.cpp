@@ -8,7 +8,7 @@
 
 #include "test_support.hpp"
 
-namespace furuta::session_log {
+namespace furuta::session_log::log_integrity_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -145,4 +145,4 @@ TEST(LogIntegrity, DamageCutsTheRunsEvenWhenNoSampleIsLost) {
 }
 
 }  // namespace
-}  // namespace furuta::session_log
+}  // namespace furuta::session_log::log_integrity_test

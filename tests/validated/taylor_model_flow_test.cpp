@@ -14,7 +14,7 @@
 #include "furuta/validated/ode.hpp"
 #include "reference.hpp"
 
-namespace furuta::validated {
+namespace furuta::validated::taylor_model_flow_test {
 namespace {
 
 using testing::Point;
@@ -127,4 +127,4 @@ TEST(TaylorModelFlow, FurutaWithIntervalParametersIsSound) {
 }
 
 }  // namespace
-}  // namespace furuta::validated
+}  // namespace furuta::validated::taylor_model_flow_test

@@ -20,7 +20,7 @@ namespace {
 using internal::TaylorModelFlowState;
 
 // A piece to run: the state it starts from and the steps before it (its ancestors').
-struct Job {
+struct TaylorModelJob {
   TaylorModelFlowState state;
   std::vector<TaylorModelFlowStep> steps;
   int depth = 0;
@@ -34,7 +34,7 @@ struct Run {
   std::vector<std::pair<std::size_t, TaylorModelFlowState>> wrapped;
 };
 
-Run run_job(const internal::TaylorModelFlowSetup& setup, const Box& x0, const Job& job) {
+Run run_job(const internal::TaylorModelFlowSetup& setup, const Box& x0, const TaylorModelJob& job) {
   const auto started = std::chrono::steady_clock::now();
   Run run;
   run.result.initial = x0;
@@ -164,7 +164,8 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
   TaylorModelSplitResult out;
   out.cuts.assign(setup.n, 0);
   std::vector<std::pair<std::string, TaylorModelFlowResult>> done;
-  std::vector<Job> jobs{Job{internal::initial_flow_state(setup, x0), {}, 0, ""}};
+  std::vector<TaylorModelJob> jobs{
+      TaylorModelJob{internal::initial_flow_state(setup, x0), {}, 0, ""}};
   std::size_t leaves = 1;
   while (!jobs.empty()) {
     std::vector<Run> runs(jobs.size());
@@ -173,10 +174,10 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
     double longest = 0.0;
     for (const Run& run : runs) longest = std::max(longest, run.result.seconds);
     out.critical_path_seconds += longest;
-    std::vector<Job> next;
+    std::vector<TaylorModelJob> next;
     for (std::size_t i = 0; i < jobs.size(); ++i) {
       Run& run = runs[i];
-      Job& job = jobs[i];
+      TaylorModelJob& job = jobs[i];
       ++out.runs;
       out.steps += run.result.steps.size() - job.steps.size();
       if (run.result.ok() || job.depth >= split.max_depth || leaves + 1 > split.max_pieces) {
@@ -201,8 +202,10 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
       ++leaves;
       const std::vector<TaylorModelFlowStep> steps(
           run.result.steps.begin(), run.result.steps.begin() + static_cast<long>(steps_before));
-      next.push_back(Job{restricted(*from, variable, -0.5), steps, job.depth + 1, job.path + "0"});
-      next.push_back(Job{restricted(*from, variable, 0.5), steps, job.depth + 1, job.path + "1"});
+      next.push_back(
+          TaylorModelJob{restricted(*from, variable, -0.5), steps, job.depth + 1, job.path + "0"});
+      next.push_back(
+          TaylorModelJob{restricted(*from, variable, 0.5), steps, job.depth + 1, job.path + "1"});
     }
     jobs = std::move(next);
   }
