@@ -53,7 +53,9 @@ inline std::filesystem::path rig_config_without_output_error(const std::filesyst
   std::string toml = text.str();
   const std::string enabled = "enabled = true";
   const auto section = toml.find("\n[output_error]");
-  const auto at = section == std::string::npos ? section : toml.find("\n" + enabled, section);
+  const auto next = section == std::string::npos ? section : toml.find("\n[", section + 1);
+  auto at = section == std::string::npos ? section : toml.find("\n" + enabled, section);
+  if (at > next) at = std::string::npos;  // another section's
   EXPECT_NE(at, std::string::npos) << "config/rig.toml: no `" << enabled << "` in [output_error]";
   if (at == std::string::npos) return {};
   toml.replace(at + 1, enabled.size(), "enabled = false");
