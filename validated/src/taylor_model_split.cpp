@@ -27,14 +27,38 @@ struct TaylorModelJob {
   std::string path;
 };
 
-// A run of a job: its result (the job's steps and its own) and the wholly wrapped states it
-// passed, each with the number of steps before it.
+// A cut restarts from a state whose error part (p's remainders and B r) is at most this share of
+// p's spread in every weighed component: there p's halves are nearly the halves of the whole set.
+// (Until 27 Nov 2026 the rule was the wholly wrapped states, whose r holds only rounding.) The
+// share was measured (bench/README.md, "Taylor models III"): 0.001 carries the pendulum's wide box
+// to 3 s in 8 pieces, where the wrapped states gave 2.697 s; 0.01-1 restart too late there.
+constexpr double kRestartErrorShare = 1e-3;
+
+bool error_part_is_small(const TaylorModelFlowState& s, const std::vector<bool>& weigh) {
+  for (std::size_t v = 0; v < s.p.size(); ++v) {
+    if (!weigh[v]) continue;
+    const std::vector<double>& c = s.p[v].coefficients();
+    double spread = 0.0;
+    for (std::size_t m = 1; m < c.size(); ++m) spread += std::abs(c[m]);
+    double error = s.p[v].remainder().mag();
+    for (std::size_t j = 0; j < s.r.size(); ++j) {
+      error +=
+          std::abs(s.b(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(j))) * s.r[j].mag();
+    }
+    if (!(error <= kRestartErrorShare * spread)) return false;
+  }
+  return true;
+}
+
+// A run of a job: its result (the job's steps and its own) and the states it passed that a cut
+// may restart from (error_part_is_small), each with the number of steps before it.
 struct Run {
   TaylorModelFlowResult result;
-  std::vector<std::pair<std::size_t, TaylorModelFlowState>> wrapped;
+  std::vector<std::pair<std::size_t, TaylorModelFlowState>> restarts;
 };
 
-Run run_job(const internal::TaylorModelFlowSetup& setup, const Box& x0, const TaylorModelJob& job) {
+Run run_job(const internal::TaylorModelFlowSetup& setup, const Box& x0, const TaylorModelJob& job,
+            const std::vector<bool>& weigh) {
   const auto started = std::chrono::steady_clock::now();
   Run run;
   run.result.initial = x0;
@@ -48,7 +72,8 @@ Run run_job(const internal::TaylorModelFlowSetup& setup, const Box& x0, const Ta
       run.result.reason = std::move(failure->reason);
       break;
     }
-    if (state.wrapped) run.wrapped.emplace_back(run.result.steps.size(), state);
+    if (error_part_is_small(state, weigh))
+      run.restarts.emplace_back(run.result.steps.size(), state);
   }
   run.result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
@@ -170,7 +195,7 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
   while (!jobs.empty()) {
     std::vector<Run> runs(jobs.size());
     internal::parallel_runs(arena, jobs.size(),
-                            [&](std::size_t i) { runs[i] = run_job(setup, x0, jobs[i]); });
+                            [&](std::size_t i) { runs[i] = run_job(setup, x0, jobs[i], weigh); });
     double longest = 0.0;
     for (const Run& run : runs) longest = std::max(longest, run.result.seconds);
     out.critical_path_seconds += longest;
@@ -184,12 +209,12 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
         done.emplace_back(job.path, std::move(run.result));
         continue;
       }
-      // Cut at the last wholly wrapped state early enough, else at the job's start.
+      // Cut at the last state early enough whose error part is small, else at the job's start.
       const double t_failed = run.result.t_reached();
       const double t_latest = t_failed - split.restart_back * (t_failed - job.state.t);
       const TaylorModelFlowState* from = &job.state;
       std::size_t steps_before = job.steps.size();
-      for (auto it = run.wrapped.rbegin(); it != run.wrapped.rend(); ++it) {
+      for (auto it = run.restarts.rbegin(); it != run.restarts.rend(); ++it) {
         if (it->second.t <= t_latest) {
           from = &it->second;
           steps_before = it->first;

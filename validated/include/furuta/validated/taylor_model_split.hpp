@@ -6,13 +6,14 @@
 //   TaylorModelSplitResult r = integrate_taylor_models_split(FurutaDynamics(tau), x0, options, {});
 //   Box at_1s = r.enclosure_at(1.0);  // the hull over the pieces
 //
-// A failed piece is cut at one of its own earlier states, the last whose error part had been
-// wholly wrapped into the polynomial (there the halves of p are the halves of the whole set)
-// at or before `restart_back` of the way back from the failure to the piece's start; else at the
-// piece's start. The variable cut is the one with the largest share of the field's read, moving
-// components' spread in that state's polynomial (each monomial's coefficient shared among its
-// variables by their exponents): after shrink wrapping a start variable stands for the start and
-// the error wrapped into it, so this is the direction the set is widest in now, not at t_start.
+// A failed piece is cut at one of its own earlier states, the last whose error part (p's
+// remainders and the Lohner part B r) is at most 0.1 % of p's spread in every component the field
+// reads (there the halves of p are nearly the halves of the whole set) at or before `restart_back`
+// of the way back from the failure to the piece's start; else at the piece's start. The variable
+// cut is the one with the largest share of the field's read, moving components' spread in that
+// state's polynomial (each monomial's coefficient shared among its variables by their exponents):
+// after shrink wrapping a start variable stands for the start and the error wrapped into it, so
+// this is the direction the set is widest in now, not at t_start.
 //
 // Sound piece by piece: every solution is at each time in the union of the pieces' enclosures
 // (each piece's steps before its cut are its ancestors', which enclose a larger set). Unlike the
@@ -31,8 +32,8 @@ namespace furuta::validated {
 struct TaylorModelSplitOptions {
   std::size_t max_pieces = 16;  // the most pieces the run may end with
   int max_depth = 8;            // the most cuts between x0 and a piece
-  // Where a failed piece is cut: its last wholly wrapped state at or before this fraction of the
-  // way back from the failure to the piece's own start (0: the last one; 1: only the start).
+  // Where a failed piece is cut: its last state with a small error part at or before this fraction
+  // of the way back from the failure to the piece's own start (0: the last one; 1: the start).
   double restart_back = 0.25;
   int threads = 0;  // TBB threads (0: every core)
 };
