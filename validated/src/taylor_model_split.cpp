@@ -34,18 +34,24 @@ struct TaylorModelJob {
 // to 3 s in 8 pieces, where the wrapped states gave 2.697 s; 0.01-1 restart too late there.
 constexpr double kRestartErrorShare = 1e-3;
 
+// The sum of |coefficient| over p's non-constant monomials: its range's radius about the constant
+// term is within it.
+double spread(const TaylorModel& p) {
+  const std::vector<double>& c = p.coefficients();
+  double sum = 0.0;
+  for (std::size_t m = 1; m < c.size(); ++m) sum += std::abs(c[m]);
+  return sum;
+}
+
 bool error_part_is_small(const TaylorModelFlowState& s, const std::vector<bool>& weigh) {
   for (std::size_t v = 0; v < s.p.size(); ++v) {
     if (!weigh[v]) continue;
-    const std::vector<double>& c = s.p[v].coefficients();
-    double spread = 0.0;
-    for (std::size_t m = 1; m < c.size(); ++m) spread += std::abs(c[m]);
     double error = s.p[v].remainder().mag();
     for (std::size_t j = 0; j < s.r.size(); ++j) {
       error +=
           std::abs(s.b(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(j))) * s.r[j].mag();
     }
-    if (!(error <= kRestartErrorShare * spread)) return false;
+    if (!(error <= kRestartErrorShare * spread(s.p[v]))) return false;
   }
   return true;
 }
@@ -91,12 +97,11 @@ std::size_t widest_variable(const std::vector<TaylorModel>& p, const std::vector
   for (std::size_t v = 0; v < p.size(); ++v) {
     if (!weigh[v]) continue;
     const std::vector<double>& c = p[v].coefficients();
-    double spread = 0.0;
-    for (std::size_t m = 1; m < space.size(); ++m) spread += std::abs(c[m]);
-    if (!(spread > 0.0)) continue;
+    const double total = spread(p[v]);
+    if (!(total > 0.0)) continue;
     for (std::size_t m = 1; m < space.size(); ++m) {
       if (c[m] == 0.0) continue;
-      const double part = std::abs(c[m]) / (spread * space.degree(m));
+      const double part = std::abs(c[m]) / (total * space.degree(m));
       for (std::size_t i = 0; i < n; ++i) share[i] += part * space.exponent(m, i);
     }
   }
