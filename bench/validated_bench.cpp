@@ -6,7 +6,8 @@
 //   build/hB/bench/validated_bench --benchmark_counters_tabular=true
 //
 // Environment: FURUTA_SPLIT_PIECES (cap on pieces, default 16), FURUTA_FV1_REL / FURUTA_FV2_REL /
-// FURUTA_MU_REL (the interval parameters' relative half-widths, default 0.1 / 0.5 / 0.02).
+// FURUTA_MU_REL (the interval parameters' relative half-widths, default 0.1 / 0.5 / 0.02);
+// FURUTA_TM_ORDER (the Taylor-model benchmarks' order in z, default 3).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -306,6 +307,7 @@ TaylorModelCase taylor_model_case(const Scenario& s, std::int64_t decades) {
   // The Lagrange remainder's target: the models' truncation is far above it (1e-9 to 1e-3 a
   // step), and 1e-10 or 1e-6 reach the same times.
   c.options.integrator.tolerance = 1e-8;
+  c.options.space_order = static_cast<int>(env_or("FURUTA_TM_ORDER", c.options.space_order));
   c.options.integrator.max_width = 2.0 * std::numbers::pi;
   c.options.shrink_wrap_max_delta = env_or("FURUTA_SHRINK_WRAP", 1.0);
   c.options.wrap_without_collapsed = env_or("FURUTA_WRAP_WITHOUT_COLLAPSED", 1.0) != 0.0;

@@ -31,19 +31,13 @@ namespace {
 
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 
-// One attempt; `kept` (an index into slots, or kNone) names a slot that is not widened: its
-// column in L and M is the unit vector of its row times `scale`, an unknown c in [-delta, delta]
-// whose part, scale c, stays in the error part on that row.
-ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
-                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                        double max_delta, std::size_t kept, std::size_t* worst) {
-  ShrinkWrap out;
-  const std::size_t m = rows.size();
-  if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
+// The slots' linear coefficients in the rows, L; the column of slot `kept` (when not kNone) is
+// the unit vector of its row times `scale`.
+Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector<std::size_t>& rows,
+                            const std::vector<std::size_t>& slots, std::size_t kept, double scale) {
   const MonomialSpace& space = *p.front().space();
-  const std::size_t nv = space.variables();
+  const std::size_t m = rows.size();
   const auto em = static_cast<Eigen::Index>(m);
-  const double scale = kept == kNone ? 0.0 : std::max(e[rows[kept]].mag(), 1e-300);
   Eigen::MatrixXd l(em, em);
   for (std::size_t i = 0; i < m; ++i) {
     for (std::size_t j = 0; j < m; ++j) {
@@ -51,23 +45,28 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
           j == kept ? (i == j ? scale : 0.0) : p[rows[i]].coefficient(space.variable(slots[j]));
     }
   }
-  const Eigen::MatrixXd a = l.fullPivLu().inverse();
+  return l;
+}
+
+// One attempt; `kept` (an index into slots, or kNone) names a slot that is not widened: its
+// column in L and M is the unit vector of its row times `scale`, an unknown c in [-delta, delta]
+// whose part, scale c, stays in the error part on that row.
+ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
+                        double max_delta, std::size_t kept) {
+  ShrinkWrap out;
+  const std::size_t m = rows.size();
+  if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
+  const MonomialSpace& space = *p.front().space();
+  const std::size_t nv = space.variables();
+  const auto em = static_cast<Eigen::Index>(m);
+  const double scale = kept == kNone ? 0.0 : std::max(e[rows[kept]].mag(), 1e-300);
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, kept, scale));
+  // A numerically singular L (the slots' columns dependent: after the arm's velocity has
+  // relaxed, the four start columns lie in the three slow directions) has no useful inverse.
+  if (!lu.isInvertible()) return out;
+  const Eigen::MatrixXd a = lu.inverse();
   if (!a.allFinite()) return out;
-  if (worst != nullptr) {
-    // The slot behind A's largest row when its column has collapsed (8x shorter than the
-    // longest): the one L can least do without.
-    double largest = -1.0;
-    std::size_t i_largest = 0;
-    for (std::size_t i = 0; i < m; ++i) {
-      const double row = a.row(static_cast<Eigen::Index>(i)).cwiseAbs().sum();
-      if (row > largest) {
-        largest = row;
-        i_largest = i;
-      }
-    }
-    const auto column = static_cast<Eigen::Index>(i_largest);
-    if (8.0 * l.col(column).norm() <= l.colwise().norm().maxCoeff()) *worst = i_largest;
-  }
   // A(z) = A0 - A0 L1(z) A0, L1(z) the slots' linear coefficients' first-order dependence on the
   // other variables (the parameters): the inverse of L(z) to first order, so that I - A M is left
   // with only what L(z) does not explain (the file's head says why A may depend on them).
@@ -179,15 +178,48 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
   return out;
 }
 
+// The slots to leave out, best first: those whose leaving out gives an invertible L whose inverse
+// needs the least widening, max over the other slots of |L^-1| |e| (a first estimate of delta).
+std::vector<std::size_t> slots_to_leave_out(const std::vector<TaylorModel>& p,
+                                            const std::vector<Interval>& e,
+                                            const std::vector<std::size_t>& rows,
+                                            const std::vector<std::size_t>& slots) {
+  const std::size_t m = rows.size();
+  Eigen::VectorXd e_mag(static_cast<Eigen::Index>(m));
+  for (std::size_t i = 0; i < m; ++i) e_mag(static_cast<Eigen::Index>(i)) = e[rows[i]].mag();
+  std::vector<std::pair<double, std::size_t>> ranked;
+  for (std::size_t j = 0; j < m; ++j) {
+    const double scale = std::max(e[rows[j]].mag(), 1e-300);
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, j, scale));
+    if (!lu.isInvertible()) continue;
+    const Eigen::VectorXd ae = lu.inverse().cwiseAbs() * e_mag;
+    double widening = 0.0;
+    for (std::size_t i = 0; i < m; ++i) {
+      if (i != j) widening = std::max(widening, ae(static_cast<Eigen::Index>(i)));
+    }
+    if (std::isfinite(widening)) ranked.emplace_back(widening, j);
+  }
+  std::sort(ranked.begin(), ranked.end());
+  std::vector<std::size_t> out;
+  for (const auto& [widening, j] : ranked) out.push_back(j);
+  return out;
+}
+
 }  // namespace
 
 ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                       double max_delta, bool leave_out_collapsed) {
-  std::size_t worst = kNone;
-  ShrinkWrap out = attempt_wrap(p, e, rows, slots, max_delta, kNone, &worst);
-  if (out.done || !leave_out_collapsed || worst == kNone || rows.size() < 2) return out;
-  return attempt_wrap(p, e, rows, slots, max_delta, worst, nullptr);
+                       double max_delta, bool leave_out_slot) {
+  ShrinkWrap out = attempt_wrap(p, e, rows, slots, max_delta, kNone);
+  if (out.done || !leave_out_slot || rows.size() < 2 || slots.size() != rows.size()) {
+    return out;
+  }
+  const std::vector<std::size_t> candidates = slots_to_leave_out(p, e, rows, slots);
+  for (std::size_t c = 0; c < std::min<std::size_t>(candidates.size(), 2); ++c) {
+    out = attempt_wrap(p, e, rows, slots, max_delta, candidates[c]);
+    if (out.done) return out;
+  }
+  return out;
 }
 
 }  // namespace furuta::validated::internal

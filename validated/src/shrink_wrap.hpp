@@ -27,13 +27,15 @@ struct ShrinkWrap {
 // A ~ L^-1 (L the slots' linear coefficients in the rows), G(z') = z' - A (p(z') - p(z) - e)
 // maps z + [-delta, delta] into itself when |I - A M| delta + |A e| < delta, M the slots'
 // derivatives over the widened box; a fixed point solves p(z') = p(z) + e (shrink_wrap.cpp says
-// why). When that fails, `leave_out_collapsed` is set and the slot behind A's largest row has a
-// collapsed column (8x shorter than the longest: the arm's damped velocity, decaying at 227 /s),
-// once more with that slot left out: its column
-// replaced by its row's unit vector, whose part stays in the error part. Nothing is done
-// (done = false) when no delta <= max_delta passes; p is rescaled in place when done.
+// why). When that fails and `leave_out_slot` is set, once more with one slot left out (its column
+// replaced by its row's unit vector, whose part stays in the error part): the slot whose leaving
+// out needs the least widening, then the next. The slot to leave out is the one whose column has
+// become dependent on the others: the Furuta arm's velocity, which decays at 150-230 /s and leaves
+// its start's influence in the pendulum's slow directions, so that the four start columns span
+// three; neither short nor long decides it. Nothing is done (done = false) when no delta <=
+// max_delta passes; p is rescaled in place when done.
 ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                       double max_delta, bool leave_out_collapsed);
+                       double max_delta, bool leave_out_slot);
 
 }  // namespace furuta::validated::internal

@@ -35,11 +35,12 @@ struct TaylorModelFlowOptions {
   // Shrink wrapping after each step when the start variables need widening by at most this
   // (0: never): the error part goes into the polynomial (shrink_wrap.hpp).
   double shrink_wrap_max_delta = 1.0;
-  // When the whole error part cannot be wrapped and a start variable's column has collapsed
-  // (decayed 8x below the longest), wrap the rest and keep the error along that variable's own
-  // component in the error part. For a stiff, damped direction along a component (the Furuta
-  // arm's velocity: a tube 10x narrower than the bench box reaches 1.2 s instead of 1.0 s); the
-  // pendulum's tube is shorter with it (bench/README.md, "Taylor models II").
+  // When the whole error part cannot be wrapped, wrap it with one start variable left out (the
+  // one whose column has collapsed onto the others, found as the one whose leaving out needs the
+  // least widening) and keep the error along that variable's own component in the error part.
+  // For a stiff, damped direction (the Furuta arm's velocity, whose start column ends in the
+  // pendulum's slow directions: a tube 10x narrower than the bench box reaches 1.9-4 s instead
+  // of 0.97-1.4 s); the pendulum's tube is shorter with it (bench/README.md, "Taylor models IV").
   bool wrap_without_collapsed = false;
 };
 
@@ -59,7 +60,7 @@ struct TaylorModelFlowResult {
   std::string reason;  // why it ended early
   std::size_t rejected = 0;
   std::size_t shrink_wraps = 0;   // steps whose error part was wrapped into the polynomial
-  std::size_t partial_wraps = 0;  // of them, with a collapsed start variable left out
+  std::size_t partial_wraps = 0;  // of them, with a start variable left out
   double seconds = 0.0;
 
   bool ok() const { return status == IntegrationResult::Status::ok; }

@@ -1,0 +1,150 @@
+// Shrink wrapping (validated/src/shrink_wrap.hpp, internal to the library: a white-box test) when
+// the start variables' columns have become dependent, as the Furuta arm's are once its velocity
+// has relaxed: four start columns in three slow directions. The wrap must leave out the dependent
+// slot (whatever its length), and what it returns must hold p(z) + e for every z and e.
+#include "shrink_wrap.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+#include <memory>
+#include <random>
+#include <vector>
+
+namespace furuta::validated::internal {
+namespace {
+
+using interval::Interval;
+
+constexpr std::size_t kSlots = 4;      // q1, dq1, q2, dq2
+constexpr std::size_t kVariables = 5;  // the four start variables and one parameter
+
+// p_i(z) = c_i + sum_j L_ij z_j + a parameter term + small quadratic terms, with L's dq1 column
+// 0.5 (q2 column) + 0.7 (dq2 column) + `off` (dq1 unit vector): dependent for off = 0.
+struct Case {
+  std::shared_ptr<const MonomialSpace> space = std::make_shared<const MonomialSpace>(kVariables, 3);
+  Eigen::Matrix4d l;
+  std::vector<TaylorModel> p;
+
+  explicit Case(double off) {
+    const Eigen::Vector4d q1(1e-3, 0.0, 0.0, 0.0);
+    const Eigen::Vector4d q2(0.0, 3e-4, 1e-3, 5e-4);
+    const Eigen::Vector4d dq2(0.0, -2e-4, 1e-4, 1e-3);
+    l.col(0) = q1;
+    l.col(2) = q2;
+    l.col(3) = dq2;
+    l.col(1) = 0.5 * q2 + 0.7 * dq2 + Eigen::Vector4d(0.0, off, 0.0, 0.0);
+    const std::array<double, kSlots> centre{0.1, -0.2, -1.7, 0.3};
+    auto z = [&](std::size_t v) { return TaylorModel::variable(space, v, Interval(-1.0, 1.0)); };
+    for (std::size_t i = 0; i < kSlots; ++i) {
+      TaylorModel row(space, Interval(centre[i]));
+      for (std::size_t j = 0; j < kSlots; ++j) row += z(j) * Interval(l(i, j));
+      if (i > 0)
+        row += z(4) * Interval(2e-3 * static_cast<double>(i)) + z(2) * z(4) * Interval(1e-5);
+      if (i == 2) row += z(2) * z(3) * Interval(2e-6);
+      p.push_back(row.polynomial());
+    }
+  }
+};
+
+const std::vector<std::size_t> kRows{0, 1, 2, 3};
+const std::vector<Interval> kError{Interval(-2e-6, 2e-6), Interval(-5e-6, 4e-6),
+                                   Interval(-3e-6, 3e-6), Interval(-1e-6, 2e-6)};
+
+// Newton in double on the slots that were widened and on the left-out row's part c: p_new(w with
+// z's other variables) + rest_mid + c e_kept = p(z) + e. Returns the worst excess of |w| over 1 and
+// of c outside the rest on the kept row (relative), both <= ~0 when sound.
+double worst_excess(const std::vector<TaylorModel>& p, const std::vector<TaylorModel>& wrapped,
+                    const ShrinkWrap& wrap, const std::vector<double>& z,
+                    const std::vector<double>& e) {
+  std::vector<double> target(kSlots);
+  for (std::size_t i = 0; i < kSlots; ++i) target[i] = p[i].evaluate(z).mid() + e[i];
+  std::vector<double> w = z;
+  double c = 0.0;
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    Eigen::Vector4d residual;
+    Eigen::Matrix4d jacobian;
+    for (std::size_t i = 0; i < kSlots; ++i) {
+      const auto ei = static_cast<Eigen::Index>(i);
+      residual(ei) = wrapped[i].evaluate(w).mid() + wrap.rest[i].mid() - target[i];
+      if (i == wrap.kept) residual(ei) += c;
+      for (std::size_t j = 0; j < kSlots; ++j) {
+        const auto ej = static_cast<Eigen::Index>(j);
+        jacobian(ei, ej) =
+            j == wrap.kept ? (i == j ? 1.0 : 0.0) : wrapped[i].derivative(j).evaluate(w).mid();
+      }
+    }
+    const Eigen::Vector4d step = jacobian.fullPivLu().solve(residual);
+    for (std::size_t j = 0; j < kSlots; ++j) {
+      if (j == wrap.kept) {
+        c -= step(static_cast<Eigen::Index>(j));
+      } else {
+        w[j] -= step(static_cast<Eigen::Index>(j));
+      }
+    }
+  }
+  double excess = -1.0;
+  for (std::size_t j = 0; j < kSlots; ++j) {
+    if (j != wrap.kept) excess = std::max(excess, std::abs(w[j]) - 1.0);
+  }
+  if (wrap.kept < kSlots) {
+    const Interval& kept = wrap.rest[wrap.kept];
+    const double half = 0.5 * kept.width();
+    excess = std::max(excess, (std::abs(c) - half) / half);
+  }
+  return excess;
+}
+
+TEST(ShrinkWrap, DependentColumnsAreWrappedWithTheDependentSlotLeftOut) {
+  const Case k(0.0);
+  const std::vector<std::size_t> slots{0, 1, 2, 3};
+  // The whole error part cannot go into four columns that span three directions.
+  std::vector<TaylorModel> unwrapped = k.p;
+  EXPECT_FALSE(shrink_wrap(unwrapped, kError, kRows, slots, 1.0, false).done);
+  // Left out, the dq1 slot: its column is not short (0.5 and 0.7 of the others), only dependent.
+  EXPECT_GT(k.l.col(1).norm(), 0.5 * k.l.col(2).norm());
+  std::vector<TaylorModel> wrapped = k.p;
+  const ShrinkWrap wrap = shrink_wrap(wrapped, kError, kRows, slots, 1.0, true);
+  ASSERT_TRUE(wrap.done);
+  EXPECT_EQ(wrap.kept, 1U);
+  // Sound: every sampled z and every corner of e is reached by widened slots in [-1, 1] and the
+  // kept row's part inside its rest.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double worst = -1.0;
+  for (int sample = 0; sample < 200; ++sample) {
+    std::vector<double> z(kVariables);
+    for (double& v : z) v = u(rng);
+    std::vector<double> e(kSlots);
+    for (std::size_t i = 0; i < kSlots; ++i)
+      e[i] = (sample >> i) & 1 ? kError[i].hi() : kError[i].lo();
+    worst = std::max(worst, worst_excess(k.p, wrapped, wrap, z, e));
+  }
+  EXPECT_LE(worst, 1e-9);
+}
+
+TEST(ShrinkWrap, IndependentColumnsAreWrappedWhole) {
+  const Case k(4e-4);
+  const std::vector<std::size_t> slots{0, 1, 2, 3};
+  std::vector<TaylorModel> wrapped = k.p;
+  const ShrinkWrap wrap = shrink_wrap(wrapped, kError, kRows, slots, 1.0, true);
+  ASSERT_TRUE(wrap.done);
+  EXPECT_EQ(wrap.kept, static_cast<std::size_t>(-1));
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  double worst = -1.0;
+  for (int sample = 0; sample < 200; ++sample) {
+    std::vector<double> z(kVariables);
+    for (double& v : z) v = u(rng);
+    std::vector<double> e(kSlots);
+    for (std::size_t i = 0; i < kSlots; ++i)
+      e[i] = (sample >> i) & 1 ? kError[i].hi() : kError[i].lo();
+    worst = std::max(worst, worst_excess(k.p, wrapped, wrap, z, e));
+  }
+  EXPECT_LE(worst, 1e-9);
+}
+
+}  // namespace
+}  // namespace furuta::validated::internal
