@@ -163,6 +163,12 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
       out.rest.assign(p.size(), Interval(0.0));
       for (std::size_t v = 0; v < p.size(); ++v) {
         TaylorModel q = p[v].rescaled(widen);
+        // Off the rows (the constant components) a remainder stays in p: the error part is
+        // zero there (taylor_model_flow_core.hpp).
+        if (std::find(rows.begin(), rows.end(), v) == rows.end()) {
+          p[v] = std::move(q);
+          continue;
+        }
         out.rest[v] = q.remainder();
         p[v] = q.polynomial();
       }

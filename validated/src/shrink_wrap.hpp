@@ -20,20 +20,20 @@ struct ShrinkWrap {
   std::size_t kept = static_cast<std::size_t>(-1);
 };
 
-// For p (polynomials, no remainder) and the error part e (an interval per component, 0 off
-// `rows`): q with p(q z_s, z_theta) + rest holding p(z) + e for every z and every e in e, where
-// z_s are the variables `slots` (as many as `rows`, p's rows `rows` depend on them linearly
-// through an invertible matrix) and q_i = 1 + delta_i. It is found by Krawczyk's argument: with
-// A ~ L^-1 (L the slots' linear coefficients in the rows), G(z') = z' - A (p(z') - p(z) - e)
-// maps z + [-delta, delta] into itself when |I - A M| delta + |A e| < delta, M the slots'
-// derivatives over the widened box; a fixed point solves p(z') = p(z) + e (shrink_wrap.cpp says
-// why). When that fails and `leave_out_slot` is set, once more with one slot left out (its column
-// replaced by its row's unit vector, whose part stays in the error part): the slot whose leaving
-// out needs the least widening, then the next. The slot to leave out is the one whose column has
-// become dependent on the others: the Furuta arm's velocity, which decays at 150-230 /s and leaves
-// its start's influence in the pendulum's slow directions, so that the four start columns span
-// three; neither short nor long decides it. Nothing is done (done = false) when no delta <=
-// max_delta passes; p is rescaled in place when done.
+// For p (polynomials on `rows`; the other components may keep a remainder, which stays in p) and
+// the error part e (an interval per component, 0 off `rows`): q with p(q z_s, z_theta) + rest
+// holding p(z) + e for every z and every e in e, where z_s are the variables `slots` (as many as
+// `rows`, p's rows `rows` depend on them linearly through an invertible matrix) and q_i = 1 +
+// delta_i. It is found by Krawczyk's argument: with A ~ L^-1 (L the slots' linear coefficients in
+// the rows), G(z') = z' - A (p(z') - p(z) - e) maps z + [-delta, delta] into itself when |I - A M|
+// delta + |A e| < delta, M the slots' derivatives over the widened box; a fixed point solves p(z')
+// = p(z) + e (shrink_wrap.cpp says why). When that fails and `leave_out_slot` is set, once more
+// with one slot left out (its column replaced by its row's unit vector, whose part stays in the
+// error part): the slot whose leaving out needs the least widening, then the next. The slot to
+// leave out is the one whose column has become dependent on the others: the Furuta arm's velocity,
+// which decays at 150-230 /s and leaves its start's influence in the pendulum's slow directions, so
+// that the four start columns span three; neither short nor long decides it. Nothing is done (done
+// = false) when no delta <= max_delta passes; p is rescaled in place when done.
 ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
                        double max_delta, bool leave_out_slot);

@@ -195,8 +195,15 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
       sum = sum * hi + runners.models.coefficient(v, i);
       sum_over = sum_over * s_over + runners.models.coefficient(v, i).bound();
     }
-    rest[v] = sum.remainder() + enclosure.remainder[v];
-    p_next[v] = sum.polynomial();
+    if (state.live.is_live[v]) {
+      rest[v] = sum.remainder() + enclosure.remainder[v];
+      p_next[v] = sum.polynomial();
+    } else {
+      // A constant component keeps its remainder in p (its value does not change, so p's own
+      // remainder holds it at t1): in the error part it would end the confined frame.
+      rest[v] = enclosure.remainder[v];
+      p_next[v] = std::move(sum);
+    }
     over[v] = sum_over + pow(s_over, k + 1) * enclosure.remainder_coefficient[v];
     for (std::size_t w = 0; w < n; ++w) {
       std::tie(j(v, w), j_over(v, w)) = at_and_over<Interval>(

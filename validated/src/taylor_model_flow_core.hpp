@@ -32,7 +32,9 @@ struct TaylorModelFlowSetup {
   std::vector<std::size_t> wrap_slots;  // the start variables the error part may be wrapped into
 };
 
-// The set at time t: every solution is in p(z) + B r for some z in [-1, 1]^n and r in r.
+// The set at time t: every solution is in p(z) + B r for some z in [-1, 1]^n and r in r. p's
+// models are polynomials on the live components; on the constant ones (the carried parameters)
+// they may keep a remainder (a restriction's rounding), and B r is zero there.
 struct TaylorModelFlowState {
   std::vector<TaylorModel> p;
   Matrix b;
