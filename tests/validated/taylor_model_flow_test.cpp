@@ -86,7 +86,7 @@ TEST(TaylorModelFlow, PendulumWideBoxIsSoundAndCarriedFurther) {
 
 // The Furuta model with its seven parameters carried as state (11 variables): +-0.1 % of the
 // truth, and the bench box (mu's +-2 %, fv1 +-10 %, fv2 +-50 %), scenario (a); most steps are
-// shrink-wrapped, some with the arm's velocity left out.
+// shrink-wrapped, some with a start variable (the arm's velocity) left out.
 TEST(TaylorModelFlow, FurutaWithIntervalParametersIsSound) {
   const model::Parameters<double> truth = model::paper_run1();
   const Box state = testing::scenario_a_state();
@@ -116,7 +116,7 @@ TEST(TaylorModelFlow, FurutaWithIntervalParametersIsSound) {
     const Box end = r.enclosure_at(r.t_reached());
     std::printf(
         "[ measured ] Furuta 11-dim %s, Taylor models order 3: %.3f s of %.1f s (%s), %zu "
-        "steps (%zu shrink-wrapped, %zu of them without the arm's velocity), %.2f s wall, q2 "
+        "steps (%zu shrink-wrapped, %zu of them with a start variable left out), %.2f s wall, q2 "
         "width %.3g; doubleton %.3f s; %zu checks, %zu violations\n",
         k.name, r.t_reached(), k.t_end, r.ok() ? "ok" : r.reason.c_str(), r.steps.size(),
         r.shrink_wraps, r.partial_wraps, r.seconds, end[FurutaDynamics::q2].width(), d.tube.t_end(),

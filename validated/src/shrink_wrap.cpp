@@ -27,12 +27,6 @@
 
 namespace furuta::validated::internal {
 
-namespace {
-
-constexpr std::size_t kNone = static_cast<std::size_t>(-1);
-
-// The slots' linear coefficients in the rows, L; the column of slot `kept` (when not kNone) is
-// the unit vector of its row times `scale`.
 Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector<std::size_t>& rows,
                             const std::vector<std::size_t>& slots, std::size_t kept, double scale) {
   const MonomialSpace& space = *p.front().space();
@@ -47,6 +41,10 @@ Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector
   }
   return l;
 }
+
+namespace {
+
+constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 
 // One attempt; `kept` (an index into slots, or kNone) names a slot that is not widened: its
 // column in L and M is the unit vector of its row times `scale`, an unknown c in [-delta, delta]
@@ -217,7 +215,8 @@ ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>&
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
                        double max_delta, bool leave_out_slot) {
   ShrinkWrap out = attempt_wrap(p, e, rows, slots, max_delta, kNone);
-  if (out.done || !leave_out_slot || rows.size() < 2 || slots.size() != rows.size()) {
+  if (out.done || !leave_out_slot || rows.size() < 2 || slots.size() != rows.size() || p.empty() ||
+      !p.front().space()) {
     return out;
   }
   const std::vector<std::size_t> candidates = slots_to_leave_out(p, e, rows, slots);

@@ -3,6 +3,7 @@
 // polynomial by widening its start variables, so that it is carried with the flow's dependence on
 // every variable instead of through an interval Jacobian. Internal to the validated library.
 
+#include <Eigen/Dense>
 #include <cstddef>
 #include <vector>
 
@@ -19,6 +20,13 @@ struct ShrinkWrap {
   // start variable keeps its scale and the error along its own row stays in `rest`.
   std::size_t kept = static_cast<std::size_t>(-1);
 };
+
+// The slots' linear coefficients in the rows, L (entry i, j: p[rows[i]]'s coefficient of
+// z_slots[j]; p's space not null); the column of slot `kept` (unless -1) is its row's unit
+// vector times `scale`.
+Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector<std::size_t>& rows,
+                            const std::vector<std::size_t>& slots,
+                            std::size_t kept = static_cast<std::size_t>(-1), double scale = 0.0);
 
 // For p (polynomials on `rows`; the other components may keep a remainder, which stays in p) and
 // the error part e (an interval per component, 0 off `rows`): q with p(q z_s, z_theta) + rest

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "parallel_runs.hpp"
+#include "shrink_wrap.hpp"
 #include "taylor_model_flow_core.hpp"
 
 namespace furuta::validated {
@@ -122,15 +123,7 @@ std::size_t cut_variable(const std::vector<TaylorModel>& p, const std::vector<bo
   if (m == 0 || slots.size() != m) return widest_variable(p, weigh);
   const MonomialSpace& space = *p.front().space();
   const std::size_t n = space.variables();
-  const auto em = static_cast<Eigen::Index>(m);
-  Eigen::MatrixXd l(em, em);
-  for (std::size_t i = 0; i < m; ++i) {
-    for (std::size_t j = 0; j < m; ++j) {
-      l(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-          p[rows[i]].coefficient(space.variable(slots[j]));
-    }
-  }
-  const Eigen::MatrixXd a = l.fullPivLu().inverse().cwiseAbs();
+  const Eigen::MatrixXd a = internal::linear_part(p, rows, slots).fullPivLu().inverse().cwiseAbs();
   if (!a.allFinite()) return widest_variable(p, weigh);
   std::vector<double> share(n, 0.0);
   for (std::size_t k = 0; k < m; ++k) {
