@@ -66,6 +66,16 @@ TaylorModelFlowOptions pendulum_options() {
   return o;
 }
 
+template <class System>
+TaylorModelSplitResult split_on_two_threads(const System& system, const Box& x0,
+                                            const TaylorModelFlowOptions& o,
+                                            std::size_t max_pieces) {
+  TaylorModelSplitOptions split;
+  split.max_pieces = max_pieces;
+  split.threads = 2;
+  return integrate_taylor_models_split(system, x0, o, split);
+}
+
 // The pendulum from a box 30x the benchmark's: one order-3 tube loses it within 3 s; split into
 // at most 8 pieces it goes further, and every sampled solution stays covered.
 TEST(TaylorModelSplit, PendulumWideBoxIsCoveredAndCarriedFurther) {
@@ -73,10 +83,7 @@ TEST(TaylorModelSplit, PendulumWideBoxIsCoveredAndCarriedFurther) {
   const Box x0{Interval(-2.045, -1.445), Interval(-0.3, 0.3)};
   const TaylorModelFlowOptions o = pendulum_options();
   const TaylorModelFlowResult one = integrate_taylor_models(pendulum, x0, o);
-  TaylorModelSplitOptions split;
-  split.max_pieces = 8;
-  split.threads = 2;
-  const TaylorModelSplitResult r = integrate_taylor_models_split(pendulum, x0, o, split);
+  const TaylorModelSplitResult r = split_on_two_threads(pendulum, x0, o, 8);
   std::mt19937_64 rng(41);
   const testing::SoundnessCount c =
       check_cover(pendulum, r, testing::sample_box<2>(x0, 300, rng), 0.01);
@@ -110,10 +117,7 @@ TEST(TaylorModelSplit, ACutInACarriedParameterKeepsTheHalvesWrapping) {
   TaylorModelFlowOptions o = pendulum_options();
   o.integrator.t_end = 6.0;
   const TaylorModelFlowResult one = integrate_taylor_models(pendulum, x0, o);
-  TaylorModelSplitOptions split;
-  split.max_pieces = 4;
-  split.threads = 2;
-  const TaylorModelSplitResult r = integrate_taylor_models_split(pendulum, x0, o, split);
+  const TaylorModelSplitResult r = split_on_two_threads(pendulum, x0, o, 4);
   std::mt19937_64 rng(43);
   const testing::SoundnessCount c =
       check_cover(pendulum, r, testing::sample_box<3>(x0, 200, rng), 0.01);
