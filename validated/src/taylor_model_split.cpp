@@ -123,7 +123,10 @@ std::size_t cut_variable(const std::vector<TaylorModel>& p, const std::vector<bo
   if (m == 0 || slots.size() != m) return widest_variable(p, weigh);
   const MonomialSpace& space = *p.front().space();
   const std::size_t n = space.variables();
-  const Eigen::MatrixXd a = internal::linear_part(p, rows, slots).fullPivLu().inverse().cwiseAbs();
+  // As in the wrap (shrink_wrap.cpp): a singular L has no useful inverse to weigh the rows by.
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(internal::linear_part(p, rows, slots));
+  if (!lu.isInvertible()) return widest_variable(p, weigh);
+  const Eigen::MatrixXd a = lu.inverse().cwiseAbs();
   if (!a.allFinite()) return widest_variable(p, weigh);
   std::vector<double> share(n, 0.0);
   for (std::size_t k = 0; k < m; ++k) {
