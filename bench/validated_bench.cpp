@@ -7,7 +7,8 @@
 //
 // Environment: FURUTA_SPLIT_PIECES (cap on pieces, default 16), FURUTA_FV1_REL / FURUTA_FV2_REL /
 // FURUTA_MU_REL (the interval parameters' relative half-widths, default 0.1 / 0.5 / 0.02);
-// FURUTA_TM_ORDER (the Taylor-model benchmarks' order in z, default 3).
+// FURUTA_TM_ORDER (the Taylor-model benchmarks' order in z, default 3), FURUTA_WRAP_AT_BASE_POINT
+// (the Furuta Taylor-model benchmarks' wrap_at_base_point, default 1).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -311,6 +312,7 @@ TaylorModelCase taylor_model_case(const Scenario& s, std::int64_t decades) {
   c.options.integrator.max_width = 2.0 * std::numbers::pi;
   c.options.shrink_wrap_max_delta = env_or("FURUTA_SHRINK_WRAP", 1.0);
   c.options.wrap_without_collapsed = env_or("FURUTA_WRAP_WITHOUT_COLLAPSED", 1.0) != 0.0;
+  c.options.wrap_at_base_point = env_or("FURUTA_WRAP_AT_BASE_POINT", 1.0) != 0.0;
   return c;
 }
 

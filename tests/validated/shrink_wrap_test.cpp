@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <random>
 #include <vector>
@@ -24,13 +25,14 @@ constexpr std::size_t kSlots = 4;      // q1, dq1, q2, dq2
 constexpr std::size_t kVariables = 5;  // the four start variables and one parameter
 
 // p_i(z) = c_i + sum_j L_ij z_j + a parameter term + small quadratic terms, with L's dq1 column
-// 0.5 (q2 column) + 0.7 (dq2 column) + `off` (dq1 unit vector): dependent for off = 0.
+// 0.5 (q2 column) + 0.7 (dq2 column) + `off` (dq1 unit vector): dependent for off = 0; the q2 row
+// curved in the slots by `curvature` z_q2 z_dq2.
 struct Case {
   std::shared_ptr<const MonomialSpace> space = std::make_shared<const MonomialSpace>(kVariables, 3);
   Eigen::Matrix4d l;
   std::vector<TaylorModel> p;
 
-  explicit Case(double off) {
+  explicit Case(double off, double curvature = 2e-6) {
     const Eigen::Vector4d q1(1e-3, 0.0, 0.0, 0.0);
     const Eigen::Vector4d q2(0.0, 3e-4, 1e-3, 5e-4);
     const Eigen::Vector4d dq2(0.0, -2e-4, 1e-4, 1e-3);
@@ -45,7 +47,7 @@ struct Case {
       for (std::size_t j = 0; j < kSlots; ++j) row += z(j) * Interval(l(i, j));
       if (i > 0)
         row += z(4) * Interval(2e-3 * static_cast<double>(i)) + z(2) * z(4) * Interval(1e-5);
-      if (i == 2) row += z(2) * z(3) * Interval(2e-6);
+      if (i == 2) row += z(2) * z(3) * Interval(curvature);
       p.push_back(row.polynomial());
     }
   }
@@ -143,6 +145,41 @@ TEST(ShrinkWrap, IndependentColumnsAreWrappedWhole) {
   ASSERT_TRUE(wrap.done);
   EXPECT_EQ(wrap.kept, static_cast<std::size_t>(-1));
   EXPECT_LE(worst_over_samples(k.p, wrapped, wrap, 12), 1e-9);
+}
+
+// The widening of slot j, 1 + delta_j, read from the rescaled linear coefficient of a row.
+double widening(const Case& k, const std::vector<TaylorModel>& wrapped, std::size_t j) {
+  const std::size_t m = k.space->variable(j);
+  return wrapped[2].coefficient(m) / k.p[2].coefficient(m);
+}
+
+// With the preconditioner at the base point (A(z) ~ the slots' derivatives at z, inverted) the
+// wraps hold as well, and widen less than with A over the box: I - A M keeps only the
+// derivatives' change within delta of z, and delta is not raised on rows that already pass.
+TEST(ShrinkWrap, AtTheBasePointTheWrapHoldsAndWidensLess) {
+  const std::vector<std::size_t> slots{0, 1, 2, 3};
+  for (const double off : {0.0, 4e-4}) {
+    for (const double curvature : {2e-6, 2e-4}) {
+      const Case k(off, curvature);
+      std::vector<TaylorModel> over_box = k.p;
+      const ShrinkWrap a = shrink_wrap(over_box, kError, kRows, slots, 1.0, true, false);
+      std::vector<TaylorModel> at_base = k.p;
+      const ShrinkWrap b = shrink_wrap(at_base, kError, kRows, slots, 1.0, true, true);
+      ASSERT_TRUE(b.done) << off << " " << curvature;
+      EXPECT_LE(worst_over_samples(k.p, at_base, b, 13), 1e-9) << off << " " << curvature;
+      if (!a.done) continue;
+      EXPECT_EQ(a.kept, b.kept);
+      for (std::size_t j = 2; j < 4; ++j) {
+        const double wa = widening(k, over_box, j);
+        const double wb = widening(k, at_base, j);
+        std::printf(
+            "[ measured ] off %g, curvature %g, slot %zu: widening %.6f over the box, "
+            "%.6f at the base point\n",
+            off, curvature, j, wa, wb);
+        EXPECT_LT(wb, wa);
+      }
+    }
+  }
 }
 
 }  // namespace

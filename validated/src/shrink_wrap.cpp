@@ -18,12 +18,24 @@
 // A(z_theta) the parameter part of C is 0.17 when C passes 1, and the slots' own nonlinear terms,
 // which each wrap multiplies by (1 + delta)^(degree - 1) against the linear ones, are what end it
 // (bench/README.md, "Taylor models III").
+//
+// A may as well depend on z itself, the slots included (the argument runs for each z and e; the
+// point z' sought is near z, not z). At the base point (attempt_wrap_at_base_point), A(z) is D(z)'s
+// inverse to the models' order, D the rows' derivatives in the slots, by Newton's iteration on
+// models; then I - A M = (I - A D(z)) + A (D(z) - M), and each row of M is D's row at a point of
+// the segment from z to z', within delta of z in the slots and inside W, so |D(z) - M| <= sum_l
+// |dD / dz_l over W| delta_l. C is thus left with D's change within delta of z, where the attempt
+// over the box keeps its change over all of W. The Furuta arm's left-out row, whose error is
+// carried from step to step, needs that: over the box its delta came out 4-15 % above its |A e|
+// each step, and the carried error grew by as much (bench/README.md, "Taylor models V").
 
 #include "shrink_wrap.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
 
 namespace furuta::validated::internal {
 
@@ -45,13 +57,148 @@ Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector
 namespace {
 
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+constexpr int kNewtonIterations = 3;
+constexpr double kDeltaMargin = 0.01;
+constexpr int kDeltaAttempts = 16;
 
-// One attempt; `kept` (an index into slots, or kNone) names a slot that is not widened: its
+using ModelMatrix = std::vector<std::vector<TaylorModel>>;
+
+// I - left right.
+ModelMatrix residual(const ModelMatrix& left, const ModelMatrix& right,
+                     const std::shared_ptr<const MonomialSpace>& space) {
+  const std::size_t m = left.size();
+  ModelMatrix r(m, std::vector<TaylorModel>(m));
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t j = 0; j < m; ++j) {
+      TaylorModel sum(space, Interval(i == j ? 1.0 : 0.0));
+      for (std::size_t k = 0; k < m; ++k) sum -= left[i][k] * right[k][j];
+      r[i][j] = std::move(sum);
+    }
+  }
+  return r;
+}
+
+// A ~ d^-1 by Newton's iteration A <- A + A (I - d A) from a0, each A kept as its polynomial.
+ModelMatrix inverse_model(const ModelMatrix& d, const Eigen::MatrixXd& a0,
+                          const std::shared_ptr<const MonomialSpace>& space) {
+  const std::size_t m = d.size();
+  ModelMatrix am(m, std::vector<TaylorModel>(m));
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t k = 0; k < m; ++k) {
+      am[i][k] = TaylorModel(
+          space, Interval(a0(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k))));
+    }
+  }
+  for (int iteration = 0; iteration < kNewtonIterations; ++iteration) {
+    const ModelMatrix r = residual(d, am, space);
+    ModelMatrix next(m, std::vector<TaylorModel>(m));
+    for (std::size_t i = 0; i < m; ++i) {
+      for (std::size_t j = 0; j < m; ++j) {
+        TaylorModel sum = am[i][j];
+        for (std::size_t k = 0; k < m; ++k) sum += am[i][k] * r[k][j];
+        next[i][j] = sum.polynomial();
+      }
+    }
+    am = std::move(next);
+  }
+  return am;
+}
+
+// Krawczyk's test with the preconditioner am (a polynomial in z): the smallest delta found, each
+// slot's at most max_delta (the kept slot's unbounded), with C delta + a < delta, or nothing.
+std::optional<std::vector<double>> krawczyk_delta(const ModelMatrix& am, const ModelMatrix& d,
+                                                  const std::vector<double>& e_mag,
+                                                  const std::vector<std::size_t>& slots,
+                                                  std::size_t kept, double max_delta) {
+  const std::size_t m = d.size();
+  const auto space = d.front().front().space();
+  const std::size_t nv = space->variables();
+  // |I - A D| and |A| over the unit box, and |A e|, the error in the slots' units.
+  const ModelMatrix r0 = residual(am, d, space);
+  std::vector<std::vector<double>> r0_mag(m, std::vector<double>(m));
+  std::vector<std::vector<double>> a_mag(m, std::vector<double>(m));
+  std::vector<double> ae(m, 0.0);
+  for (std::size_t i = 0; i < m; ++i) {
+    Interval s(0.0);
+    for (std::size_t j = 0; j < m; ++j) {
+      r0_mag[i][j] = r0[i][j].bound().mag();
+      a_mag[i][j] = am[i][j].bound().mag();
+      s += Interval(a_mag[i][j]) * Interval(e_mag[j]);
+    }
+    ae[i] = s.hi();
+    if (!std::isfinite(ae[i])) return std::nullopt;
+  }
+  // delta from a little above |A e|, raised to a little above C delta + a until it holds.
+  std::vector<double> delta = ae;
+  for (double& x : delta) x *= 1.0 + kDeltaMargin;
+  for (int attempt = 0; attempt < kDeltaAttempts; ++attempt) {
+    for (double& x : delta) x = std::max(x, 1e-300);
+    for (std::size_t j = 0; j < m; ++j) {
+      if (j != kept && delta[j] > max_delta) return std::nullopt;
+    }
+    std::vector<Interval> box(nv, Interval(-1.0, 1.0));
+    for (std::size_t j = 0; j < m; ++j) {
+      if (j == kept) continue;
+      const double w = (Interval(1.0) + Interval(delta[j])).hi();
+      box[slots[j]] = Interval(-w, w);
+    }
+    // |D(z) - D(xi)| for xi within delta of z in the slots: the derivatives' slopes in the
+    // slots over the widened box times delta, plus twice D's rounding.
+    std::vector<std::vector<Interval>> dd(m, std::vector<Interval>(m, Interval(0.0)));
+    for (std::size_t k = 0; k < m; ++k) {
+      for (std::size_t j = 0; j < m; ++j) {
+        if (j == kept) continue;
+        Interval sum = Interval(2.0) * Interval(d[k][j].remainder().mag());
+        for (std::size_t l = 0; l < m; ++l) {
+          if (l == kept) continue;
+          sum += Interval(d[k][j].partial_over(slots[l], box).mag()) * Interval(delta[l]);
+        }
+        dd[k][j] = sum;
+      }
+    }
+    // C delta + a, C = |I - A D| + |A| |D - D(xi)|, rounded up.
+    Eigen::MatrixXd c(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
+    std::vector<double> next(m, 0.0);
+    for (std::size_t i = 0; i < m; ++i) {
+      Interval s = Interval(ae[i]);
+      for (std::size_t j = 0; j < m; ++j) {
+        Interval cij = Interval(r0_mag[i][j]);
+        for (std::size_t k = 0; k < m; ++k) cij += Interval(a_mag[i][k]) * dd[k][j];
+        c(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = cij.hi();
+        s += Interval(cij.hi()) * Interval(delta[j]);
+      }
+      next[i] = s.hi();
+    }
+    bool inside = true;
+    for (std::size_t i = 0; i < m; ++i) inside = inside && next[i] < delta[i];
+    if (inside) return delta;
+    // Raise delta towards the fixed point (I - C)^-1 a of this C (C grows with delta, slowly), or
+    // where that has no positive solution, to a little above C delta + a. Only raised: a margin
+    // on every row each round compounds (the kept row's error, carried from step to step, grew
+    // by 5 % a round so).
+    const Eigen::VectorXd a_vec =
+        Eigen::Map<const Eigen::VectorXd>(ae.data(), static_cast<Eigen::Index>(m));
+    const Eigen::VectorXd fixed =
+        (Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m)) - c)
+            .fullPivLu()
+            .solve(a_vec);
+    const bool usable = fixed.allFinite() && (fixed.array() > 0.0).all();
+    for (std::size_t i = 0; i < m; ++i) {
+      const double target = usable ? fixed(static_cast<Eigen::Index>(i)) : next[i];
+      delta[i] = std::max(delta[i], (1.0 + kDeltaMargin) * std::max(target, next[i]));
+    }
+  }
+  return std::nullopt;
+}
+
+// One attempt with A depending on the other variables (the parameters) to first order and M over
+// the widened box; `kept` (an index into slots, or kNone) names a slot that is not widened: its
 // column in L and M is the unit vector of its row times `scale`, an unknown c in [-delta, delta]
 // whose part, scale c, stays in the error part on that row.
-ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
-                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                        double max_delta, std::size_t kept) {
+ShrinkWrap attempt_wrap_over_box(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                                 const std::vector<std::size_t>& rows,
+                                 const std::vector<std::size_t>& slots, double max_delta,
+                                 std::size_t kept) {
   ShrinkWrap out;
   const std::size_t m = rows.size();
   if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
@@ -182,6 +329,76 @@ ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>
   return out;
 }
 
+// One attempt with A depending on every variable, A(z) ~ D(z)^-1, and M - D(z) bounded by the
+// derivatives' slopes times delta (the file's head says why); `kept` (an index into slots, or
+// kNone) names a slot that is not widened: its column in D is the unit vector of its row times
+// `scale`, an unknown c in [-delta, delta] whose part, scale c, stays in the error part on that
+// row.
+ShrinkWrap attempt_wrap_at_base_point(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                                      const std::vector<std::size_t>& rows,
+                                      const std::vector<std::size_t>& slots, double max_delta,
+                                      std::size_t kept) {
+  ShrinkWrap out;
+  const std::size_t m = rows.size();
+  if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
+  const auto space = p.front().space();
+  const std::size_t nv = space->variables();
+  const double scale = kept == kNone ? 0.0 : std::max(e[rows[kept]].mag(), 1e-300);
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, kept, scale));
+  // A numerically singular L (the slots' columns dependent: after the arm's velocity has
+  // relaxed, the four start columns lie in the three slow directions) has no useful inverse.
+  if (!lu.isInvertible()) return out;
+  const Eigen::MatrixXd a0 = lu.inverse();
+  if (!a0.allFinite()) return out;
+  // D(z): the rows' derivatives in the slots, models in every variable (the kept column constant).
+  ModelMatrix d(m, std::vector<TaylorModel>(m));
+  for (std::size_t k = 0; k < m; ++k) {
+    for (std::size_t j = 0; j < m; ++j) {
+      d[k][j] = j == kept ? TaylorModel(space, Interval(k == j ? scale : 0.0))
+                          : p[rows[k]].derivative(slots[j]);
+    }
+  }
+  std::vector<double> e_mag(m);
+  for (std::size_t i = 0; i < m; ++i) e_mag[i] = e[rows[i]].mag();
+  const std::optional<std::vector<double>> delta =
+      krawczyk_delta(inverse_model(d, a0, space), d, e_mag, slots, kept, max_delta);
+  if (!delta) return out;
+  std::vector<double> widen(nv, 1.0);
+  for (std::size_t j = 0; j < m; ++j) {
+    if (j == kept) continue;
+    widen[slots[j]] = (Interval(1.0) + Interval((*delta)[j])).hi();
+  }
+  out.rest.assign(p.size(), Interval(0.0));
+  for (std::size_t v = 0; v < p.size(); ++v) {
+    TaylorModel q = p[v].rescaled(widen);
+    // Off the rows (the constant components) a remainder stays in p: the error part is zero
+    // there (taylor_model_flow_core.hpp).
+    if (std::find(rows.begin(), rows.end(), v) == rows.end()) {
+      p[v] = std::move(q);
+      continue;
+    }
+    out.rest[v] = q.remainder();
+    p[v] = q.polynomial();
+  }
+  if (kept != kNone) {
+    out.rest[rows[kept]] += Interval(scale) * Interval(-(*delta)[kept], (*delta)[kept]);
+    out.kept = kept;
+  }
+  out.done = true;
+  return out;
+}
+
+// The wrap at the base point where it passes (when asked), else over the box.
+ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
+                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
+                        double max_delta, std::size_t kept, bool at_base_point) {
+  if (at_base_point) {
+    ShrinkWrap out = attempt_wrap_at_base_point(p, e, rows, slots, max_delta, kept);
+    if (out.done) return out;
+  }
+  return attempt_wrap_over_box(p, e, rows, slots, max_delta, kept);
+}
+
 // The slots to leave out, best first: those whose leaving out gives an invertible L whose inverse
 // needs the least widening, max over the other slots of |L^-1| |e| (a first estimate of delta).
 std::vector<std::size_t> slots_to_leave_out(const std::vector<TaylorModel>& p,
@@ -213,15 +430,15 @@ std::vector<std::size_t> slots_to_leave_out(const std::vector<TaylorModel>& p,
 
 ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                       double max_delta, bool leave_out_slot) {
-  ShrinkWrap out = attempt_wrap(p, e, rows, slots, max_delta, kNone);
+                       double max_delta, bool leave_out_slot, bool at_base_point) {
+  ShrinkWrap out = attempt_wrap(p, e, rows, slots, max_delta, kNone, at_base_point);
   if (out.done || !leave_out_slot || rows.size() < 2 || slots.size() != rows.size() || p.empty() ||
       !p.front().space()) {
     return out;
   }
   const std::vector<std::size_t> candidates = slots_to_leave_out(p, e, rows, slots);
   for (std::size_t c = 0; c < std::min<std::size_t>(candidates.size(), 2); ++c) {
-    out = attempt_wrap(p, e, rows, slots, max_delta, candidates[c]);
+    out = attempt_wrap(p, e, rows, slots, max_delta, candidates[c], at_base_point);
     if (out.done) return out;
   }
   return out;

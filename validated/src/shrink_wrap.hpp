@@ -42,8 +42,12 @@ Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector
 // which decays at 150-230 /s and leaves its start's influence in the pendulum's slow directions, so
 // that the four start columns span three; neither short nor long decides it. Nothing is done (done
 // = false) when no delta <= max_delta passes; p is rescaled in place when done.
+// With `at_base_point`, each attempt first takes A as a function of every variable, A(z) ~
+// (p's slot derivatives at z)^-1, so that I - A M is left with the derivatives' change within
+// delta of z only, instead of their spread over the whole box; the attempt over the box when it
+// does not pass.
 ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
-                       double max_delta, bool leave_out_slot);
+                       double max_delta, bool leave_out_slot, bool at_base_point = false);
 
 }  // namespace furuta::validated::internal

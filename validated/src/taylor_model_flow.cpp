@@ -245,7 +245,7 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
   if (options.shrink_wrap_max_delta > 0.0) {
     const ShrinkWrap wrap =
         shrink_wrap(p_next, frame.box, live.live, setup.wrap_slots, options.shrink_wrap_max_delta,
-                    options.wrap_without_collapsed);
+                    options.wrap_without_collapsed, options.wrap_at_base_point);
     if (wrap.done) {
       ++result.shrink_wraps;
       result.partial_wraps += wrap.kept < setup.wrap_slots.size();

@@ -42,6 +42,11 @@ struct TaylorModelFlowOptions {
   // pendulum's slow directions: a tube 10x narrower than the bench box reaches 1.9-4 s instead
   // of 0.97-1.4 s); the pendulum's tube is shorter with it (bench/README.md, "Taylor models IV").
   bool wrap_without_collapsed = false;
+  // Shrink wrapping's preconditioner as a function of the whole start point, not only of the
+  // carried parameters (shrink_wrap.hpp): tighter where the start box is narrow against the
+  // parameters' spread (the Furuta tubes: bench/README.md, "Taylor models V"), looser where the
+  // slots' derivatives vary much over the start box (the pendulum with its stiffness carried).
+  bool wrap_at_base_point = false;
 };
 
 struct TaylorModelFlowStep {
