@@ -191,6 +191,50 @@ std::optional<std::vector<double>> krawczyk_delta(const ModelMatrix& am, const M
   return std::nullopt;
 }
 
+// L^-1 (linear_part), or nothing when L is numerically singular: the slots' columns dependent,
+// as after the arm's velocity has relaxed, when the four start columns lie in the three slow
+// directions, and L^-1 is no useful preconditioner.
+std::optional<Eigen::MatrixXd> linear_part_inverse(const std::vector<TaylorModel>& p,
+                                                   const std::vector<std::size_t>& rows,
+                                                   const std::vector<std::size_t>& slots,
+                                                   std::size_t kept, double scale) {
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, kept, scale));
+  if (!lu.isInvertible()) return std::nullopt;
+  Eigen::MatrixXd a = lu.inverse();
+  if (!a.allFinite()) return std::nullopt;
+  return a;
+}
+
+// The wrap that passed with delta: p rescaled in place, p(q z_s, z_theta) with q = 1 + delta off
+// the kept slot, and the new error part (p's rounding; on the kept row, its part scale c).
+ShrinkWrap widened(std::vector<TaylorModel>& p, const std::vector<std::size_t>& rows,
+                   const std::vector<std::size_t>& slots, std::size_t kept, double scale,
+                   const std::vector<double>& delta) {
+  ShrinkWrap out;
+  std::vector<double> widen(p.front().space()->variables(), 1.0);
+  for (std::size_t j = 0; j < slots.size(); ++j) {
+    if (j != kept) widen[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
+  }
+  out.rest.assign(p.size(), Interval(0.0));
+  for (std::size_t v = 0; v < p.size(); ++v) {
+    TaylorModel q = p[v].rescaled(widen);
+    // Off the rows (the constant components) a remainder stays in p: the error part is zero
+    // there (taylor_model_flow_core.hpp).
+    if (std::find(rows.begin(), rows.end(), v) == rows.end()) {
+      p[v] = std::move(q);
+      continue;
+    }
+    out.rest[v] = q.remainder();
+    p[v] = q.polynomial();
+  }
+  if (kept != kNone) {
+    out.rest[rows[kept]] += Interval(scale) * Interval(-delta[kept], delta[kept]);
+    out.kept = kept;
+  }
+  out.done = true;
+  return out;
+}
+
 // One attempt with A depending on the other variables (the parameters) to first order and M over
 // the widened box; `kept` (an index into slots, or kNone) names a slot that is not widened: its
 // column in L and M is the unit vector of its row times `scale`, an unknown c in [-delta, delta]
@@ -201,17 +245,13 @@ ShrinkWrap attempt_wrap_over_box(std::vector<TaylorModel>& p, const std::vector<
                                  std::size_t kept) {
   ShrinkWrap out;
   const std::size_t m = rows.size();
-  if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
   const MonomialSpace& space = *p.front().space();
   const std::size_t nv = space.variables();
   const auto em = static_cast<Eigen::Index>(m);
   const double scale = kept == kNone ? 0.0 : std::max(e[rows[kept]].mag(), 1e-300);
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, kept, scale));
-  // A numerically singular L (the slots' columns dependent: after the arm's velocity has
-  // relaxed, the four start columns lie in the three slow directions) has no useful inverse.
-  if (!lu.isInvertible()) return out;
-  const Eigen::MatrixXd a = lu.inverse();
-  if (!a.allFinite()) return out;
+  const std::optional<Eigen::MatrixXd> l_inverse = linear_part_inverse(p, rows, slots, kept, scale);
+  if (!l_inverse) return out;
+  const Eigen::MatrixXd& a = *l_inverse;
   // A(z) = A0 - A0 L1(z) A0, L1(z) the slots' linear coefficients' first-order dependence on the
   // other variables (the parameters): the inverse of L(z) to first order, so that I - A M is left
   // with only what L(z) does not explain (the file's head says why A may depend on them).
@@ -299,31 +339,7 @@ ShrinkWrap attempt_wrap_over_box(std::vector<TaylorModel>& p, const std::vector<
     }
     bool inside = true;
     for (std::size_t i = 0; i < m; ++i) inside = inside && next[i] < delta[i];
-    if (inside) {
-      std::vector<double> widen(nv, 1.0);
-      for (std::size_t j = 0; j < m; ++j) {
-        if (j == kept) continue;
-        widen[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
-      }
-      out.rest.assign(p.size(), Interval(0.0));
-      for (std::size_t v = 0; v < p.size(); ++v) {
-        TaylorModel q = p[v].rescaled(widen);
-        // Off the rows (the constant components) a remainder stays in p: the error part is
-        // zero there (taylor_model_flow_core.hpp).
-        if (std::find(rows.begin(), rows.end(), v) == rows.end()) {
-          p[v] = std::move(q);
-          continue;
-        }
-        out.rest[v] = q.remainder();
-        p[v] = q.polynomial();
-      }
-      if (kept != kNone) {
-        out.rest[rows[kept]] += Interval(scale) * Interval(-delta[kept], delta[kept]);
-        out.kept = kept;
-      }
-      out.done = true;
-      return out;
-    }
+    if (inside) return widened(p, rows, slots, kept, scale, delta);
     for (std::size_t i = 0; i < m; ++i) delta[i] = 1.05 * std::max(next[i], delta[i]);
   }
   return out;
@@ -340,16 +356,10 @@ ShrinkWrap attempt_wrap_at_base_point(std::vector<TaylorModel>& p, const std::ve
                                       std::size_t kept) {
   ShrinkWrap out;
   const std::size_t m = rows.size();
-  if (m == 0 || slots.size() != m || p.empty() || !p.front().space()) return out;
   const auto space = p.front().space();
-  const std::size_t nv = space->variables();
   const double scale = kept == kNone ? 0.0 : std::max(e[rows[kept]].mag(), 1e-300);
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, kept, scale));
-  // A numerically singular L (the slots' columns dependent: after the arm's velocity has
-  // relaxed, the four start columns lie in the three slow directions) has no useful inverse.
-  if (!lu.isInvertible()) return out;
-  const Eigen::MatrixXd a0 = lu.inverse();
-  if (!a0.allFinite()) return out;
+  const std::optional<Eigen::MatrixXd> a0 = linear_part_inverse(p, rows, slots, kept, scale);
+  if (!a0) return out;
   // D(z): the rows' derivatives in the slots, models in every variable (the kept column constant).
   ModelMatrix d(m, std::vector<TaylorModel>(m));
   for (std::size_t k = 0; k < m; ++k) {
@@ -361,37 +371,17 @@ ShrinkWrap attempt_wrap_at_base_point(std::vector<TaylorModel>& p, const std::ve
   std::vector<double> e_mag(m);
   for (std::size_t i = 0; i < m; ++i) e_mag[i] = e[rows[i]].mag();
   const std::optional<std::vector<double>> delta =
-      krawczyk_delta(inverse_model(d, a0, space), d, e_mag, slots, kept, max_delta);
+      krawczyk_delta(inverse_model(d, *a0, space), d, e_mag, slots, kept, max_delta);
   if (!delta) return out;
-  std::vector<double> widen(nv, 1.0);
-  for (std::size_t j = 0; j < m; ++j) {
-    if (j == kept) continue;
-    widen[slots[j]] = (Interval(1.0) + Interval((*delta)[j])).hi();
-  }
-  out.rest.assign(p.size(), Interval(0.0));
-  for (std::size_t v = 0; v < p.size(); ++v) {
-    TaylorModel q = p[v].rescaled(widen);
-    // Off the rows (the constant components) a remainder stays in p: the error part is zero
-    // there (taylor_model_flow_core.hpp).
-    if (std::find(rows.begin(), rows.end(), v) == rows.end()) {
-      p[v] = std::move(q);
-      continue;
-    }
-    out.rest[v] = q.remainder();
-    p[v] = q.polynomial();
-  }
-  if (kept != kNone) {
-    out.rest[rows[kept]] += Interval(scale) * Interval(-(*delta)[kept], (*delta)[kept]);
-    out.kept = kept;
-  }
-  out.done = true;
-  return out;
+  return widened(p, rows, slots, kept, scale, *delta);
 }
 
-// The wrap at the base point where it passes (when asked), else over the box.
+// The wrap at the base point where it passes (when asked), else over the box; nothing for
+// arguments that do not fit (no rows, a slot per row, p on a space).
 ShrinkWrap attempt_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>& e,
                         const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
                         double max_delta, std::size_t kept, bool at_base_point) {
+  if (rows.empty() || slots.size() != rows.size() || p.empty() || !p.front().space()) return {};
   if (at_base_point) {
     ShrinkWrap out = attempt_wrap_at_base_point(p, e, rows, slots, max_delta, kept);
     if (out.done) return out;
