@@ -54,6 +54,17 @@ Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector
   return l;
 }
 
+std::optional<Eigen::MatrixXd> linear_part_inverse(const std::vector<TaylorModel>& p,
+                                                   const std::vector<std::size_t>& rows,
+                                                   const std::vector<std::size_t>& slots,
+                                                   std::size_t kept, double scale) {
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, kept, scale));
+  if (!lu.isInvertible()) return std::nullopt;
+  Eigen::MatrixXd a = lu.inverse();
+  if (!a.allFinite()) return std::nullopt;
+  return a;
+}
+
 namespace {
 
 constexpr std::size_t kNone = static_cast<std::size_t>(-1);
@@ -189,20 +200,6 @@ std::optional<std::vector<double>> krawczyk_delta(const ModelMatrix& am, const M
     }
   }
   return std::nullopt;
-}
-
-// L^-1 (linear_part), or nothing when L is numerically singular: the slots' columns dependent,
-// as after the arm's velocity has relaxed, when the four start columns lie in the three slow
-// directions, and L^-1 is no useful preconditioner.
-std::optional<Eigen::MatrixXd> linear_part_inverse(const std::vector<TaylorModel>& p,
-                                                   const std::vector<std::size_t>& rows,
-                                                   const std::vector<std::size_t>& slots,
-                                                   std::size_t kept, double scale) {
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, kept, scale));
-  if (!lu.isInvertible()) return std::nullopt;
-  Eigen::MatrixXd a = lu.inverse();
-  if (!a.allFinite()) return std::nullopt;
-  return a;
 }
 
 // The wrap that passed with delta: p rescaled in place, p(q z_s, z_theta) with q = 1 + delta off
@@ -401,9 +398,9 @@ std::vector<std::size_t> slots_to_leave_out(const std::vector<TaylorModel>& p,
   std::vector<std::pair<double, std::size_t>> ranked;
   for (std::size_t j = 0; j < m; ++j) {
     const double scale = std::max(e[rows[j]].mag(), 1e-300);
-    const Eigen::FullPivLU<Eigen::MatrixXd> lu(linear_part(p, rows, slots, j, scale));
-    if (!lu.isInvertible()) continue;
-    const Eigen::VectorXd ae = lu.inverse().cwiseAbs() * e_mag;
+    const std::optional<Eigen::MatrixXd> l_inverse = linear_part_inverse(p, rows, slots, j, scale);
+    if (!l_inverse) continue;
+    const Eigen::VectorXd ae = l_inverse->cwiseAbs() * e_mag;
     double widening = 0.0;
     for (std::size_t i = 0; i < m; ++i) {
       if (i != j) widening = std::max(widening, ae(static_cast<Eigen::Index>(i)));

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "furuta/interval/interval.hpp"
@@ -27,6 +28,15 @@ struct ShrinkWrap {
 Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector<std::size_t>& rows,
                             const std::vector<std::size_t>& slots,
                             std::size_t kept = static_cast<std::size_t>(-1), double scale = 0.0);
+
+// L^-1, or nothing when L is numerically singular: the slots' columns dependent, as after the
+// arm's velocity has relaxed, when the four start columns lie in the three slow directions, and
+// L^-1 is no useful preconditioner.
+std::optional<Eigen::MatrixXd> linear_part_inverse(const std::vector<TaylorModel>& p,
+                                                   const std::vector<std::size_t>& rows,
+                                                   const std::vector<std::size_t>& slots,
+                                                   std::size_t kept = static_cast<std::size_t>(-1),
+                                                   double scale = 0.0);
 
 // For p (polynomials on `rows`; the other components may keep a remainder, which stays in p) and
 // the error part e (an interval per component, 0 off `rows`): q with p(q z_s, z_theta) + rest

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -124,10 +125,9 @@ std::size_t cut_variable(const std::vector<TaylorModel>& p, const std::vector<bo
   const MonomialSpace& space = *p.front().space();
   const std::size_t n = space.variables();
   // As in the wrap (shrink_wrap.cpp): a singular L has no useful inverse to weigh the rows by.
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(internal::linear_part(p, rows, slots));
-  if (!lu.isInvertible()) return widest_variable(p, weigh);
-  const Eigen::MatrixXd a = lu.inverse().cwiseAbs();
-  if (!a.allFinite()) return widest_variable(p, weigh);
+  const std::optional<Eigen::MatrixXd> l_inverse = internal::linear_part_inverse(p, rows, slots);
+  if (!l_inverse) return widest_variable(p, weigh);
+  const Eigen::MatrixXd a = l_inverse->cwiseAbs();
   std::vector<double> share(n, 0.0);
   for (std::size_t k = 0; k < m; ++k) {
     const double weight = a.col(static_cast<Eigen::Index>(k)).sum();
