@@ -7,6 +7,7 @@
 #include <mpfr.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <random>
@@ -118,6 +119,19 @@ std::vector<Function> functions() {
                  mpfr_div(r, r, t, MPFR_RNDN);
                  mpfr_sqr(r, r, MPFR_RNDN);
                }});
+  // A denominator from 0.6 to 3.2 about 1.95 on the wide box: the reciprocal's tail far from c.
+  f.push_back(
+      {"x1 / (2 + x0 + 0.2 x1 x2)",
+       [](const auto& x) { return x[1] / (x[0] + x[1] * x[2] * Interval(0.2) + TaylorModel(2.0)); },
+       [set](mpfr_ptr r, const auto& x) {
+         Mp t, k;
+         set(k, 0.2);
+         mpfr_mul(t, x[1], x[2], MPFR_RNDN);
+         mpfr_mul(t, t, k, MPFR_RNDN);
+         mpfr_add(t, t, x[0], MPFR_RNDN);
+         mpfr_add_d(t, t, 2.0, MPFR_RNDN);
+         mpfr_div(r, x[1], t, MPFR_RNDN);
+       }});
   return f;
 }
 
@@ -168,6 +182,22 @@ TEST(TaylorModel, EveryOperationHoldsTheExactValueAtEveryPoint) {
     }
   }
   std::printf("[ measured ] Taylor models: %zu MPFR checks, 0 violations\n", checks);
+}
+
+// 1/x over [0.45, 1.55] in one variable: the series about 1 is exact up to order k, so the
+// remainder is the geometric series' tail, largest at x = 0.45: 0.55^(k+1) / 0.45. The Lagrange
+// form of the tail (0.55^(k+1) / 0.45^(k+2)) is 4.9x-110x wider at orders 1-5.
+TEST(TaylorModel, TheReciprocalsRemainderIsTheSeriesTail) {
+  for (int order : {1, 3, 5}) {
+    const auto space = std::make_shared<const MonomialSpace>(1, order);
+    const TaylorModel x = TaylorModel::variable(space, 0, Interval(0.45, 1.55));
+    const TaylorModel y = reciprocal(x);
+    const double tail = std::pow(0.55, order + 1) / 0.45;
+    EXPECT_LE(y.remainder().mag(), tail * 1.001) << "order " << order;
+    // It holds 1/x near the ends (at z = -1 the exact value is the bound's edge itself).
+    EXPECT_TRUE(y.evaluate({-0.99}).contains(1.0 / (1.0 - 0.55 * 0.99))) << "order " << order;
+    EXPECT_TRUE(y.evaluate({0.99}).contains(1.0 / (1.0 + 0.55 * 0.99))) << "order " << order;
+  }
 }
 
 TEST(TaylorModel, TheRemainderShrinksWithTheOrderAndTheDependencyCancels) {

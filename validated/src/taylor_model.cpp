@@ -492,7 +492,10 @@ TaylorModel TaylorModel::compose(const TaylorModel& a, const Expand& expand) {
 
 TaylorModel reciprocal(const TaylorModel& a) {
   if (!a.space_) return TaylorModel(Interval(1.0) / a.remainder_);
-  // 1/x about c: d_i = (-1)^i / c^(i+1); the Lagrange term (-1)^(k+1) / xi^(k+2), xi in range.
+  // 1/x about c: d_i = (-1)^i / c^(i+1), and the rest of the geometric series exactly,
+  // 1/x - sum_{i<=k} (c - x)^i / c^(i+1) = (c - x)^(k+1) / (c^(k+1) x), x in range. The Lagrange
+  // form, (c - x)^(k+1) / xi^(k+2), would take the smallest |xi| k + 1 times more: on a range
+  // from 0.45 c to 1.55 c (the Furuta model's determinant over a wide set) 24x wider at k = 3.
   return TaylorModel::compose(
       a, [](double c, const Interval& range, int k) -> std::optional<TaylorModel::Expansion> {
         if (range.contains_zero() || !range.is_bounded()) return std::nullopt;
@@ -503,7 +506,8 @@ TaylorModel reciprocal(const TaylorModel& a) {
           e.d[static_cast<std::size_t>(i)] = i % 2 == 0 ? power : -power;
           power = power * inv;
         }
-        const Interval tail = Interval(1.0) / pow(range, k + 2);
+        // power is now c^-(k+2); the tail needs c^-(k+1) / x.
+        const Interval tail = power * Interval(c) / range;
         e.lagrange = (k + 1) % 2 == 0 ? tail : -tail;
         return e;
       });
