@@ -186,7 +186,7 @@ TEST(TaylorModel, EveryOperationHoldsTheExactValueAtEveryPoint) {
 
 // 1/x over [0.45, 1.55] in one variable: the series about 1 is exact up to order k, so the
 // remainder is the geometric series' tail, largest at x = 0.45: 0.55^(k+1) / 0.45. The Lagrange
-// form of the tail (0.55^(k+1) / 0.45^(k+2)) is 4.9x-110x wider at orders 1-5.
+// form of the tail (0.55^(k+1) / 0.45^(k+2)) is 4.9x-120x wider at orders 1-5.
 TEST(TaylorModel, TheReciprocalsRemainderIsTheSeriesTail) {
   for (int order : {1, 3, 5}) {
     const auto space = std::make_shared<const MonomialSpace>(1, order);
