@@ -53,6 +53,9 @@ struct RemoteOptions {
   // The key `start` signs with (docs/security.md); empty: the configuration's
   // [daemon] command_key_file.
   std::filesystem::path command_key;
+  // The daemon's public key, which every answer must be signed under; empty: the configuration's
+  // [daemon] daemon_public_key_file. Unreadable: answers are taken unverified, and said so.
+  std::filesystem::path daemon_public_key;
 };
 // A session's excitation as the user gave it; what is left out comes from the configuration's
 // [excitation], field by field.
@@ -64,7 +67,9 @@ struct StartOptions {
   std::optional<std::int64_t> seed;
 };
 enum class RemoteKind { start, stop, estop, status };
-// Sends one command and reports the daemon's verdict on it. start: 0 once the session runs, 1
+// Sends one command and reports the daemon's verdict on it. Only answers signed under the
+// daemon's public key count (others are ignored and counted; said when nothing else came); stop,
+// e-stop and status are sent again until answered. start: 0 once the session runs, 1
 // refused (by the command's check, or by the loop: a session running, the pendulum swinging, the
 // logs directory), 2 no answer, or no verdict within wait_s. stop, estop: 0 once the session has
 // ended (or when none ran: said so), 2 when it still runs after wait_s. status: 0. Over LCM;

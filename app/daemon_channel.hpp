@@ -5,6 +5,8 @@
 // in virtual time, behind it.
 
 #include <chrono>
+#include <cstddef>
+#include <iosfwd>
 #include <optional>
 #include <string>
 
@@ -25,6 +27,13 @@ class DaemonChannel {
   // Where the daemon is expected, for messages ("udpm://...").
   virtual std::string where() const = 0;
 };
+
+// A status as it arrived on RIG_STATUS: false for one larger than any the daemon sends
+// (command_auth::kMaxStatusBytes) or one that does not decode.
+bool decode_status(const void* data, std::size_t size, furuta::rig_status_t& status);
+// One line (scripts read "state X", "cycles N," and "last fault: reason"); every text in it is
+// bounded and escaped, since a status may quote a stranger's bytes.
+void print_status(const furuta::rig_status_t& status, std::ostream& out);
 
 struct RemoteOptions;
 struct StartOptions;

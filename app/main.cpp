@@ -36,6 +36,9 @@ int main(int argc, char** argv) {
         ->check(CLI::ExistingFile);
     cmd->add_option("--timeout", remote.reply_timeout_s, "Seconds to wait for the daemon's answer")
         ->check(CLI::Range(0.1, 60.0));
+    cmd->add_option("--daemon-public-key", remote.daemon_public_key,
+                    "The key the daemon's answers are checked with (default: the "
+                    "configuration's [daemon] daemon_public_key_file)");
   };
   auto add_session = [&](CLI::App* cmd, furuta::app::StartOptions& start) {
     cmd->add_option("--profile", start.profile,

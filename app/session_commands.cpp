@@ -11,12 +11,14 @@
 #include <lcm/lcm-cpp.hpp>
 #include <ostream>
 #include <random>
+#include <set>
 #include <sstream>
 #include <thread>
 
 #include "commands.hpp"
 #include "daemon_channel.hpp"
 #include "furuta/command_auth/command_auth.hpp"
+#include "furuta/command_auth/status_signature.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
@@ -56,9 +58,210 @@ std::string utc_time(std::int64_t wall_ns) {
   return stamp;
 }
 
-// One line (scripts read "state X", "cycles N," and "last fault: reason"); counts that have no
-// data yet say so rather than showing a zero.
-void print_status(const furuta::rig_status_t& s, std::ostream& out) {
+// duration_reached and stop_command end a session as asked; every other end is a fault.
+bool ended_as_asked(const std::string& end_reason) {
+  const std::string reason = end_reason.substr(0, end_reason.find(':'));
+  return reason == "duration_reached" || reason == "stop_command";
+}
+
+class LcmChannel final : public DaemonChannel {
+ public:
+  explicit LcmChannel(std::string url) : url_(std::move(url)), lcm_(url_) {
+    if (lcm_.good()) {
+      subscription_ = lcm_.subscribe(session_log::kChannelStatus, &LcmChannel::on_status, this);
+      // Statuses pile up here only while this process is busy elsewhere; the newest matter.
+      subscription_->setQueueCapacity(256);
+    }
+  }
+  ~LcmChannel() override {
+    if (subscription_) lcm_.unsubscribe(subscription_);
+  }
+  bool good() { return lcm_.good(); }
+  void send(const furuta::rig_command_t& command) override {
+    lcm_.publish(session_log::kChannelCommand, &command);
+  }
+  void send_signed(const furuta::rig_signed_command_t& command) override {
+    lcm_.publish(session_log::kChannelSignedCommand, &command);
+  }
+  std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) override {
+    const auto deadline = std::chrono::steady_clock::now() + wait;
+    while (received_.empty()) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return std::nullopt;
+      lcm_.handleTimeout(static_cast<int>(std::max<std::int64_t>(1, left.count())));
+    }
+    furuta::rig_status_t first = std::move(received_.front());
+    received_.pop_front();
+    return first;
+  }
+  std::string where() const override { return url_; }
+
+ private:
+  // Raw: a message larger than any status the daemon sends is dropped unread, and one that does
+  // not decode is dropped without LCM's message on stderr.
+  void on_status(const lcm::ReceiveBuffer* buffer, const std::string&) {
+    furuta::rig_status_t status{};
+    if (decode_status(buffer->data, buffer->data_size, status)) {
+      received_.push_back(std::move(status));
+    }
+  }
+  std::string url_;
+  lcm::LCM lcm_;
+  lcm::Subscription* subscription_ = nullptr;
+  std::deque<furuta::rig_status_t> received_;
+};
+
+// Random and non-zero: zero means "not a reply", and two `furuta` at once must not share one.
+std::int64_t new_request_id() {
+  std::random_device entropy;
+  return static_cast<std::int64_t>(((std::uint64_t{entropy()} << 31) ^ entropy()) >> 1) + 1;
+}
+
+std::chrono::milliseconds millis(double seconds) {
+  return std::chrono::milliseconds(std::llround(seconds * 1000));
+}
+
+// Which answers count: those signed under the daemon's public key. Without a readable public key
+// nothing can be checked, and every answer is taken as it is (the caller says so once).
+class AnswerCheck {
+ public:
+  explicit AnswerCheck(std::optional<command_auth::DaemonPublicKey> key) : key_(key) {}
+  bool verifying() const { return key_.has_value(); }
+  bool trusted(const furuta::rig_status_t& status) {
+    if (!key_) return true;
+    switch (command_auth::check_status(status, *key_)) {
+      case command_auth::StatusAuthenticity::signed_by_daemon:
+        return true;
+      case command_auth::StatusAuthenticity::unsigned_status:
+        ++unsigned_;
+        return false;
+      case command_auth::StatusAuthenticity::wrongly_signed:
+        ++wrongly_signed_;
+        return false;
+    }
+    return false;
+  }
+  // "" when nothing was ignored, else what and why, for the message that nothing answered.
+  std::string ignored() const {
+    if (unsigned_ == 0 && wrongly_signed_ == 0) return {};
+    return "; " + std::to_string(unsigned_) + " unsigned and " + std::to_string(wrongly_signed_) +
+           " wrongly signed answer(s) were ignored: a furutad without its daemon key, or someone "
+           "on the LCM group forging the daemon's answers (docs/security.md)";
+  }
+
+ private:
+  std::optional<command_auth::DaemonPublicKey> key_;
+  std::int64_t unsigned_ = 0;
+  std::int64_t wrongly_signed_ = 0;
+};
+
+// The first status for which `done` holds, within `limit`, among the trusted answers to this
+// tool's own status requests (each a fresh random id, so no old answer can be played back as
+// one). A request goes out now and every 250 ms.
+template <class Done>
+std::optional<furuta::rig_status_t> poll_status(DaemonChannel& channel, AnswerCheck& check,
+                                                std::chrono::milliseconds limit, Done done) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  auto next_request = std::chrono::steady_clock::now();
+  std::set<std::int64_t> asked;
+  for (;;) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= deadline) return std::nullopt;
+    if (now >= next_request) {
+      furuta::rig_command_t ask{};
+      ask.request_id = new_request_id();
+      ask.kind = furuta::rig_command_t::KIND_STATUS_REQUEST;
+      asked.insert(ask.request_id);
+      channel.send(ask);
+      next_request = now + std::chrono::milliseconds(250);
+    }
+    const auto wait = std::min(next_request, deadline) - now;
+    auto s = channel.receive(std::chrono::duration_cast<std::chrono::milliseconds>(wait) +
+                             std::chrono::milliseconds(1));
+    if (s && asked.count(s->reply_to_request_id) != 0 && check.trusted(*s) && done(*s)) return s;
+  }
+}
+
+const char* command_name(RemoteKind kind) {
+  switch (kind) {
+    case RemoteKind::start:
+      return "start";
+    case RemoteKind::stop:
+      return "stop";
+    case RemoteKind::estop:
+      return "estop";
+    case RemoteKind::status:
+      return "status";
+  }
+  return "?";
+}
+
+void fill_start_command(const StartOptions& start, const config::ExcitationConfig& defaults,
+                        furuta::rig_command_t& command) {
+  command.profile = start.profile.value_or(defaults.profile);
+  command.amplitude_duty = start.amplitude_duty.value_or(defaults.amplitude_duty);
+  command.duration_s = start.duration_s.value_or(defaults.duration_s);
+  command.seed = start.seed.value_or(defaults.seed);
+  command.label = start.label;
+}
+
+// The daemon's public key, or nothing (said on `err`: its answers are then taken unverified).
+std::optional<command_auth::DaemonPublicKey> daemon_public_key(const RemoteOptions& remote,
+                                                               const std::string& name,
+                                                               std::ostream& err) {
+  std::filesystem::path path = remote.daemon_public_key;
+  if (path.empty()) {
+    try {
+      path = config::load_rig_config(remote.config_path).daemon.daemon_public_key_file;
+    } catch (const std::exception& e) {
+      err << name << ": WARNING: the daemon's answers are taken unverified: " << e.what() << "\n";
+      return std::nullopt;
+    }
+  }
+  command_auth::PublicKeyFile file = command_auth::read_daemon_public_key(path);
+  if (!file.key) {
+    err << name << ": WARNING: the daemon's answers are taken unverified: " << file.problem << "\n";
+  }
+  return file.key;
+}
+
+std::string lcm_url_for(const RemoteOptions& remote) {
+  if (!remote.lcm_url.empty()) return remote.lcm_url;
+  return config::load_rig_config(remote.config_path).daemon.lcm_url;
+}
+
+std::string describe_rig(const config::RigConfig& rig, const RunOptions& options,
+                         const daemon::RigConnection& rig_io) {
+  const bridge::DeviceInfo& motor = rig_io.motor->device_info();
+  const bridge::DeviceInfo& encoder = rig_io.encoder->device_info();
+  std::ostringstream text;
+  if (options.simulated) {
+    text << "simulated (--sim)";
+  } else if (rig.backend == config::UsbBackend::simulated) {
+    text << "simulated ([rig] backend = \"simulated\" in " << options.config_path.string()
+         << "; set hidapi or libusb for the USB boards)";
+  } else {
+    text << "USB boards through " << rig_io.description;
+  }
+  text << ": 1065 serial " << motor.serial << " (firmware " << motor.firmware_version
+       << "), 1047 serial " << encoder.serial << " (firmware " << encoder.firmware_version << ")";
+  if (options.virtual_time) text << ", virtual time";
+  return text.str();
+}
+
+}  // namespace
+
+bool decode_status(const void* data, std::size_t size, furuta::rig_status_t& status) {
+  return size <= command_auth::kMaxStatusBytes &&
+         status.decode(data, 0, static_cast<int>(size)) >= 0;
+}
+
+// Counts that have no data yet say so rather than showing a zero.
+void print_status(const furuta::rig_status_t& status, std::ostream& out) {
+  // Every text of a status may quote a stranger's bytes: bounded and escaped before printing.
+  furuta::rig_status_t s = status;
+  command_auth::bound_status_text(s);
   out << "state " << state_name(s.state);
   if (!s.session.empty()) out << ", session " << s.session;
   if (s.cycles == 0) {
@@ -94,141 +297,22 @@ void print_status(const furuta::rig_status_t& s, std::ostream& out) {
         << " command(s) refused for their signature since start-up, the latest: "
         << s.unauthenticated_reason;
   }
+  std::string counts;
+  for (const auto& [n, what] :
+       {std::pair{s.refused_unsigned, "unsigned"},
+        std::pair{s.refused_bad_signature, "bad signature"},
+        std::pair{s.refused_malformed, "malformed"},
+        std::pair{s.refused_out_of_time, "out of time"}, std::pair{s.refused_replayed, "replayed"},
+        std::pair{s.refused_start_budget, "over the start budget"},
+        std::pair{s.refused_stop_budget, "over the stop budget"},
+        std::pair{s.refused_status_budget, "over the status budget"},
+        std::pair{s.refused_invalid, "invalid"},
+        std::pair{s.replies_withheld, "not answered (reply budget)"}}) {
+    if (n > 0) counts += (counts.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  }
+  if (!counts.empty()) out << "; refusals since start-up: " << counts;
   out << "\n";
 }
-
-// duration_reached and stop_command end a session as asked; every other end is a fault.
-bool ended_as_asked(const std::string& end_reason) {
-  const std::string reason = end_reason.substr(0, end_reason.find(':'));
-  return reason == "duration_reached" || reason == "stop_command";
-}
-
-class LcmChannel final : public DaemonChannel {
- public:
-  explicit LcmChannel(std::string url) : url_(std::move(url)), lcm_(url_) {
-    if (lcm_.good()) {
-      subscription_ = lcm_.subscribe(session_log::kChannelStatus, &LcmChannel::on_status, this);
-    }
-  }
-  ~LcmChannel() override {
-    if (subscription_) lcm_.unsubscribe(subscription_);
-  }
-  bool good() { return lcm_.good(); }
-  void send(const furuta::rig_command_t& command) override {
-    lcm_.publish(session_log::kChannelCommand, &command);
-  }
-  void send_signed(const furuta::rig_signed_command_t& command) override {
-    lcm_.publish(session_log::kChannelSignedCommand, &command);
-  }
-  std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) override {
-    const auto deadline = std::chrono::steady_clock::now() + wait;
-    while (received_.empty()) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-          deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) return std::nullopt;
-      lcm_.handleTimeout(static_cast<int>(std::max<std::int64_t>(1, left.count())));
-    }
-    furuta::rig_status_t first = std::move(received_.front());
-    received_.pop_front();
-    return first;
-  }
-  std::string where() const override { return url_; }
-
- private:
-  void on_status(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_status_t* m) {
-    received_.push_back(*m);
-  }
-  std::string url_;
-  lcm::LCM lcm_;
-  lcm::Subscription* subscription_ = nullptr;
-  std::deque<furuta::rig_status_t> received_;
-};
-
-// Random and non-zero: zero means "not a reply", and two `furuta` at once must not share one.
-std::int64_t new_request_id() {
-  std::random_device entropy;
-  return static_cast<std::int64_t>(((std::uint64_t{entropy()} << 31) ^ entropy()) >> 1) + 1;
-}
-
-std::chrono::milliseconds millis(double seconds) {
-  return std::chrono::milliseconds(std::llround(seconds * 1000));
-}
-
-// The first status for which `done` holds, within `limit`. A status request goes out now and
-// every 250 ms (the daemon's own status comes once a second): any status is the current state,
-// whoever asked.
-template <class Done>
-std::optional<furuta::rig_status_t> poll_status(DaemonChannel& channel,
-                                                std::chrono::milliseconds limit, Done done) {
-  const auto deadline = std::chrono::steady_clock::now() + limit;
-  auto next_request = std::chrono::steady_clock::now();
-  for (;;) {
-    const auto now = std::chrono::steady_clock::now();
-    if (now >= deadline) return std::nullopt;
-    if (now >= next_request) {
-      furuta::rig_command_t ask{};
-      ask.request_id = new_request_id();
-      ask.kind = furuta::rig_command_t::KIND_STATUS_REQUEST;
-      channel.send(ask);
-      next_request = now + std::chrono::milliseconds(250);
-    }
-    const auto wait = std::min(next_request, deadline) - now;
-    if (auto s = channel.receive(std::chrono::duration_cast<std::chrono::milliseconds>(wait) +
-                                 std::chrono::milliseconds(1));
-        s && done(*s)) {
-      return s;
-    }
-  }
-}
-
-const char* command_name(RemoteKind kind) {
-  switch (kind) {
-    case RemoteKind::start:
-      return "start";
-    case RemoteKind::stop:
-      return "stop";
-    case RemoteKind::estop:
-      return "estop";
-    case RemoteKind::status:
-      return "status";
-  }
-  return "?";
-}
-
-void fill_start_command(const StartOptions& start, const config::ExcitationConfig& defaults,
-                        furuta::rig_command_t& command) {
-  command.profile = start.profile.value_or(defaults.profile);
-  command.amplitude_duty = start.amplitude_duty.value_or(defaults.amplitude_duty);
-  command.duration_s = start.duration_s.value_or(defaults.duration_s);
-  command.seed = start.seed.value_or(defaults.seed);
-  command.label = start.label;
-}
-
-std::string lcm_url_for(const RemoteOptions& remote) {
-  if (!remote.lcm_url.empty()) return remote.lcm_url;
-  return config::load_rig_config(remote.config_path).daemon.lcm_url;
-}
-
-std::string describe_rig(const config::RigConfig& rig, const RunOptions& options,
-                         const daemon::RigConnection& rig_io) {
-  const bridge::DeviceInfo& motor = rig_io.motor->device_info();
-  const bridge::DeviceInfo& encoder = rig_io.encoder->device_info();
-  std::ostringstream text;
-  if (options.simulated) {
-    text << "simulated (--sim)";
-  } else if (rig.backend == config::UsbBackend::simulated) {
-    text << "simulated ([rig] backend = \"simulated\" in " << options.config_path.string()
-         << "; set hidapi or libusb for the USB boards)";
-  } else {
-    text << "USB boards through " << rig_io.description;
-  }
-  text << ": 1065 serial " << motor.serial << " (firmware " << motor.firmware_version
-       << "), 1047 serial " << encoder.serial << " (firmware " << encoder.firmware_version << ")";
-  if (options.virtual_time) text << ", virtual time";
-  return text.str();
-}
-
-}  // namespace
 
 int run_remote_command(RemoteKind kind, const RemoteOptions& remote, const StartOptions& start,
                        std::ostream& out, std::ostream& err) {
@@ -276,22 +360,38 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
       command.kind = furuta::rig_command_t::KIND_STATUS_REQUEST;
       break;
   }
-  if (key) {
-    channel.send_signed(command_auth::sign_command_now(command, *key, command_auth::this_sender()));
-  } else {
-    channel.send(command);
-  }
+  AnswerCheck check(daemon_public_key(remote, name, err));
+  // A start is sent once (its signature is taken once); the others again until answered, an
+  // e-stop most often, so one lost in a flood is soon followed by the next.
+  const std::chrono::milliseconds resend = kind == RemoteKind::start ? std::chrono::hours(1)
+                                           : kind == RemoteKind::estop
+                                               ? std::chrono::milliseconds(20)
+                                               : std::chrono::milliseconds(250);
   std::optional<furuta::rig_status_t> reply;
   const auto deadline = std::chrono::steady_clock::now() + millis(remote.reply_timeout_s);
+  auto next_send = std::chrono::steady_clock::now();
   while (!reply && std::chrono::steady_clock::now() < deadline) {
-    auto s = channel.receive(std::chrono::milliseconds(50));
-    if (s && s->reply_to_request_id == id) reply = std::move(s);
+    if (std::chrono::steady_clock::now() >= next_send) {
+      if (key) {
+        channel.send_signed(
+            command_auth::sign_command_now(command, *key, command_auth::this_sender()));
+      } else {
+        channel.send(command);
+      }
+      next_send = std::chrono::steady_clock::now() + resend;
+    }
+    const auto wait = std::min(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                   next_send - std::chrono::steady_clock::now()),
+                               std::chrono::milliseconds(50));
+    auto s = channel.receive(std::max(wait, std::chrono::milliseconds(1)));
+    if (s && s->reply_to_request_id == id && check.trusted(*s)) reply = std::move(s);
   }
   if (!reply) {
     err << name << ": no answer from furutad on " << channel.where() << " within "
         << remote.reply_timeout_s
         << " s (is it running? `systemctl status furutad`; a furutad of another version does not "
-           "understand this furuta)\n";
+           "understand this furuta)"
+        << check.ignored() << "\n";
     return 2;
   }
   if (!reply->request_accepted) {
@@ -313,7 +413,7 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
     }
     // The reply says the command was valid and queued; the loop decides (the pendulum must hang
     // still first) and the status names the request either way.
-    const auto verdict = poll_status(channel, millis(remote.wait_s), [&](const auto& s) {
+    const auto verdict = poll_status(channel, check, millis(remote.wait_s), [&](const auto& s) {
       return s.last_session_request_id == id || s.refused_request_id == id;
     });
     if (!verdict) {
@@ -357,7 +457,7 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
     out << name << ": " << done << "; not waiting for " << which << " to end\n";
     return 0;
   }
-  const auto ended = poll_status(channel, millis(remote.wait_s), [&](const auto& s) {
+  const auto ended = poll_status(channel, check, millis(remote.wait_s), [&](const auto& s) {
     if (s.last_session_end.empty()) return false;
     return session.empty() ? !s.last_session.empty() && s.last_session != before
                            : s.last_session == session;

@@ -1,10 +1,13 @@
 // furutad: the rig daemon. Thin: configuration in, boards opened, the Daemon run until a signal.
 #include <signal.h>
 #include <systemd/sd-daemon.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <iostream>
 #include <thread>
 
@@ -41,6 +44,8 @@ int main(int argc, char** argv) {
   std::string logs_dir;
   std::string lcm_url;
   std::string command_key;
+  std::string daemon_key;
+  std::string command_state;
   bool create_command_key = false;
   app.add_option("-c,--config", config_path, "Rig configuration (TOML)")->check(CLI::ExistingFile);
   app.add_flag("--sim", simulated, "Drive the simulated rig instead of the USB boards");
@@ -54,9 +59,18 @@ int main(int argc, char** argv) {
   app.add_option("--command-key", command_key,
                  "The key starts are signed with (overrides [daemon] command_key_file); created "
                  "when missing");
+  app.add_option("--daemon-key", daemon_key,
+                 "The key this daemon signs its answers with (overrides [daemon] "
+                 "daemon_key_file); its public half is then beside it, named .pub for its "
+                 "extension");
+  app.add_option("--command-state", command_state,
+                 "Where the replay floor is kept across restarts (overrides [daemon] "
+                 "command_state_file)");
   app.add_flag("--create-command-key", create_command_key,
-               "Create the command key if it is missing (mode 0640, group furuta), then exit: "
-               "what the package and the unit's ExecStartPre run as root");
+               "Create the command key and the daemon's key pair where missing (the secrets "
+               "mode 0640, group furuta; the public key 0644), check them, then exit: what the "
+               "package and the unit's ExecStartPre run as root. Exit 2 when a key or its "
+               "directory fails a check");
   app.set_version_flag("--version", daemon::kSoftwareVersion);
   app.footer(
       "Exit status: 0 stopped as asked (a signal, or the end of --replay); 1 the control loop "
@@ -81,26 +95,71 @@ int main(int argc, char** argv) {
     if (lcm_url.empty()) lcm_url = rig.daemon.lcm_url;
     if (require_rt) settings.realtime.enabled = true;
 
-    // Who may start sessions (docs/security.md). A missing key is made here on first start (the
-    // unit makes it as root before, so it gets group furuta); one that cannot be read or made
-    // leaves the daemon running, since stop and e-stop need no key, but every start is refused.
+    // Who may start sessions, and the key the daemon's answers are signed with
+    // (docs/security.md). Missing keys are made here on first start (the unit makes them as root
+    // before, so they get group furuta); a key that cannot be read or made leaves the daemon
+    // running, since stop and e-stop need no key: every start is refused, or the answers go out
+    // unsigned.
     if (command_key.empty()) command_key = rig.daemon.command_key_file;
-    const command_auth::KeyCreation creation =
-        command_auth::ensure_command_key(command_key, "furuta");
-    if (creation.created) std::cerr << "furutad: created the command key " << command_key << "\n";
-    if (create_command_key) {
-      if (creation.problem.empty()) return 0;
-      std::cerr << "furutad: " << creation.problem << "\n";
-      return 2;
+    std::filesystem::path public_key_path = rig.daemon.daemon_public_key_file;
+    if (daemon_key.empty()) {
+      daemon_key = rig.daemon.daemon_key_file;
+    } else {
+      public_key_path = std::filesystem::path(daemon_key).replace_extension(".pub");
+    }
+    settings.command_auth.state_file =
+        command_state.empty() ? rig.daemon.command_state_file : command_state;
+    std::vector<std::string> key_problems;
+    for (const std::string& path : {command_key, daemon_key}) {
+      if (std::string why = command_auth::key_directory_problem(path); !why.empty()) {
+        key_problems.push_back(why);
+        continue;
+      }
+      const command_auth::KeyCreation creation = command_auth::ensure_command_key(path, "furuta");
+      if (creation.created) std::cerr << "furutad: created the key " << path << "\n";
+      if (!creation.problem.empty()) key_problems.push_back(creation.problem);
     }
     command_auth::KeyFile key = command_auth::read_command_key(command_key);
-    if (!creation.problem.empty() && !key.key) key.problem = creation.problem;
+    const command_auth::KeyFile signing_key = command_auth::read_command_key(daemon_key);
+    if (signing_key.key) {
+      const auto public_key = command_auth::daemon_public_key(*signing_key.key);
+      if (create_command_key) {
+        if (std::string why = command_auth::write_daemon_public_key(public_key_path, public_key);
+            !why.empty()) {
+          key_problems.push_back(why);
+        }
+      } else if (command_auth::read_daemon_public_key(public_key_path).key != public_key) {
+        std::cerr << "furutad: WARNING: " << public_key_path.string()
+                  << " is missing or is not the public half of " << daemon_key
+                  << ": tools will not trust this daemon's answers (furutad "
+                     "--create-command-key as root writes it)\n";
+      }
+    }
+    if (create_command_key) {
+      if (!key.key) key_problems.push_back(key.problem);
+      if (!signing_key.key) key_problems.push_back(signing_key.problem);
+      for (const std::string& why : key_problems) std::cerr << "furutad: " << why << "\n";
+      return key_problems.empty() ? 0 : 2;
+    }
+    for (const std::string& why : key_problems) std::cerr << "furutad: WARNING: " << why << "\n";
+    if (std::string why = command_auth::key_directory_problem(command_key); !why.empty()) {
+      key.key.reset();  // a key anyone could have planted proves nothing
+      key.problem = why;
+    }
     if (key.key) {
       settings.command_key = key.key;
     } else {
       settings.command_key_problem = key.problem;
       std::cerr << "furutad: WARNING: " << key.problem
                 << "; every start is refused (stop, e-stop and status still work)\n";
+    }
+    if (signing_key.key && command_auth::key_directory_problem(daemon_key).empty()) {
+      settings.daemon_key = signing_key.key;
+    } else {
+      std::cerr << "furutad: WARNING: no key to sign answers with ("
+                << (signing_key.key ? command_auth::key_directory_problem(daemon_key)
+                                    : signing_key.problem)
+                << "): tools that check answers will ignore this daemon's\n";
     }
 
     // A daemon that cannot log must say so now, not at the first start. It still comes up: it is
@@ -158,6 +217,15 @@ int main(int argc, char** argv) {
       return 2;
     }
     daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
+    if (!daemon.command_state_problem().empty()) {
+      std::cerr << "furutad: WARNING: " << daemon.command_state_problem() << "\n";
+    }
+    if (const auto dir = settings.command_auth.state_file.parent_path();
+        ::access(dir.empty() ? "." : dir.c_str(), W_OK) != 0) {
+      std::cerr << "furutad: WARNING: cannot write the replay floor in " << dir.string() << ": "
+                << std::strerror(errno)
+                << "; every start is refused until it can ([daemon] command_state_file)\n";
+    }
     if (replayed) {
       daemon.start_replayed_session(*replayed->start);
       daemon.loop().exit_when_idle();

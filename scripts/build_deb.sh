@@ -38,13 +38,13 @@ done
 depends=$(dpkg-deb -f "$deb" Depends)
 depends_names=$(sed 's/, /\n/g' <<<"$depends" | sed 's/ .*//')
 for p in systemd libc6 libstdc++6 libglib2.0-0 liblcm1 libhidapi-hidraw0 libusb-1.0-0 libliquid1 \
-  libsystemd0 libtbb12 libtomlplusplus3; do
+  libsodium23 libsystemd0 libtbb12 libtomlplusplus3; do
   grep -qxF "$p" <<<"$depends_names" ||
     { echo "build_deb: $deb does not depend on $p (Depends: $depends)" >&2; exit 1; }
 done
-# No secret in the package: each machine makes its own command key (docs/security.md).
-if grep -q 'command.key' <<<"$contents"; then
-  echo "build_deb: $deb ships a command key" >&2
+# No secret in the package: each machine makes its own keys (docs/security.md).
+if grep -qE '(command|daemon)\.(key|pub)' <<<"$contents"; then
+  echo "build_deb: $deb ships a key" >&2
   exit 1
 fi
 # What postinst does on the target, inside a root: the service user, the key furutad makes, the
@@ -64,10 +64,15 @@ done
 systemd-sysusers --root="$root" furuta.conf >/dev/null 2>&1 ||
   { echo "build_deb: systemd-sysusers rejected the package's furuta.conf" >&2; exit 1; }
 "${run_target[@]}" "$root/usr/sbin/furutad" --config "$root/etc/furuta/rig.toml" --command-key "$root/etc/furuta/command.key" \
+  --daemon-key "$root/etc/furuta/daemon.key" --command-state "$root/var/lib/furuta/command-replay.state" \
   --create-command-key || { echo "build_deb: the packaged furutad made no command key" >&2; exit 1; }
 key="$root/etc/furuta/command.key"
-[ "$(stat -c %a "$key")" = 640 ] ||
-  { echo "build_deb: the command key has mode $(stat -c %a "$key"), not 640" >&2; exit 1; }
+for secret in "$key" "$root/etc/furuta/daemon.key"; do
+  [ "$(stat -c %a "$secret")" = 640 ] ||
+    { echo "build_deb: ${secret#"$root"} has mode $(stat -c %a "$secret"), not 640" >&2; exit 1; }
+done
+[ "$(stat -c %a "$root/etc/furuta/daemon.pub")" = 644 ] ||
+  { echo "build_deb: the packaged furutad wrote no daemon.pub of mode 644" >&2; exit 1; }
 if [ "$(id -u)" -eq 0 ]; then
   systemd-tmpfiles --root="$root" --create furuta.conf ||
     { echo "build_deb: systemd-tmpfiles rejected the package's furuta.conf" >&2; exit 1; }

@@ -9,6 +9,8 @@ packages=(
   build-essential cmake ninja-build pkg-config git clang-format
   # messaging
   liblcm-dev liblcm-bin libglib2.0-dev
+  # the daemon's signed answers (Ed25519)
+  libsodium-dev
   # USB
   libusb-1.0-0-dev libhidapi-dev
   # numerics

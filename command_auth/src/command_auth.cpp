@@ -2,19 +2,20 @@
 
 #include <fcntl.h>
 #include <glib.h>
-#include <grp.h>
 #include <pwd.h>
-#include <sys/random.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <fstream>
+#include <limits>
 #include <memory>
 #include <random>
 #include <sstream>
 #include <vector>
+
+#include "furuta/common/wire_text.hpp"
 
 namespace furuta::command_auth {
 
@@ -22,13 +23,6 @@ namespace {
 
 // Bumped if the signed layout ever changes, so an old tag can never verify under a new layout.
 constexpr char kDomain[] = "furuta rig_signed_command_t v1";
-
-struct FdCloser {
-  int fd = -1;
-  ~FdCloser() {
-    if (fd >= 0) ::close(fd);
-  }
-};
 
 struct HmacFree {
   void operator()(GHmac* hmac) const { g_hmac_unref(hmac); }
@@ -40,31 +34,11 @@ void put_u64(GHmac* hmac, std::uint64_t value) {
   g_hmac_update(hmac, bytes, sizeof bytes);
 }
 
-int hex_digit(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
-
-std::string octal_mode(mode_t mode) {
-  char text[8];
-  std::snprintf(text, sizeof text, "%04o", static_cast<unsigned>(mode & 07777));
-  return text;
-}
-
 // Compares in time that does not depend on where the first difference is.
 bool same_tag(const CommandTag& a, const std::uint8_t (&b)[32]) {
   unsigned difference = 0;
   for (std::size_t i = 0; i < a.size(); ++i) difference |= a[i] ^ b[i];
   return difference == 0;
-}
-
-std::string seconds_text(std::int64_t ns) {
-  std::ostringstream out;
-  out.precision(3);
-  out << static_cast<double>(ns) * 1e-9 << " s";
-  return out.str();
 }
 
 }  // namespace
@@ -74,123 +48,6 @@ bool moves_motor(const furuta::rig_command_t& command) {
   return command.kind != furuta::rig_command_t::KIND_STOP &&
          command.kind != furuta::rig_command_t::KIND_ESTOP &&
          command.kind != furuta::rig_command_t::KIND_STATUS_REQUEST;
-}
-
-KeyFile read_command_key(const std::filesystem::path& path) {
-  KeyFile result;
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
-  if (fd < 0) {
-    const int error = errno;
-    result.permission_denied = error == EACCES || error == EPERM;
-    result.problem = "cannot read the command key " + path.string() + ": " + std::strerror(error);
-    return result;
-  }
-  FdCloser closer{fd};
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    result.problem = "the command key " + path.string() + " is not a regular file";
-    return result;
-  }
-  if ((st.st_mode & (S_IROTH | S_IWOTH)) != 0) {
-    result.problem = "the command key " + path.string() + " has mode " + octal_mode(st.st_mode) +
-                     ": every user can read it, so it proves nothing (chmod 0640, group furuta)";
-    return result;
-  }
-  char buffer[256];
-  const ssize_t n = ::read(fd, buffer, sizeof buffer);
-  if (n < 0) {
-    result.problem = "cannot read the command key " + path.string() + ": " + std::strerror(errno);
-    return result;
-  }
-  std::string text(buffer, static_cast<std::size_t>(n));
-  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) {
-    text.pop_back();
-  }
-  const std::string where = path.string() + ": line 1: ";
-  if (text.find('\n') != std::string::npos) {
-    result.problem = where + "the key is one line of 64 hexadecimal digits, found more lines";
-    return result;
-  }
-  if (text.size() != 2 * kKeyBytes) {
-    result.problem = where + "expected 64 hexadecimal digits (a 32-byte key), found " +
-                     std::to_string(text.size()) + " characters";
-    return result;
-  }
-  CommandKey key{};
-  for (std::size_t i = 0; i < kKeyBytes; ++i) {
-    const int high = hex_digit(text[2 * i]);
-    const int low = hex_digit(text[2 * i + 1]);
-    if (high < 0 || low < 0) {
-      const std::size_t column = (high < 0 ? 2 * i : 2 * i + 1) + 1;
-      result.problem = where + "column " + std::to_string(column) + ": '" + text[column - 1] +
-                       "' is not a hexadecimal digit";
-      return result;
-    }
-    key[i] = static_cast<std::uint8_t>(high * 16 + low);
-  }
-  result.key = key;
-  return result;
-}
-
-KeyCreation ensure_command_key(const std::filesystem::path& path, const std::string& group) {
-  KeyCreation result;
-  struct stat st {};
-  if (::lstat(path.c_str(), &st) == 0) return result;  // there already: never replaced here
-  if (errno != ENOENT) {
-    result.problem = "cannot look at " + path.string() + ": " + std::strerror(errno);
-    return result;
-  }
-  CommandKey key{};
-  if (::getrandom(key.data(), key.size(), 0) != static_cast<ssize_t>(key.size())) {
-    result.problem = std::string("no random bytes for a command key: ") + std::strerror(errno);
-    return result;
-  }
-  std::string text;
-  static constexpr char kHex[] = "0123456789abcdef";
-  for (std::uint8_t b : key) {
-    text += kHex[b >> 4];
-    text += kHex[b & 15];
-  }
-  text += '\n';
-  // Written beside it and linked into place, so the key appears whole or not at all, and a key
-  // another process created meanwhile is kept (link refuses to replace).
-  std::string temp = path.string() + ".newXXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) {
-    result.problem = "cannot create the command key " + path.string() + ": " + std::strerror(errno);
-    return result;
-  }
-  bool linked = false;
-  {
-    FdCloser closer{fd};
-    std::string why;
-    if (::fchmod(fd, 0640) != 0) why = std::string("chmod: ") + std::strerror(errno);
-    if (why.empty() && ::geteuid() == 0 && !group.empty()) {
-      struct group entry {};
-      struct group* found = nullptr;
-      std::vector<char> buffer(4096);
-      if (::getgrnam_r(group.c_str(), &entry, buffer.data(), buffer.size(), &found) == 0 && found &&
-          ::fchown(fd, 0, found->gr_gid) != 0) {
-        why = std::string("chown root:") + group + ": " + std::strerror(errno);
-      }
-    }
-    if (why.empty() && ::write(fd, text.data(), text.size()) != static_cast<ssize_t>(text.size())) {
-      why = std::string("write: ") + std::strerror(errno);
-    }
-    if (why.empty() && ::fsync(fd) != 0) why = std::string("fsync: ") + std::strerror(errno);
-    if (why.empty()) {
-      if (::link(temp.c_str(), path.c_str()) == 0) {
-        linked = true;
-      } else if (errno != EEXIST) {
-        why = std::string("link: ") + std::strerror(errno);
-      }
-    }
-    if (!why.empty())
-      result.problem = "cannot create the command key " + path.string() + ": " + why;
-  }
-  ::unlink(temp.c_str());
-  result.created = linked;
-  return result;
 }
 
 CommandTag command_tag(const CommandKey& key, const furuta::rig_signed_command_t& message) {
@@ -249,66 +106,217 @@ std::string this_sender() {
   return user + "@" + host;
 }
 
+namespace {
+
+constexpr char kStateHeader[] = "furuta command replay state v1";
+constexpr char kStateKey[] = "highest_signed_wall_ns";
+
+// a - b without overflow, saturated to the int64 range: signing times come from the wire.
+std::int64_t saturating_difference(std::int64_t a, std::int64_t b) {
+  std::int64_t out = 0;
+  if (__builtin_sub_overflow(a, b, &out)) {
+    return a > b ? std::numeric_limits<std::int64_t>::max()
+                 : std::numeric_limits<std::int64_t>::min();
+  }
+  return out;
+}
+
+std::int64_t saturating_sum(std::int64_t a, std::int64_t b) {
+  std::int64_t out = 0;
+  if (__builtin_add_overflow(a, b, &out)) {
+    return b > 0 ? std::numeric_limits<std::int64_t>::max()
+                 : std::numeric_limits<std::int64_t>::min();
+  }
+  return out;
+}
+
+// |difference| in seconds, for messages; any pair of int64 times formats without overflow.
+std::string distance_text(std::int64_t a, std::int64_t b) {
+  const long double seconds = (static_cast<long double>(a) - static_cast<long double>(b)) * 1e-9L;
+  std::ostringstream out;
+  out.precision(3);
+  out << static_cast<double>(seconds < 0 ? -seconds : seconds) << " s";
+  return out.str();
+}
+
+Verdict refused(Refusal refusal, std::string reason) {
+  Verdict verdict;
+  verdict.refusal = refusal;
+  verdict.reason = std::move(reason);
+  return verdict;
+}
+
+}  // namespace
+
+ReplayState read_replay_state(const std::filesystem::path& path) {
+  ReplayState state;
+  std::ifstream in(path);
+  if (!in) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec) && !ec) return state;
+    state.problem = "cannot read the replay state " + path.string() + ": " + std::strerror(errno);
+    return state;
+  }
+  std::string header, key;
+  std::getline(in, header);
+  if (header != kStateHeader) {
+    state.problem = path.string() + ": line 1: expected \"" + kStateHeader + "\"";
+    return state;
+  }
+  long long value = 0;
+  if (!(in >> key >> value) || key != kStateKey) {
+    state.problem = path.string() + ": line 2: expected \"" + kStateKey + " <ns>\"";
+    return state;
+  }
+  state.highest_signed_wall_ns = value;
+  return state;
+}
+
+std::string write_replay_state(const std::filesystem::path& path,
+                               std::int64_t highest_signed_wall_ns) {
+  const std::string text = std::string(kStateHeader) + "\n" + kStateKey + " " +
+                           std::to_string(highest_signed_wall_ns) + "\n";
+  const std::string temp = path.string() + ".new";
+  const auto fail = [&](const char* what) {
+    const std::string why = std::string(what) + " " + temp + ": " + std::strerror(errno);
+    ::unlink(temp.c_str());
+    return why;
+  };
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0640);
+  if (fd < 0) return fail("cannot create");
+  const bool written = ::write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  const bool synced = written && ::fsync(fd) == 0;
+  ::close(fd);
+  if (!written) return fail("cannot write");
+  if (!synced) return fail("cannot sync");
+  if (::rename(temp.c_str(), path.c_str()) != 0) return fail("cannot rename into place");
+  // The rename itself reaches the disk with its directory.
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd >= 0) {
+    ::fsync(dir_fd);
+    ::close(dir_fd);
+  }
+  return {};
+}
+
 CommandVerifier::CommandVerifier(std::optional<CommandKey> key, std::string key_problem,
-                                 VerifierSettings settings, std::int64_t started_wall_ns)
+                                 VerifierSettings settings, std::int64_t now_wall_ns,
+                                 std::int64_t now_monotonic_ns)
     : key_(key),
       key_problem_(std::move(key_problem)),
-      settings_(settings),
-      started_wall_ns_(started_wall_ns) {}
-
-void CommandVerifier::forget_before(std::int64_t wall_ns) {
-  while (!taken_.empty() && taken_.front().first < wall_ns) {
-    taken_tags_.erase(taken_.front().second);
-    taken_.pop_front();
+      settings_(std::move(settings)),
+      started_wall_ns_(now_wall_ns),
+      started_monotonic_ns_(now_monotonic_ns),
+      highest_taken_ns_(std::numeric_limits<std::int64_t>::min()) {
+  start_floor_wall_ns_ = now_wall_ns;
+  if (settings_.state_file.empty()) return;
+  const ReplayState state = read_replay_state(settings_.state_file);
+  if (state.highest_signed_wall_ns) {
+    highest_taken_ns_ = *state.highest_signed_wall_ns;
+    start_floor_wall_ns_ = std::max(start_floor_wall_ns_, saturating_sum(highest_taken_ns_, 1));
+    return;
   }
+  if (state.problem.empty()) return;  // no file yet: nothing was ever taken with it
+  // Unreadable: anything an earlier daemon took was signed at most max_ahead past its clock,
+  // which was before now unless the clock was stepped back.
+  start_floor_wall_ns_ = saturating_sum(now_wall_ns, settings_.max_ahead.count());
+  state_problem_ = state.problem + "; starts signed before " +
+                   distance_text(start_floor_wall_ns_, now_wall_ns) +
+                   " from now are refused as possible replays";
+}
+
+std::int64_t CommandVerifier::floor_wall_ns(std::int64_t now_monotonic_ns) const {
+  const std::int64_t elapsed = saturating_difference(now_monotonic_ns, started_monotonic_ns_);
+  const std::int64_t trailing =
+      saturating_difference(saturating_sum(started_wall_ns_, std::max<std::int64_t>(0, elapsed)),
+                            settings_.window.count());
+  return std::max(start_floor_wall_ns_, trailing);
+}
+
+std::string CommandVerifier::record_taken(std::int64_t signed_wall_ns) {
+  if (settings_.state_file.empty() || signed_wall_ns <= highest_taken_ns_) return {};
+  if (std::string why = write_replay_state(settings_.state_file, signed_wall_ns); !why.empty()) {
+    return why;
+  }
+  highest_taken_ns_ = signed_wall_ns;
+  return {};
 }
 
 Verdict CommandVerifier::verify(const furuta::rig_signed_command_t& message,
-                                std::int64_t now_wall_ns) {
-  Verdict verdict;
+                                std::int64_t now_wall_ns, std::int64_t now_monotonic_ns) {
   if (!key_) {
-    verdict.reason = "this daemon has no command key, so it takes no start: " + key_problem_;
-    return verdict;
+    return refused(Refusal::no_key,
+                   "this daemon has no command key, so it takes no start: " + key_problem_);
+  }
+  // Sizes first: nothing of an oversized message is hashed, stored or echoed.
+  if (message.sender.size() > settings_.max_sender_bytes) {
+    return refused(Refusal::malformed, "sender: " + std::to_string(message.sender.size()) +
+                                           " bytes, above the limit of " +
+                                           std::to_string(settings_.max_sender_bytes));
+  }
+  if (message.command.size() > settings_.max_command_bytes) {
+    return refused(Refusal::malformed, "command: " + std::to_string(message.command.size()) +
+                                           " bytes, above the limit of " +
+                                           std::to_string(settings_.max_command_bytes));
   }
   const CommandTag expected = command_tag(*key_, message);
   if (!same_tag(expected, message.tag)) {
-    verdict.reason = "bad signature from \"" + message.sender +
-                     "\": not signed with this rig's command key, or changed on the way";
-    return verdict;
+    return refused(Refusal::bad_signature,
+                   "bad signature from " + text::wire_quoted(message.sender, 64) +
+                       ": not signed with this rig's command key, or changed on the way");
   }
-  const std::int64_t window = settings_.window.count();
-  if (message.signed_wall_ns < started_wall_ns_) {
-    verdict.reason = "signed before this daemon started (" +
-                     seconds_text(started_wall_ns_ - message.signed_wall_ns) +
-                     "): refused as a possible replay; sign it again";
-    return verdict;
-  }
-  if (message.signed_wall_ns < now_wall_ns - window ||
-      message.signed_wall_ns > now_wall_ns + window) {
-    const std::int64_t off = message.signed_wall_ns - now_wall_ns;
-    verdict.reason = "signed " + seconds_text(off < 0 ? -off : off) +
-                     (off < 0 ? " ago" : " ahead of the daemon's clock") + ", outside the +- " +
-                     seconds_text(window) +
-                     " a signed command is taken in (replayed, or the clocks are out of step)";
-    return verdict;
-  }
-  forget_before(now_wall_ns - window);
-  if (taken_tags_.count(expected) != 0) {
-    verdict.reason = "replayed: this signed command was taken already";
-    return verdict;
-  }
-  if (taken_.size() >= settings_.max_remembered) {
-    verdict.reason = "more than " + std::to_string(settings_.max_remembered) +
-                     " signed commands within the replay window; try again shortly";
-    return verdict;
-  }
+  Verdict verdict;
   if (message.command.empty() ||
       verdict.command.decode(message.command.data(), 0, static_cast<int>(message.command.size())) !=
           static_cast<int>(message.command.size())) {
-    verdict.reason = "the signed bytes are not one rig_command_t";
+    return refused(Refusal::malformed, "the signed bytes are not one rig_command_t");
+  }
+  if (!moves_motor(verdict.command)) {
+    // Its tag says who sent it; replaying a stop or a status request moves nothing.
+    verdict.accepted = true;
     return verdict;
   }
-  taken_.emplace_back(message.signed_wall_ns, expected);
+  const std::int64_t signed_ns = message.signed_wall_ns;
+  const std::int64_t window = settings_.window.count();
+  if (signed_ns < saturating_difference(now_wall_ns, window)) {
+    return refused(Refusal::out_of_time,
+                   "signed " + distance_text(now_wall_ns, signed_ns) + " ago, outside the " +
+                       distance_text(window, 0) +
+                       " a signed command is taken in (replayed, or the clocks are out of step)");
+  }
+  if (signed_ns > saturating_sum(now_wall_ns, settings_.max_ahead.count())) {
+    return refused(Refusal::out_of_time, "signed " + distance_text(signed_ns, now_wall_ns) +
+                                             " ahead of the daemon's clock, more than the " +
+                                             distance_text(settings_.max_ahead.count(), 0) +
+                                             " allowed (the clocks are out of step: NTP on both)");
+  }
+  const std::int64_t floor = floor_wall_ns(now_monotonic_ns);
+  if (signed_ns < floor) {
+    return refused(Refusal::out_of_time,
+                   "signed " + distance_text(floor, signed_ns) +
+                       " before the replay floor (this daemon's start, the latest command it "
+                       "took before a restart, or its window since): refused as a possible "
+                       "replay; sign it again");
+  }
+  while (!taken_.empty() && taken_.begin()->first < floor) {
+    taken_tags_.erase(taken_.begin()->second);
+    taken_.erase(taken_.begin());
+  }
+  if (taken_tags_.count(expected) != 0) {
+    return refused(Refusal::replayed, "replayed: this signed command was taken already");
+  }
+  if (taken_.size() >= settings_.max_remembered) {
+    return refused(Refusal::memory_full, "more than " + std::to_string(settings_.max_remembered) +
+                                             " signed commands within the replay window; try "
+                                             "again shortly");
+  }
+  if (std::string why = record_taken(signed_ns); !why.empty()) {
+    return refused(Refusal::not_recorded,
+                   "cannot record the replay floor (" + why +
+                       "): refused, since a restart could then take it again");
+  }
+  taken_.emplace(signed_ns, expected);
   taken_tags_.insert(expected);
   verdict.accepted = true;
   return verdict;

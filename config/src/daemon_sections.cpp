@@ -75,6 +75,15 @@ DaemonConfig read_daemon(Section d) {
   dc.command_window_s = d.number(
       "command_window_s", dc.command_window_s, [](double v) { return v >= 1 && v <= 3600; },
       "in [1, 3600]");
+  dc.command_clock_skew_s = d.number(
+      "command_clock_skew_s", dc.command_clock_skew_s, [](double v) { return v >= 0 && v <= 60; },
+      "in [0, 60]");
+  for (auto [key, value] : {std::pair{"command_state_file", &dc.command_state_file},
+                            std::pair{"daemon_key_file", &dc.daemon_key_file},
+                            std::pair{"daemon_public_key_file", &dc.daemon_public_key_file}}) {
+    *value = d.text(key, *value);
+    if (value->empty()) d.fail(key, d.node(key), "must not be empty");
+  }
   read_realtime(d.child("realtime"), dc);
   d.reject_unknown_keys();
   return dc;
@@ -135,6 +144,9 @@ CommandLimitsConfig read_limits(Section l, const SafetyConfig& safety) {
   lc.max_commands_per_s = static_cast<int>(l.integer(
       "max_commands_per_s", lc.max_commands_per_s,
       [](std::int64_t v) { return v >= 1 && v <= 1000; }, "in [1, 1000]"));
+  lc.max_stops_per_s = static_cast<int>(l.integer(
+      "max_stops_per_s", lc.max_stops_per_s, [](std::int64_t v) { return v >= 1 && v <= 1000; },
+      "in [1, 1000]"));
   l.reject_unknown_keys();
   return lc;
 }

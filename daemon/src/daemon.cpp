@@ -4,6 +4,7 @@
 #include <ctime>
 #include <future>
 
+#include "furuta/common/wire_text.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::daemon {
@@ -60,7 +61,8 @@ Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, br
       events_(settings_.queue_capacity),
       validator_(settings_.command_limits),
       verifier_(settings_.command_key, settings_.command_key_problem, settings_.command_auth,
-                wall_now_ns()) {
+                wall_now_ns(), monotonic_now_ns()) {
+  if (settings_.daemon_key) signer_.emplace(*settings_.daemon_key);
   loop_ = std::make_unique<ControlLoop>(settings_.loop, motor, encoder, clock, events_);
   recorder_ = std::make_unique<SessionRecorder>(
       settings_.recorder, &lcm_,
@@ -72,6 +74,17 @@ Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, br
   subscription_ = lcm_.subscribe(session_log::kChannelCommand, &Daemon::on_command, this);
   signed_subscription_ =
       lcm_.subscribe(session_log::kChannelSignedCommand, &Daemon::on_signed_command, this);
+  // A flood must not pile up in LCM's queue behind the e-stop that ends it: the kernel's socket
+  // buffer holds what waits.
+  subscription_->setQueueCapacity(64);
+  signed_subscription_->setQueueCapacity(64);
+}
+
+std::int64_t Daemon::monotonic_now_ns() const {
+  if (settings_.monotonic_clock_ns) return settings_.monotonic_clock_ns();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
 }
 
 std::int64_t Daemon::wall_now_ns() const {
@@ -187,8 +200,20 @@ furuta::rig_status_t Daemon::status_message() {
   m.refused_request_id = h.refused_request_id;
   m.refused_reason = h.refused_reason;
   m.logs_problem = snapshot_.logs_problem;
-  m.refused_unauthenticated = refused_unauthenticated_.load();
   m.unauthenticated_reason = unauthenticated_reason_;
+  const RefusalCounts& r = refusals_;
+  m.refused_unsigned = r.unsigned_motor_commands.load();
+  m.refused_bad_signature = r.bad_signature.load();
+  m.refused_malformed = r.malformed.load();
+  m.refused_out_of_time = r.out_of_time.load();
+  m.refused_replayed = r.replayed.load();
+  m.refused_unauthenticated = m.refused_unsigned + m.refused_bad_signature + m.refused_malformed +
+                              m.refused_out_of_time + m.refused_replayed;
+  m.refused_start_budget = r.start_budget.load();
+  m.refused_stop_budget = r.stop_budget.load();
+  m.refused_status_budget = r.status_budget.load();
+  m.refused_invalid = r.invalid.load();
+  m.replies_withheld = r.replies_withheld.load();
   return m;
 }
 
@@ -207,8 +232,7 @@ void Daemon::io_thread_main() {
   auto publish_status = [&] {
     check_logs_dir();
     refresh_snapshot();
-    const furuta::rig_status_t status = status_message();
-    lcm_.publish(session_log::kChannelStatus, &status);
+    publish(status_message());
   };
   for (;;) {
     bool any = false;
@@ -243,24 +267,115 @@ void Daemon::lcm_thread_main() {
   while (!lcm_stop_.load()) lcm_.handleTimeout(50);
 }
 
-void Daemon::on_command(const lcm::ReceiveBuffer*, const std::string&,
-                        const furuta::rig_command_t* msg) {
-  const furuta::rig_status_t reply = handle_unsigned_command(*msg);
-  lcm_.publish(session_log::kChannelStatus, &reply);
+namespace {
+
+// Larger than any command or signed command the tools send (the verifier's limits are below it):
+// anything bigger is not decoded at all.
+constexpr int kMaxCommandMessageBytes = 2048;
+
+}  // namespace
+
+void Daemon::on_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
+  furuta::rig_command_t command{};
+  if (buffer->data_size > static_cast<std::uint32_t>(kMaxCommandMessageBytes) ||
+      command.decode(buffer->data, 0, static_cast<int>(buffer->data_size)) < 0) {
+    refusals_.malformed.fetch_add(1);
+    return;  // nothing to address a reply to
+  }
+  publish_reply(handle_unsigned_command(command),
+                command.kind == furuta::rig_command_t::KIND_ESTOP);
 }
 
-void Daemon::on_signed_command(const lcm::ReceiveBuffer*, const std::string&,
-                               const furuta::rig_signed_command_t* msg) {
-  const furuta::rig_status_t reply = handle_signed_command(*msg);
-  lcm_.publish(session_log::kChannelStatus, &reply);
+void Daemon::on_signed_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
+  furuta::rig_signed_command_t message{};
+  if (buffer->data_size > static_cast<std::uint32_t>(kMaxCommandMessageBytes) ||
+      message.decode(buffer->data, 0, static_cast<int>(buffer->data_size)) < 0) {
+    refusals_.malformed.fetch_add(1);
+    return;
+  }
+  const furuta::rig_status_t reply = handle_signed_command(message);
+  bool estop = false;
+  if (reply.request_accepted) {
+    furuta::rig_command_t command{};
+    estop =
+        command.decode(message.command.data(), 0, static_cast<int>(message.command.size())) > 0 &&
+        command.kind == furuta::rig_command_t::KIND_ESTOP;
+  }
+  publish_reply(reply, estop);
+}
+
+void Daemon::publish(furuta::rig_status_t status) {
+  command_auth::bound_status_text(status);
+  if (signer_) signer_->sign(status);
+  lcm_.publish(session_log::kChannelStatus, &status);
+}
+
+void Daemon::publish_reply(furuta::rig_status_t reply, bool estop) {
+  // The loop's time, as for the command budgets: exact in virtual time.
+  const std::int64_t now = loop_->counters().clock_ns.load();
+  const CommandLimits& limits = settings_.command_limits;
+  if (!reply.request_accepted &&
+      !refusal_replies_.take(std::max(0, limits.max_refusal_replies_per_s), now)) {
+    refusals_.replies_withheld.fetch_add(1);
+    return;
+  }
+  if (reply.request_accepted && estop &&
+      !estop_replies_.take(std::max(0, limits.max_estop_replies_per_s), now)) {
+    refusals_.replies_withheld.fetch_add(1);
+    return;
+  }
+  publish(std::move(reply));
+}
+
+void Daemon::count(CommandRefusal refusal) {
+  switch (refusal) {
+    case CommandRefusal::none:
+      break;
+    case CommandRefusal::start_budget:
+      refusals_.start_budget.fetch_add(1);
+      break;
+    case CommandRefusal::stop_budget:
+      refusals_.stop_budget.fetch_add(1);
+      break;
+    case CommandRefusal::status_budget:
+      refusals_.status_budget.fetch_add(1);
+      break;
+    case CommandRefusal::invalid:
+      refusals_.invalid.fetch_add(1);
+      break;
+  }
 }
 
 furuta::rig_status_t Daemon::refuse_unauthenticated(std::int64_t request_id,
+                                                    command_auth::Refusal refusal,
                                                     const std::string& reason) {
-  refused_unauthenticated_.fetch_add(1);
+  using command_auth::Refusal;
+  switch (refusal) {
+    case Refusal::bad_signature:
+      refusals_.bad_signature.fetch_add(1);
+      break;
+    case Refusal::malformed:
+      refusals_.malformed.fetch_add(1);
+      break;
+    case Refusal::out_of_time:
+      refusals_.out_of_time.fetch_add(1);
+      break;
+    case Refusal::replayed:
+      refusals_.replayed.fetch_add(1);
+      break;
+    case Refusal::unsigned_command:
+      refusals_.unsigned_motor_commands.fetch_add(1);
+      break;
+    case Refusal::none:
+    case Refusal::no_key:
+    case Refusal::memory_full:
+    case Refusal::not_recorded:
+      refusals_.invalid.fetch_add(1);  // a start this daemon cannot take now
+      break;
+  }
   {
     std::lock_guard lock(snapshot_mutex_);
-    unauthenticated_reason_ = reason;
+    unauthenticated_reason_ = text::printable_text(reason, 512);
   }
   furuta::rig_status_t reply = status_message();
   reply.reply_to_request_id = request_id;
@@ -272,7 +387,7 @@ furuta::rig_status_t Daemon::refuse_unauthenticated(std::int64_t request_id,
 furuta::rig_status_t Daemon::handle_unsigned_command(const furuta::rig_command_t& command) {
   if (command_auth::moves_motor(command)) {
     return refuse_unauthenticated(
-        command.request_id,
+        command.request_id, command_auth::Refusal::unsigned_command,
         "unsigned: a command that moves the motor must be signed with the rig's command key "
         "(furuta start signs it when it may read the key; docs/security.md)");
   }
@@ -283,7 +398,7 @@ furuta::rig_status_t Daemon::handle_signed_command(const furuta::rig_signed_comm
   command_auth::Verdict verdict;
   {
     std::lock_guard lock(command_mutex_);
-    verdict = verifier_.verify(message, wall_now_ns());
+    verdict = verifier_.verify(message, wall_now_ns(), monotonic_now_ns());
   }
   if (!verdict.accepted) {
     // The request id only addresses the reply; nothing else of an unverified command is used.
@@ -291,7 +406,8 @@ furuta::rig_status_t Daemon::handle_signed_command(const furuta::rig_signed_comm
     const bool decodable =
         !message.command.empty() &&
         unverified.decode(message.command.data(), 0, static_cast<int>(message.command.size())) > 0;
-    return refuse_unauthenticated(decodable ? unverified.request_id : 0, verdict.reason);
+    return refuse_unauthenticated(decodable ? unverified.request_id : 0, verdict.refusal,
+                                  verdict.reason);
   }
   if (verdict.command.kind == furuta::rig_command_t::KIND_START_SESSION) {
     std::vector<std::uint8_t> encoded(static_cast<std::size_t>(message.getEncodedSize()));
@@ -328,6 +444,7 @@ furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command
     decision = validator_.validate(command, loop_->counters().clock_ns.load());
     if (decision.accepted) decision = carry_out(command);
   }
+  count(decision.refusal);
   furuta::rig_status_t reply = status_message();
   reply.reply_to_request_id = command.request_id;
   reply.request_accepted = decision.accepted;
@@ -343,9 +460,11 @@ CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {
       // session may begin between this and its turn) and refuses by the request's id.
       if (loop_->counters().state.load() == LoopState::running) {
         std::lock_guard lock(snapshot_mutex_);
-        decision = {false, "a session is already running" +
-                               (snapshot_.session.empty() ? "" : ": " + snapshot_.session) +
-                               " (furuta stop ends it)"};
+        decision = {false,
+                    "a session is already running" +
+                        (snapshot_.session.empty() ? "" : ": " + snapshot_.session) +
+                        " (furuta stop ends it)",
+                    CommandRefusal::invalid};
         break;
       }
       SessionRequest request;
@@ -353,12 +472,12 @@ CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {
       try {
         const ExcitationSpec spec = spec_from_command(command, settings_.default_excitation);
         if (std::string why = check_spec_limits(spec, settings_.command_limits); !why.empty()) {
-          decision = {false, why};
+          decision = {false, why, CommandRefusal::invalid};
           break;
         }
         request.excitation = Excitation(spec);
       } catch (const std::exception& e) {
-        decision = {false, e.what()};
+        decision = {false, e.what(), CommandRefusal::invalid};
         break;
       }
       // Before the loop takes it: a session whose log cannot even be created would drive the
@@ -367,7 +486,7 @@ CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {
         if (std::string why = session_log::logs_dir_problem(
                 settings_.recorder.logs_dir, settings_.recorder.min_free_bytes_to_start);
             !why.empty()) {
-          decision = {false, "cannot log a session: " + why};
+          decision = {false, "cannot log a session: " + why, CommandRefusal::invalid};
           break;
         }
       }
@@ -378,7 +497,7 @@ CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {
               unique_session_name(session_name(wall, command.label), settings_.recorder.logs_dir));
       copy_to(request.label, command.label);
       if (!loop_->request_session(request)) {
-        decision = {false, "a start request is already waiting"};
+        decision = {false, "a start request is already waiting", CommandRefusal::invalid};
       }
       break;
     }

@@ -175,8 +175,11 @@ DaemonSettings daemon_settings_from_config(const config::RigConfig& config) {
   d.command_limits.max_arm_switch_rad = config.limits.max_arm_switch_rad;
   d.command_limits.max_commands_per_s = config.limits.max_commands_per_s;
   d.default_excitation = excitation_from_config(config.excitation);
+  d.command_limits.max_stops_per_s = config.limits.max_stops_per_s;
   d.command_auth.window =
       std::chrono::nanoseconds(std::llround(config.daemon.command_window_s * 1e9));
+  d.command_auth.max_ahead =
+      std::chrono::nanoseconds(std::llround(config.daemon.command_clock_skew_s * 1e9));
 
   d.realtime.enabled = config.daemon.realtime;
   d.realtime.fifo_priority = config.daemon.fifo_priority;

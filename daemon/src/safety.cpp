@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "furuta/common/wire_text.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 
 namespace furuta::daemon {
@@ -27,21 +28,7 @@ std::string shortest_text(double value) {
 // A string from the wire, made safe to echo into a status reply or a log line: bounded, and every
 // byte outside printable ASCII escaped.
 std::string printable_quoted(std::string_view text) {
-  constexpr std::size_t kMaxShown = 40;
-  std::string out = "\"";
-  for (std::size_t i = 0; i < text.size() && i < kMaxShown; ++i) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    if (c >= 0x20 && c < 0x7f && c != '"' && c != '\\') {
-      out += static_cast<char>(c);
-    } else {
-      char escaped[8];
-      std::snprintf(escaped, sizeof escaped, "\\x%02x", c);
-      out += escaped;
-    }
-  }
-  if (text.size() > kMaxShown) out += "...";
-  out += '"';
-  return out;
+  return text::wire_quoted(text, 48);
 }
 
 std::string known_profiles() {
@@ -136,21 +123,21 @@ StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) no
   return StopReason::none;
 }
 
-bool CommandValidator::Bucket::take(double per_second, std::int64_t now_ns) {
-  if (tokens < 0.0) {
-    tokens = per_second;
-    last_refill_ns = now_ns;
-  } else if (now_ns > last_refill_ns) {
+bool TokenBucket::take(double per_second, std::int64_t now_ns) {
+  if (tokens_ < 0.0) {
+    tokens_ = per_second;
+    last_refill_ns_ = now_ns;
+  } else if (now_ns > last_refill_ns_) {
     // Unsigned difference: the subtraction cannot overflow whatever the two stamps are.
     const auto elapsed_ns =
-        static_cast<std::uint64_t>(now_ns) - static_cast<std::uint64_t>(last_refill_ns);
-    tokens = std::min(per_second, tokens + static_cast<double>(elapsed_ns) * per_second / 1e9);
-    last_refill_ns = now_ns;
+        static_cast<std::uint64_t>(now_ns) - static_cast<std::uint64_t>(last_refill_ns_);
+    tokens_ = std::min(per_second, tokens_ + static_cast<double>(elapsed_ns) * per_second / 1e9);
+    last_refill_ns_ = now_ns;
   }
   // The slack absorbs rounding in refills summed over many small intervals.
   constexpr double kSlack = 1e-9;
-  if (tokens + kSlack < 1.0) return false;
-  tokens = std::max(0.0, tokens - 1.0);
+  if (tokens_ + kSlack < 1.0) return false;
+  tokens_ = std::max(0.0, tokens_ - 1.0);
   return true;
 }
 
@@ -158,32 +145,39 @@ CommandDecision CommandValidator::validate(const rig_command_t& command, std::in
   // An e-stop must get through whatever else is flooding the channel, so it neither needs nor
   // spends a token.
   if (command.kind == rig_command_t::KIND_ESTOP) return {true, {}};
-
-  if (command.kind == rig_command_t::KIND_STATUS_REQUEST) {
-    if (!status_requests_.take(std::max(0, limits_.max_status_requests_per_s), now_ns)) {
-      return {false, "rate limit: more than " + std::to_string(limits_.max_status_requests_per_s) +
-                         " status requests per second"};
-    }
+  // Each kind spends its own budget before being looked at, so a flood of garbage is throttled
+  // too, and never at the expense of another kind.
+  const auto over = [](const char* what, int per_second, CommandRefusal refusal) {
+    return CommandDecision{
+        false, "rate limit: more than " + std::to_string(per_second) + " " + what + " per second",
+        refusal};
+  };
+  switch (command.kind) {
+    case rig_command_t::KIND_STATUS_REQUEST:
+      if (!status_requests_.take(std::max(0, limits_.max_status_requests_per_s), now_ns)) {
+        return over("status requests", limits_.max_status_requests_per_s,
+                    CommandRefusal::status_budget);
+      }
+      return {true, {}};
+    case rig_command_t::KIND_STOP:
+      if (!stops_.take(std::max(0, limits_.max_stops_per_s), now_ns)) {
+        return over("stops", limits_.max_stops_per_s, CommandRefusal::stop_budget);
+      }
+      return {true, {}};
+    default:
+      break;
+  }
+  if (!starts_.take(std::max(0, limits_.max_commands_per_s), now_ns)) {
+    return over("starts", limits_.max_commands_per_s, CommandRefusal::start_budget);
+  }
+  if (command.kind == rig_command_t::KIND_START_SESSION) {
+    auto problem = check_start_session(command, limits_);
+    if (!problem.empty()) return {false, std::move(problem), CommandRefusal::invalid};
     return {true, {}};
   }
-  // Everything else spends a token before being looked at, so a flood of garbage is throttled too.
-  if (!commands_.take(std::max(0, limits_.max_commands_per_s), now_ns)) {
-    return {false, "rate limit: more than " + std::to_string(limits_.max_commands_per_s) +
-                       " commands per second"};
-  }
-
-  switch (command.kind) {
-    case rig_command_t::KIND_STOP:
-      return {true, {}};
-    case rig_command_t::KIND_START_SESSION: {
-      auto problem = check_start_session(command, limits_);
-      if (!problem.empty()) return {false, std::move(problem)};
-      return {true, {}};
-    }
-    default:
-      return {false, "kind: " + std::to_string(static_cast<int>(command.kind)) +
-                         " is not a known command"};
-  }
+  return {false,
+          "kind: " + std::to_string(static_cast<int>(command.kind)) + " is not a known command",
+          CommandRefusal::invalid};
 }
 
 ExcitationSpec spec_from_command(const rig_command_t& command, const ExcitationSpec& defaults) {

@@ -2,11 +2,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -18,6 +20,7 @@
 #include "commands.hpp"
 #include "daemon_channel.hpp"
 #include "furuta/command_auth/command_auth.hpp"
+#include "furuta/command_auth/status_signature.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
@@ -164,6 +167,12 @@ class SteppedDaemon final : public DaemonChannel {
     settings_.command_limits.max_commands_per_s = 1000;  // the polls are not under test
     EXPECT_EQ(command_auth::ensure_command_key(key_path(), "").problem, "");
     settings_.command_key = command_auth::read_command_key(key_path()).key;
+    // The daemon signs its answers; `furuta` checks them with the public half.
+    EXPECT_EQ(command_auth::ensure_command_key(key_dir_.path() / "daemon.key", "").problem, "");
+    settings_.daemon_key = command_auth::read_command_key(key_dir_.path() / "daemon.key").key;
+    EXPECT_EQ(command_auth::write_daemon_public_key(
+                  public_key_path(), command_auth::daemon_public_key(*settings_.daemon_key)),
+              "");
     subscription_ = lcm_.subscribe(session_log::kChannelStatus, &SteppedDaemon::on_status, this);
     daemon_ = std::make_unique<daemon::Daemon>(settings_, *motor_, *encoder_, clock_, lcm_);
     daemon_->start();
@@ -190,21 +199,49 @@ class SteppedDaemon final : public DaemonChannel {
   void keep_time_still() { steps_per_command_ = 0; }
 
   void send(const furuta::rig_command_t& command) override {
-    lcm_.publish(session_log::kChannelCommand, &command);
+    ++sent_[static_cast<std::uint8_t>(command.kind)];
+    if (command.kind == lost_kind_ && to_lose_ > 0) {
+      --to_lose_;
+    } else {
+      lcm_.publish(session_log::kChannelCommand, &command);
+    }
     step_cycles(steps_per_command_);
   }
   void send_signed(const furuta::rig_signed_command_t& command) override {
+    if (on_signed_) on_signed_(command);
     lcm_.publish(session_log::kChannelSignedCommand, &command);
     step_cycles(steps_per_command_);
   }
+  // Called with each signed command before the daemon sees it (a forger watching the group).
+  void watch_signed(std::function<void(const furuta::rig_signed_command_t&)> forger) {
+    on_signed_ = std::move(forger);
+  }
   // The key this daemon checks starts with (furuta start signs with it).
   fs::path key_path() const { return key_dir_.path() / "command.key"; }
+  // The public half of the key this daemon signs its answers with.
+  fs::path public_key_path() const { return key_dir_.path() / "daemon.pub"; }
   std::optional<furuta::rig_status_t> receive(std::chrono::milliseconds wait) override {
     std::unique_lock lock(mutex_);
     if (!arrived_.wait_for(lock, wait, [&] { return !statuses_.empty(); })) return std::nullopt;
     furuta::rig_status_t first = statuses_.front();
     statuses_.pop_front();
     return first;
+  }
+  // A status as if published by someone on the group, before what the daemon says next.
+  void inject(const furuta::rig_status_t& status) {
+    std::lock_guard lock(mutex_);
+    statuses_.push_front(status);
+  }
+  // Commands of these kinds reach no daemon (lost in a flood) until `n` of them were sent.
+  void lose_first(std::int8_t kind, int n) {
+    lost_kind_ = kind;
+    to_lose_ = n;
+  }
+  int sent(std::int8_t kind) const { return sent_[static_cast<std::uint8_t>(kind)]; }
+  daemon::Daemon& daemon() { return *daemon_; }
+  const daemon::DaemonSettings& settings() const { return settings_; }
+  void publish_signed(const furuta::rig_signed_command_t& command) {
+    lcm_.publish(session_log::kChannelSignedCommand, &command);
   }
   std::string where() const override { return "memq:// (a test daemon)"; }
 
@@ -229,6 +266,10 @@ class SteppedDaemon final : public DaemonChannel {
   lcm::Subscription* subscription_ = nullptr;
   std::unique_ptr<daemon::Daemon> daemon_;
   int steps_per_command_ = 1;
+  std::int8_t lost_kind_ = -1;
+  int to_lose_ = 0;
+  std::array<int, 256> sent_{};
+  std::function<void(const furuta::rig_signed_command_t&)> on_signed_;
   std::mutex mutex_;
   std::condition_variable arrived_;
   std::deque<furuta::rig_status_t> statuses_;
@@ -246,6 +287,7 @@ Said remote(SteppedDaemon& daemon, RemoteKind kind, StartOptions start = {},
             RemoteOptions options = {}) {
   options.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
   if (options.command_key.empty()) options.command_key = daemon.key_path();
+  if (options.daemon_public_key.empty()) options.daemon_public_key = daemon.public_key_path();
   std::ostringstream out, err;
   Said said;
   said.code = run_remote_command(kind, daemon, options, start, out, err);
@@ -323,6 +365,88 @@ TEST(RemoteCommand, AStartWithNoVerdictInTimeExits2AndNoWaitReturnsAtTheAcceptan
   EXPECT_EQ(said.code, 0) << said.out << said.err;
   EXPECT_TRUE(said.has("furuta start: accepted (request ")) << said.out;
   EXPECT_TRUE(said.has("not waiting for it to run")) << said.out;
+}
+
+// The refusal a forger on the group sends first, unsigned or signed with a key of its own,
+// answering a genuine signed start: ignored, and the daemon's own answer is the one believed.
+TEST(RemoteCommand, AForgedAnswerIsIgnoredAndTheDaemonsOwnBelieved) {
+  SteppedDaemon daemon;
+  daemon.step_cycles(70);
+  const command_auth::StatusSigner forger_key(command_auth::CommandKey{7, 7, 7});
+  int forged = 0;
+  daemon.watch_signed([&](const furuta::rig_signed_command_t& m) {
+    furuta::rig_command_t command{};
+    ASSERT_GT(command.decode(m.command.data(), 0, static_cast<int>(m.command.size())), 0);
+    furuta::rig_status_t lie{};
+    lie.reply_to_request_id = command.request_id;
+    lie.request_accepted = false;
+    lie.request_reason = "the command key was revoked; no session started";
+    daemon.inject(lie);  // unsigned
+    forger_key.sign(lie);
+    daemon.inject(lie);  // signed, but not by the daemon
+    forged += 2;
+  });
+  const Said started = remote(daemon, RemoteKind::start, session_of("free_decay", 30, "real"));
+  EXPECT_EQ(forged, 2);
+  EXPECT_EQ(started.code, 0) << started.out << started.err;
+  EXPECT_FALSE(started.has("revoked")) << started.out << started.err;
+  EXPECT_TRUE(started.has("_real running")) << started.out;
+  EXPECT_EQ(daemon.daemon().loop().counters().state.load(), daemon::LoopState::running);
+}
+
+// Nothing but forged answers: no answer is believed, and the tool says what it ignored.
+TEST(RemoteCommand, OnlyForgedAnswersAreNoAnswerAndSaySo) {
+  SteppedDaemon daemon;
+  RemoteOptions options;
+  options.reply_timeout_s = 0.3;
+  // Checked against a key the daemon does not have: every answer is "wrongly signed".
+  TempDir other;
+  ASSERT_EQ(
+      command_auth::write_daemon_public_key(
+          other.path() / "other.pub", command_auth::daemon_public_key(command_auth::CommandKey{9})),
+      "");
+  options.daemon_public_key = other.path() / "other.pub";
+  const Said said = remote(daemon, RemoteKind::status, {}, options);
+  EXPECT_EQ(said.code, 2) << said.out << said.err;
+  EXPECT_TRUE(said.has("no answer from furutad")) << said.err;
+  EXPECT_TRUE(said.has("wrongly signed answer(s) were ignored")) << said.err;
+  EXPECT_TRUE(said.has("forging the daemon's answers")) << said.err;
+
+  // Without a readable public key the answers are taken, and the tool says they are unverified.
+  RemoteOptions unverified;
+  unverified.daemon_public_key = other.path() / "none.pub";
+  const Said taken = remote(daemon, RemoteKind::status, {}, unverified);
+  EXPECT_EQ(taken.code, 0) << taken.out << taken.err;
+  EXPECT_TRUE(taken.has("WARNING: the daemon's answers are taken unverified")) << taken.err;
+  EXPECT_TRUE(taken.has("state idle")) << taken.out;
+}
+
+// What a stranger's sender did to the status reaches the terminal escaped, never raw.
+TEST(RemoteCommand, StatusPrintsAStrangersTextEscaped) {
+  SteppedDaemon daemon;
+  furuta::rig_command_t start{};
+  start.request_id = 55;
+  start.kind = furuta::rig_command_t::KIND_START_SESSION;
+  daemon.publish_signed(command_auth::sign_command(start, command_auth::CommandKey{1},
+                                                   "\x1b]0;pwned\a\x1b[2J", 0, 1));
+  const Said said = remote(daemon, RemoteKind::status);
+  EXPECT_EQ(said.code, 0) << said.err;
+  EXPECT_TRUE(said.has("1 bad signature")) << said.out;
+  EXPECT_TRUE(said.has("\\x1b]0;pwned\\x07")) << said.out;
+  EXPECT_EQ(said.out.find('\x1b'), std::string::npos) << said.out;
+  EXPECT_EQ(said.out.find('\a'), std::string::npos) << said.out;
+}
+
+// An e-stop lost on the way (a flood, a full socket buffer) is sent again until answered.
+TEST(RemoteCommand, AnEstopIsSentAgainUntilAnswered) {
+  SteppedDaemon daemon;
+  daemon.step_cycles(70);
+  ASSERT_EQ(remote(daemon, RemoteKind::start, session_of("free_decay", 30, "lost")).code, 0);
+  daemon.lose_first(furuta::rig_command_t::KIND_ESTOP, 3);
+  const Said halted = remote(daemon, RemoteKind::estop);
+  EXPECT_EQ(halted.code, 0) << halted.out << halted.err;
+  EXPECT_TRUE(halted.has("_lost ended: estop_command")) << halted.out;
+  EXPECT_GE(daemon.sent(furuta::rig_command_t::KIND_ESTOP), 4);
 }
 
 // status: no latency figures before any session ("no data yet", not 0.0), no fault since start-up;

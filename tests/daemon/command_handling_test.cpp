@@ -20,6 +20,7 @@
 
 #include "daemon_test_support.hpp"
 #include "furuta/command_auth/command_auth.hpp"
+#include "furuta/command_auth/status_signature.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
@@ -46,6 +47,10 @@ class Inbox {
       replies_.push_back(*m);
     }
     arrived_.notify_all();
+  }
+  std::size_t count() {
+    std::lock_guard lock(mutex_);
+    return replies_.size();
   }
   // The reply to `request_id`; fails the test if none comes within a generous time (a hang guard,
   // not a timing assertion).
@@ -280,7 +285,7 @@ TEST(CommandHandling, AFloodIsRateLimitedAndAnEstopAlwaysGetsThrough) {
       ++looked_at;
       continue;
     }
-    EXPECT_EQ(reply.request_reason, "rate limit: more than 5 commands per second");
+    EXPECT_EQ(reply.request_reason, "rate limit: more than 5 starts per second");
   }
   EXPECT_EQ(looked_at, 4);
   const rig_status_t estop_reply = rig.inbox.reply_to(estop);
@@ -305,6 +310,7 @@ TEST(CommandHandling, AFloodIsRateLimitedAndAnEstopAlwaysGetsThrough) {
 TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;
+  rig.settings.command_limits.max_refusal_replies_per_s = 1'000'000'000;  // every one answered
   rig.start(dir.path());
 
   // Malformed messages (found by fuzz_command_decode): a string length of 0 used to throw out of
@@ -319,8 +325,12 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   }
   const std::vector<std::uint8_t> junk(3, 0xEE);
   rig.lcm.publish(session_log::kChannelCommand, junk.data(), static_cast<unsigned>(junk.size()));
+  // Larger than any command: dropped undecoded, like the junk, and counted.
+  const rig_command_t oversized = testing::start_command(std::string(100000, 'p'), 0.2, 10.0);
+  rig.lcm.publish(session_log::kChannelCommand, &oversized);
   const rig_status_t alive = rig.ask(status_request());
   EXPECT_TRUE(alive.request_accepted) << alive.request_reason;
+  EXPECT_EQ(alive.refused_malformed, 5);
 
   rig.step_cycles(70);  // past the rest check
   const double limit = rig.settings.command_limits.max_amplitude_duty;
@@ -337,9 +347,9 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
                           std::numeric_limits<double>::quiet_NaN()}) {
     hostile.push_back(testing::start_command("chirp", 0.2, duration));
   }
-  hostile.push_back(testing::start_command(std::string(100000, 'p'), 0.2, 10.0));
+  hostile.push_back(testing::start_command(std::string(500, 'p'), 0.2, 10.0));
   hostile.push_back(testing::start_command("bang_bang\n", 0.2, 10.0));
-  hostile.push_back(testing::start_command("prbs", 0.2, 10.0, std::string(100000, 'l')));
+  hostile.push_back(testing::start_command("prbs", 0.2, 10.0, std::string(500, 'l')));
   rig_command_t seed = testing::start_command("step", 0.2, 10.0);
   seed.seed = std::numeric_limits<std::int64_t>::min();
   hostile.push_back(seed);
@@ -391,7 +401,8 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   int unauthenticated_sent = 0;
   for (int n = 0; n < cycles * per_cycle; ++n) unauthenticated_sent += n % kinds >= kinds - 2;
   EXPECT_EQ(refused_unauthenticated, unauthenticated_sent);
-  EXPECT_EQ(rig.ask(status_request()).refused_unauthenticated, unauthenticated_sent);
+  // The status counts the malformed messages sent first among them.
+  EXPECT_EQ(rig.ask(status_request()).refused_unauthenticated, unauthenticated_sent + 5);
   EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
 
   const rig_status_t estop = rig.ask(testing::simple_command(rig_command_t::KIND_ESTOP));
@@ -498,6 +509,148 @@ TEST(CommandHandling, OnlyAStartSignedWithTheRigsKeyMovesTheMotor) {
   const command_auth::CommandTag tag = command_auth::command_tag(rig.key, *log.start_command);
   EXPECT_TRUE(std::equal(tag.begin(), tag.end(), log.start_command->tag));
   EXPECT_EQ(log.unknown_channel_events, 0u);
+}
+
+// A signed command with a megabyte of sender, no key needed: refused by its size, and neither the
+// reply nor any status after it quotes it, so every answer stays small enough to receive.
+TEST(CommandHandling, AMegabyteSenderNeitherBlindsTheStatusNorIsEchoed) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.start(dir.path());
+  rig_command_t start = testing::start_command("bang_bang", 0.2, 10.0, "x");
+  start.request_id = 8001;
+  rig.send_message(command_auth::sign_command(start, CommandRig::key_filled_with(0x33),
+                                              std::string(1'000'000, '\x1b'), rig.wall_ns.load(),
+                                              1));
+  const rig_status_t after = rig.ask(status_request());
+  EXPECT_LE(static_cast<std::size_t>(after.getEncodedSize()), command_auth::kMaxStatusBytes);
+  EXPECT_EQ(after.refused_malformed, 1);  // over the size any command has: not even decoded
+  EXPECT_EQ(rig.inbox.count(), 1u);       // nothing answered it
+
+  // Over the sender's limit, within the message's: refused by its size, the reply short.
+  start.request_id = 8002;
+  rig.send_message(command_auth::sign_command(start, CommandRig::key_filled_with(0x33),
+                                              std::string(1000, 'A'), rig.wall_ns.load(), 2));
+  const rig_status_t reply = rig.inbox.reply_to(8002);
+  EXPECT_FALSE(reply.request_accepted);
+  EXPECT_EQ(reply.request_reason, "sender: 1000 bytes, above the limit of 128");
+  EXPECT_LE(static_cast<std::size_t>(reply.getEncodedSize()), command_auth::kMaxStatusBytes);
+  const rig_status_t counted = rig.ask(status_request());
+  EXPECT_EQ(counted.refused_malformed, 2);
+  EXPECT_EQ(counted.refused_unauthenticated, 2);
+  EXPECT_EQ(counted.unauthenticated_reason, reply.request_reason);
+
+  // Within the size, a sender of escape sequences is quoted escaped.
+  start.request_id = 8003;
+  rig.send_message(command_auth::sign_command(start, CommandRig::key_filled_with(0x33),
+                                              "\x1b[2J\x1b]0;pwned\a", rig.wall_ns.load(), 3));
+  const rig_status_t escaped = rig.inbox.reply_to(8003);
+  EXPECT_EQ(escaped.request_reason.find('\x1b'), std::string::npos) << escaped.request_reason;
+  EXPECT_NE(escaped.request_reason.find("\\x1b[2J"), std::string::npos) << escaped.request_reason;
+}
+
+// Stops, e-stops and status requests have budgets of their own: a flood of unsigned stops does not
+// keep a genuine signed start out, and every refusal is counted under its reason.
+TEST(CommandHandling, AStopFloodDoesNotSpendTheStartBudget) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_limits.max_refusal_replies_per_s = 1'000'000'000;
+  rig.start(dir.path());
+  rig.step_cycles(70);  // past the rest check
+  // Time stands still: 100 stops and 100 status requests at once, then the start.
+  std::vector<std::int64_t> stops;
+  for (int i = 0; i < 100; ++i) {
+    stops.push_back(rig.send(testing::simple_command(rig_command_t::KIND_STOP)));
+    rig.send(status_request());
+  }
+  // The loop takes the stops (a stop cancels a start that waits with it), 16 ms pass.
+  rig.step_cycles(1);
+  const rig_status_t start = rig.ask(testing::start_command("bang_bang", 0.2, 30.0, "through"));
+  EXPECT_TRUE(start.request_accepted) << start.request_reason;
+  int stops_refused = 0;
+  for (std::int64_t id : stops) stops_refused += !rig.inbox.reply_to(id).request_accepted;
+  EXPECT_EQ(stops_refused, 100 - rig.settings.command_limits.max_stops_per_s);
+  rig.step_cycles(3);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
+  // The e-stop needs no budget at all.
+  EXPECT_TRUE(rig.ask(testing::simple_command(rig_command_t::KIND_ESTOP)).request_accepted);
+  rig.step_cycles(1);
+  EXPECT_EQ(rig.daemon->loop().counters().last_stop.load(), StopReason::estop_command);
+  rig.step_cycles(70);  // the budgets refill
+  const rig_status_t counts = rig.ask(status_request());
+  EXPECT_EQ(counts.refused_stop_budget, 80);
+  EXPECT_EQ(counts.refused_status_budget, 80);
+  EXPECT_EQ(counts.refused_start_budget, 0);
+  EXPECT_EQ(counts.refused_unauthenticated, 0);
+}
+
+// A flood of wrongly signed commands is counted, but only answered within the refusal reply
+// budget: the daemon does not echo a flood onto the group. Accepted commands are always answered.
+TEST(CommandHandling, RefusalsAreAnsweredWithinTheirBudgetAndAllCounted) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.start(dir.path());
+  const rig_command_t start = testing::start_command("bang_bang", 0.2, 30.0, "flood");
+  for (int i = 0; i < 500; ++i) rig.send_signed(start, CommandRig::key_filled_with(0x33));
+  const rig_status_t status = rig.ask(status_request());
+  EXPECT_TRUE(status.request_accepted);
+  EXPECT_EQ(status.refused_bad_signature, 500);
+  EXPECT_EQ(status.replies_withheld, 500 - rig.settings.command_limits.max_refusal_replies_per_s);
+  EXPECT_EQ(rig.inbox.count(),
+            static_cast<std::size_t>(rig.settings.command_limits.max_refusal_replies_per_s + 1));
+}
+
+// With a daemon key every answer carries the daemon's signature; the public half checks it.
+TEST(CommandHandling, EveryAnswerIsSignedWithTheDaemonKey) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.daemon_key = CommandRig::key_filled_with(0x77);
+  rig.start(dir.path());
+  const auto public_key = command_auth::daemon_public_key(*rig.settings.daemon_key);
+  const rig_status_t status = rig.ask(status_request());
+  EXPECT_EQ(command_auth::check_status(status, public_key),
+            command_auth::StatusAuthenticity::signed_by_daemon);
+  const rig_status_t refused = rig.ask(testing::start_command("square", 0.2, 1.0));
+  EXPECT_FALSE(refused.request_accepted);
+  EXPECT_EQ(command_auth::check_status(refused, public_key),
+            command_auth::StatusAuthenticity::signed_by_daemon);
+  EXPECT_EQ(command_auth::check_status(
+                refused, command_auth::daemon_public_key(CommandRig::key_filled_with(0x78))),
+            command_auth::StatusAuthenticity::wrongly_signed);
+}
+
+// A start dated ahead of the daemon's clock (within the skew) is taken; the daemon restarts with
+// the same replay state file; the same bytes are refused.
+TEST(CommandHandling, AStartTakenBeforeARestartIsRefusedAfterIt) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  rig.settings.command_auth.state_file = dir.path() / "command-replay.state";
+  rig.start(dir.path());
+  rig.step_cycles(70);
+  rig_command_t start = testing::start_command("free_decay", 0.1, 30.0, "once");
+  start.request_id = 9001;
+  const auto captured =
+      command_auth::sign_command(start, rig.key, "ana@rig", rig.wall_ns.load() + 1'500'000'000, 5);
+  rig.send_message(captured);
+  ASSERT_TRUE(rig.inbox.reply_to(9001).request_accepted);
+  rig.step_cycles(3);
+  ASSERT_TRUE(rig.ask(testing::simple_command(rig_command_t::KIND_STOP)).request_accepted);
+  rig.step_cycles(3);
+
+  rig.clock.run_free();
+  rig.daemon.reset();
+  rig.clock.stop_running_free();
+  rig.wall_ns += 500'000'000;  // restarted half a second later
+  rig.start(dir.path());
+  rig.step_cycles(70);
+  rig.send_message(captured);
+  const rig_status_t replay =
+      ask_until(rig, [](const rig_status_t& s) { return s.refused_out_of_time == 1; });
+  EXPECT_EQ(replay.refused_out_of_time, 1);
+  EXPECT_NE(replay.unauthenticated_reason.find("replay floor"), std::string::npos)
+      << replay.unauthenticated_reason;
+  rig.step_cycles(3);
+  EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::idle);
 }
 
 TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {

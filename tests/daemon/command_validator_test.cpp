@@ -84,24 +84,24 @@ TEST(CommandValidator, StopAndStatusIgnoreTheSessionFields) {
 
 TEST(CommandValidator, TheBucketStartsFullAndRefillsAtTheConfiguredRate) {
   CommandValidator validator{CommandLimits{}};  // 5 per second
-  const auto stop = command_of(rig_command_t::KIND_STOP);
-  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(stop, kStart).accepted) << i;
-  const auto refused = validator.validate(stop, kStart);
+  const auto request = start();                 // 5 starts per second
+  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(request, kStart).accepted) << i;
+  const auto refused = validator.validate(request, kStart);
   EXPECT_FALSE(refused.accepted);
-  EXPECT_EQ(refused.reason, "rate limit: more than 5 commands per second");
+  EXPECT_EQ(refused.reason, "rate limit: more than 5 starts per second");
   // One token every 200 ms.
-  EXPECT_FALSE(validator.validate(stop, kStart + 199'999'999).accepted);
-  EXPECT_TRUE(validator.validate(stop, kStart + 200'000'000).accepted);
-  EXPECT_FALSE(validator.validate(stop, kStart + 200'000'001).accepted);
+  EXPECT_FALSE(validator.validate(request, kStart + 199'999'999).accepted);
+  EXPECT_TRUE(validator.validate(request, kStart + 200'000'000).accepted);
+  EXPECT_FALSE(validator.validate(request, kStart + 200'000'001).accepted);
   // A long quiet spell refills to the burst size, not beyond.
   const std::int64_t later = kStart + 3600 * kSecond;
-  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(stop, later).accepted) << i;
-  EXPECT_FALSE(validator.validate(stop, later).accepted);
+  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(request, later).accepted) << i;
+  EXPECT_FALSE(validator.validate(request, later).accepted);
 }
 
 TEST(CommandValidator, ASteadyStreamGetsTheConfiguredRate) {
   CommandValidator validator{CommandLimits{}};
-  const auto status = command_of(rig_command_t::KIND_STOP);
+  const auto status = start();
   int accepted = 0;
   for (std::int64_t t = 0; t <= 10 * kSecond; t += 100'000'000) {  // 10 per second for 10 s
     accepted += validator.validate(status, kStart + t).accepted ? 1 : 0;
@@ -130,19 +130,19 @@ TEST(CommandValidator, StatusRequestsHaveTheirOwnBucketAndCannotLockOutAStop) {
 TEST(CommandValidator, EstopIsNeverRateLimitedAndSpendsNoToken) {
   CommandValidator validator{CommandLimits{}};
   const auto estop = command_of(rig_command_t::KIND_ESTOP);
-  const auto stop = command_of(rig_command_t::KIND_STOP);
+  const auto request = start();
   for (int i = 0; i < 1000; ++i) ASSERT_TRUE(validator.validate(estop, kStart).accepted) << i;
-  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(stop, kStart).accepted) << i;
-  EXPECT_FALSE(validator.validate(stop, kStart).accepted);
+  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(request, kStart).accepted) << i;
+  EXPECT_FALSE(validator.validate(request, kStart).accepted);
   for (int i = 0; i < 1000; ++i) ASSERT_TRUE(validator.validate(estop, kStart).accepted) << i;
 
   CommandLimits none;
   none.max_commands_per_s = 0;
   CommandValidator closed(none);
   EXPECT_TRUE(closed.validate(estop, kStart).accepted);
-  EXPECT_FALSE(closed.validate(stop, kStart).accepted);
-  EXPECT_EQ(closed.validate(stop, kStart + 100 * kSecond).reason,
-            "rate limit: more than 0 commands per second");
+  EXPECT_FALSE(closed.validate(request, kStart).accepted);
+  EXPECT_EQ(closed.validate(request, kStart + 100 * kSecond).reason,
+            "rate limit: more than 0 starts per second");
 }
 
 TEST(CommandValidator, RejectedCommandsSpendTokensToo) {
@@ -152,25 +152,29 @@ TEST(CommandValidator, RejectedCommandsSpendTokensToo) {
   bad.amplitude_duty = 5.0;
   for (int i = 0; i < 3; ++i) EXPECT_FALSE(validator.validate(bad, kStart).accepted);
   for (int i = 0; i < 2; ++i) EXPECT_FALSE(validator.validate(command_of(9), kStart).accepted);
-  const auto decision = validator.validate(command_of(rig_command_t::KIND_STOP), kStart);
+  const auto decision = validator.validate(start(), kStart);
   EXPECT_FALSE(decision.accepted);
-  EXPECT_EQ(decision.reason, "rate limit: more than 5 commands per second");
+  EXPECT_EQ(decision.reason, "rate limit: more than 5 starts per second");
+  EXPECT_EQ(decision.refusal, CommandRefusal::start_budget);
+  // Stops have a budget of their own, untouched by the starts.
+  EXPECT_TRUE(validator.validate(command_of(rig_command_t::KIND_STOP), kStart).accepted);
 }
 
 TEST(CommandValidator, AClockThatJumpsAroundNeitherRefillsNorOverflows) {
   CommandValidator validator{CommandLimits{}};
-  const auto stop = command_of(rig_command_t::KIND_STOP);
-  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(stop, kStart).accepted);
-  EXPECT_FALSE(validator.validate(stop, kStart - 10 * kSecond).accepted);  // backwards: nothing
-  EXPECT_FALSE(validator.validate(stop, std::numeric_limits<std::int64_t>::min()).accepted);
+  const auto request = start();
+  for (int i = 0; i < 5; ++i) EXPECT_TRUE(validator.validate(request, kStart).accepted);
+  EXPECT_FALSE(validator.validate(request, kStart - 10 * kSecond).accepted);  // backwards: nothing
+  EXPECT_FALSE(validator.validate(request, std::numeric_limits<std::int64_t>::min()).accepted);
   // Forward again from the newest reading, across the whole range without overflow.
   for (int i = 0; i < 5; ++i) {
-    EXPECT_TRUE(validator.validate(stop, std::numeric_limits<std::int64_t>::max()).accepted) << i;
+    EXPECT_TRUE(validator.validate(request, std::numeric_limits<std::int64_t>::max()).accepted)
+        << i;
   }
-  EXPECT_FALSE(validator.validate(stop, std::numeric_limits<std::int64_t>::max()).accepted);
+  EXPECT_FALSE(validator.validate(request, std::numeric_limits<std::int64_t>::max()).accepted);
 
   CommandValidator from_negative{CommandLimits{}};  // the first reading may be anything
-  EXPECT_TRUE(from_negative.validate(stop, std::numeric_limits<std::int64_t>::min()).accepted);
+  EXPECT_TRUE(from_negative.validate(request, std::numeric_limits<std::int64_t>::min()).accepted);
 }
 
 // --- START_SESSION fields ---

@@ -87,10 +87,20 @@ class DaemonProcess {
  public:
   DaemonProcess(const Options& options, const fs::path& logs_dir, const fs::path& output,
                 std::optional<std::uint64_t> fsize_limit = std::nullopt) {
-    std::vector<std::string> args{options.furutad,    "--sim",         "-c",
-                                  options.config,     "--logs-dir",    logs_dir.string(),
-                                  "--lcm-url",        options.lcm_url, "--command-key",
-                                  options.command_key};
+    std::vector<std::string> args{options.furutad,
+                                  "--sim",
+                                  "-c",
+                                  options.config,
+                                  "--logs-dir",
+                                  logs_dir.string(),
+                                  "--lcm-url",
+                                  options.lcm_url,
+                                  "--command-key",
+                                  options.command_key,
+                                  "--daemon-key",
+                                  (fs::path(options.work) / "daemon.key").string(),
+                                  "--command-state",
+                                  (fs::path(options.work) / "command-replay.state").string()};
     pid_ = ::fork();
     if (pid_ < 0) throw std::runtime_error("fork failed");
     if (pid_ == 0) {

@@ -54,11 +54,16 @@ sed -e "s|^lcm_url = .*|lcm_url = \"$URL\"|" \
     -e "s|^logs_dir = .*|logs_dir = \"$LOGS\"|" \
     -e "s|^rest_check_s = .*|rest_check_s = 0.0|" \
     -e "s|^command_key_file = .*|command_key_file = \"$TMP/command.key\"|" \
+    -e "s|^command_state_file = .*|command_state_file = \"$TMP/command-replay.state\"|" \
+    -e "s|^daemon_key_file = .*|daemon_key_file = \"$TMP/daemon.key\"|" \
+    -e "s|^daemon_public_key_file = .*|daemon_public_key_file = \"$TMP/daemon.pub\"|" \
     -e "s|^arm_switch_deg = [0-9.]*|arm_switch_deg = 20|" "$RIG_TOML" > "$CONFIG"
 grep -q "^lcm_url = \"$URL\"" "$CONFIG" || fail "could not set lcm_url in the [daemon] table"
 grep -q "^logs_dir = \"$LOGS\"" "$CONFIG" || fail "could not set logs_dir in the [daemon] table"
 grep -q "^rest_check_s = 0.0$" "$CONFIG" || fail "could not set rest_check_s in the [daemon] table"
 grep -q "^command_key_file = \"$TMP/command.key\"" "$CONFIG" || fail "could not set command_key_file"
+grep -q "^daemon_public_key_file = \"$TMP/daemon.pub\"" "$CONFIG" || fail "could not set daemon_public_key_file"
+grep -q "^command_state_file = \"$TMP/command-replay.state\"" "$CONFIG" || fail "could not set command_state_file"
 grep -q "^arm_switch_deg = 20 " "$CONFIG" || fail "could not set arm_switch_deg in [excitation]"
 
 cli() { "$FURUTA" "$@" --config "$CONFIG" --timeout 5; }
@@ -119,11 +124,19 @@ check_log() {
     || fail "lcm-logplayer did not play the signed start of $log"
 }
 
+# The keys, as the unit's ExecStartPre makes them: the command key, the daemon key and its public
+# half, which the CLI checks every answer with.
+"$FURUTAD" -c "$CONFIG" --create-command-key || fail "furutad --create-command-key failed"
+[ "$(stat -c %a "$TMP/daemon.pub")" = 644 ] || fail "no daemon.pub of mode 644"
+
 "$FURUTAD" --sim -c "$CONFIG" > "$TMP/furutad.log" 2>&1 &
 DAEMON_PID=$!
 
 line=$(wait_for_status "state idle" 80) || fail "furutad did not come up"
 echo "furutad up: $line"
+# Its answers are signed, and checked: no warning that they were taken unverified.
+out=$(cli status 2>&1) || fail "furuta status failed: $out"
+grep -q "unverified" <<< "$out" && fail "the daemon's answers were not verified: $out"
 
 # Only those who can read the key start sessions (issue 21): an unsigned start is refused with
 # its reason, a start without the key is not even sent (77), and both leave the rig idle.

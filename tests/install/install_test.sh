@@ -74,6 +74,10 @@ if [ "$(id -u)" -eq 0 ]; then
   [ "$(stat -c %u:%g "$key")" = "0:$gid" ] ||
     fail "/etc/furuta/command.key is owned by $(stat -c %u:%g "$key"), not root:furuta (0:$gid)"
 fi
+# The daemon key the same way (its public half is written by furutad --create-command-key).
+daemon_key="$root/etc/furuta/daemon.key"
+grep -qxE '[0-9a-f]{64}' "$daemon_key" || fail "cmake --install made no daemon key of 64 hex digits"
+[ "$(stat -c %a "$daemon_key")" = 640 ] || fail "/etc/furuta/daemon.key has mode $(stat -c %a "$daemon_key"), not 640"
 before=$(cat "$key")
 DESTDIR="$root" cmake --install "$1" --prefix /usr >/dev/null
 [ "$(cat "$key")" = "$before" ] || fail "a second cmake --install replaced the command key"

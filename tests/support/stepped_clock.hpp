@@ -47,6 +47,11 @@ class SteppedClock final : public furuta::bridge::Clock {
     }
     changed_.notify_all();
   }
+  // Back to stepping, once the sleeper run_free let go is gone (a daemon restarted in a test).
+  void stop_running_free() {
+    std::lock_guard lock(mutex_);
+    free_ = false;
+  }
 
  private:
   static constexpr std::int64_t kNobody = std::numeric_limits<std::int64_t>::min();

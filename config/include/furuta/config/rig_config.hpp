@@ -35,9 +35,17 @@ struct DaemonConfig {
   std::int64_t reconnect_interval_ms = 200;  // a lost board is asked for back this often
   std::int64_t queue_capacity = 4096;
   // Commands that move the motor are signed with this key (docs/security.md); furutad creates it
-  // when missing. Signed commands are taken within this many seconds of the daemon's clock.
+  // when missing. Signed commands are taken if signed at most command_window_s before the
+  // daemon's clock and command_clock_skew_s after it, once; the replay floor survives restarts in
+  // command_state_file.
   std::string command_key_file = "/etc/furuta/command.key";
   double command_window_s = 30.0;
+  double command_clock_skew_s = 2.0;
+  std::string command_state_file = "/var/lib/furuta/command-replay.state";
+  // The daemon signs every status it publishes with this key; tools check the signature with the
+  // public half (docs/security.md). furutad --create-command-key makes both when missing.
+  std::string daemon_key_file = "/etc/furuta/daemon.key";
+  std::string daemon_public_key_file = "/etc/furuta/daemon.pub";
   bool realtime = false;
   int fifo_priority = 80;
   int cpu = -1;
@@ -63,7 +71,8 @@ struct CommandLimitsConfig {
   double max_amplitude_duty = 0.5;
   double max_duration_s = 600.0;
   double max_arm_switch_rad = 135.0 * 3.14159265358979323846 / 180.0;
-  int max_commands_per_s = 5;
+  int max_commands_per_s = 5;  // starts
+  int max_stops_per_s = 20;
 };
 
 // [excitation]: defaults for sessions (a command overrides profile, amplitude, duration, seed).

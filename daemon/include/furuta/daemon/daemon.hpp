@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "furuta/command_auth/command_auth.hpp"
+#include "furuta/command_auth/status_signature.hpp"
 #include "furuta/daemon/control_loop.hpp"
 #include "furuta/daemon/session_recorder.hpp"
 #include "furuta/rig_command_t.hpp"
@@ -37,7 +38,25 @@ struct DaemonSettings {
   std::optional<command_auth::CommandKey> command_key;
   std::string command_key_problem = "no command key was given to the daemon";
   command_auth::VerifierSettings command_auth;
-  std::function<std::int64_t()> wall_clock_ns;  // empty: the system's UTC clock
+  // Signs every status published on RIG_STATUS (the daemon key's seed). Without it statuses go
+  // out unsigned, and tools that hold the public key say so.
+  std::optional<command_auth::CommandKey> daemon_key;
+  std::function<std::int64_t()> wall_clock_ns;       // empty: the system's UTC clock
+  std::function<std::int64_t()> monotonic_clock_ns;  // empty: CLOCK_MONOTONIC (the replay floor)
+};
+
+// Refusals since start-up by reason, as rig_status_t counts them.
+struct RefusalCounts {
+  std::atomic<std::int64_t> unsigned_motor_commands{0};
+  std::atomic<std::int64_t> bad_signature{0};
+  std::atomic<std::int64_t> malformed{0};
+  std::atomic<std::int64_t> out_of_time{0};
+  std::atomic<std::int64_t> replayed{0};
+  std::atomic<std::int64_t> start_budget{0};
+  std::atomic<std::int64_t> stop_budget{0};
+  std::atomic<std::int64_t> status_budget{0};
+  std::atomic<std::int64_t> invalid{0};
+  std::atomic<std::int64_t> replies_withheld{0};
 };
 
 class Daemon {
@@ -77,6 +96,8 @@ class Daemon {
   bool ready() const { return ready_.load(); }
   // Why a session could not be logged now ("": it can), as of the last status (once a second).
   std::string logs_problem() const;
+  // What the replay state file said at start ("" when all was well).
+  const std::string& command_state_problem() const { return verifier_.state_problem(); }
   // Advances while the loop cycles (furutad pings the watchdog only while it moves).
   std::int64_t heartbeat() const { return loop_->counters().cycles.load(); }
 
@@ -97,12 +118,21 @@ class Daemon {
   void check_logs_dir();
   void io_thread_main();
   void lcm_thread_main();
-  void on_command(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_command_t* msg);
-  void on_signed_command(const lcm::ReceiveBuffer*, const std::string&,
-                         const furuta::rig_signed_command_t* msg);
+  // Raw handlers: oversized and undecodable messages are counted as malformed, never decoded or
+  // printed (LCM's typed handlers print every decoding error).
+  void on_command(const lcm::ReceiveBuffer* buffer, const std::string&);
+  void on_signed_command(const lcm::ReceiveBuffer* buffer, const std::string&);
+  // Publishes a reply: bounded, signed, and, for a refusal or an e-stop, only within its reply
+  // budget (counted as withheld otherwise).
+  void publish_reply(furuta::rig_status_t reply, bool estop);
+  void publish(furuta::rig_status_t status);
   // A command refused for its signature: counted, and the reply says why.
-  furuta::rig_status_t refuse_unauthenticated(std::int64_t request_id, const std::string& reason);
+  furuta::rig_status_t refuse_unauthenticated(std::int64_t request_id,
+                                              command_auth::Refusal refusal,
+                                              const std::string& reason);
+  void count(CommandRefusal refusal);
   std::int64_t wall_now_ns() const;
+  std::int64_t monotonic_now_ns() const;
   // An accepted command's action, under command_mutex_; a start may still be refused.
   CommandDecision carry_out(const furuta::rig_command_t& command);
 
@@ -113,7 +143,11 @@ class Daemon {
   std::unique_ptr<SessionRecorder> recorder_;
   CommandValidator validator_;
   command_auth::CommandVerifier verifier_;  // under command_mutex_
-  std::atomic<std::int64_t> refused_unauthenticated_{0};
+  std::optional<command_auth::StatusSigner> signer_;
+  RefusalCounts refusals_;
+  // Reply budgets, on the LCM thread only.
+  TokenBucket refusal_replies_;
+  TokenBucket estop_replies_;
   std::string unauthenticated_reason_;  // under snapshot_mutex_
   // Validator state and the loop's single-producer request queue: commands come from LCM and
   // from handle_command, replays from start_replayed_session.

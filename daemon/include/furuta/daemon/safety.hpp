@@ -64,18 +64,47 @@ struct SafetyInput {
 // encoders), or none.
 StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) noexcept;
 
+// Each kind of command has a budget of its own (a token bucket, bursts of the rate's size), so a
+// flood of one kind never uses up what another needs: e-stops have none and are always taken.
 struct CommandLimits {
   double max_amplitude_duty = 0.5;
   double max_duration_s = 600.0;
   double max_arm_switch_rad = 2.4;     // bang-bang thresholds must sit inside the safety limit
-  int max_commands_per_s = 5;          // token bucket, burst of the same size
-  int max_status_requests_per_s = 20;  // a bucket of their own
+  int max_commands_per_s = 5;          // starts (and any other command that moves the motor)
+  int max_stops_per_s = 20;            // stops
+  int max_status_requests_per_s = 20;  // status requests
   int max_label_chars = 64;
+  // Answers the daemon publishes: refusals, and e-stops (each e-stop is acted on, answered or
+  // not), so a flood is not echoed onto the group. Accepted starts, stops and status requests
+  // are always answered; they have budgets above.
+  int max_refusal_replies_per_s = 20;
+  int max_estop_replies_per_s = 50;
+};
+
+// Why a command was refused, for the counts in the status.
+enum class CommandRefusal : std::uint8_t {
+  none,
+  start_budget,
+  stop_budget,
+  status_budget,
+  invalid,  // outside the limits, unknown, or a start the daemon cannot take now
 };
 
 struct CommandDecision {
   bool accepted = false;
   std::string reason;  // why not, naming the field: "amplitude_duty: 0.9 above the limit 0.5"
+  CommandRefusal refusal = CommandRefusal::none;
+};
+
+// `per_second` tokens a second, in bursts of that size, full at first use. Time comes from the
+// caller, so it runs in virtual time too.
+class TokenBucket {
+ public:
+  bool take(double per_second, std::int64_t now_ns);
+
+ private:
+  double tokens_ = -1.0;
+  std::int64_t last_refill_ns_ = 0;
 };
 
 // Validates commands and rate-limits them (e-stop is never rate-limited: it must always get
@@ -86,17 +115,10 @@ class CommandValidator {
   CommandDecision validate(const furuta::rig_command_t& command, std::int64_t now_ns);
 
  private:
-  // A token bucket: `per_second` tokens a second, bursts of that size, full at first use.
-  struct Bucket {
-    double tokens = -1.0;
-    std::int64_t last_refill_ns = 0;
-    bool take(double per_second, std::int64_t now_ns);
-  };
   CommandLimits limits_;
-  Bucket commands_;
-  // Status requests change nothing, so polling them has its own, larger bucket and cannot lock out
-  // start and stop.
-  Bucket status_requests_;
+  TokenBucket starts_;
+  TokenBucket stops_;
+  TokenBucket status_requests_;
 };
 
 // The excitation for an accepted START_SESSION: the command's profile, amplitude, duration and seed
