@@ -196,3 +196,58 @@ TEST(CliArguments, FurutadSaysAtStartUpThatItCannotLog) {
 }
 
 }  // namespace
+
+namespace {
+
+std::string create_keys(const fs::path& dir) {
+  return "timeout 60 " + std::string(FURUTA_DAEMON) +
+         " --config " FURUTA_SOURCE_DIR "/config/rig.toml --command-key " +
+         (dir / "command.key").string() + " --daemon-key " + (dir / "daemon.key").string() +
+         " --create-command-key";
+}
+
+// `furutad --create-command-key` (what the package and the unit run as root): makes the command
+// key, the daemon key and its public half where none is; refuses, with exit 2, a key directory
+// others may write into and a key it did not write that fails a check, and leaves both as they are.
+TEST(CliArguments, FurutadCreatesTheKeysOnlyWhereNobodyElseCouldHavePlantedOne) {
+  furuta::testing::TempDir dir;
+  const Outcome made = run(create_keys(dir.path()));
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  EXPECT_EQ(fs::status(dir.path() / "command.key").permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(fs::status(dir.path() / "daemon.key").permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(fs::status(dir.path() / "daemon.pub").permissions(),
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                fs::perms::others_read);
+  const auto text = [](const fs::path& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string key = text(dir.path() / "command.key");
+  ASSERT_EQ(run(create_keys(dir.path())).exit_code, 0);  // kept
+  EXPECT_EQ(text(dir.path() / "command.key"), key);
+
+  // A key someone made readable: refused, not replaced.
+  fs::permissions(dir.path() / "command.key", fs::perms::others_read, fs::perm_options::add);
+  const Outcome readable = run(create_keys(dir.path()));
+  EXPECT_EQ(readable.exit_code, 2) << readable.output;
+  EXPECT_TRUE(has(readable, "every user can read it")) << readable.output;
+  EXPECT_EQ(text(dir.path() / "command.key"), key);
+
+  // A directory every user may write into: nothing made, nothing kept.
+  furuta::testing::TempDir open_dir;
+  fs::permissions(open_dir.path(), fs::perms::all);
+  const Outcome open = run(create_keys(open_dir.path()));
+  EXPECT_EQ(open.exit_code, 2) << open.output;
+  EXPECT_TRUE(has(open, open_dir.path().string())) << open.output;
+  EXPECT_FALSE(fs::exists(open_dir.path() / "command.key"));
+  EXPECT_FALSE(fs::exists(open_dir.path() / "daemon.key"));
+  // A key planted there beforehand is not kept either.
+  std::ofstream(open_dir.path() / "command.key") << std::string(64, 'a') << "\n";
+  fs::permissions(open_dir.path() / "command.key",
+                  fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(run(create_keys(open_dir.path())).exit_code, 2);
+}
+
+}  // namespace
