@@ -4,11 +4,13 @@
 #include <climits>
 #include <cstdint>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <vector>
 
 #include "furuta/rig_command_t.hpp"
 #include "furuta/rig_sample_t.hpp"
 #include "furuta/rig_session_t.hpp"
+#include "furuta/rig_signed_command_t.hpp"
 #include "furuta/rig_status_t.hpp"
 #include "furuta/rig_usb_report_t.hpp"
 
@@ -170,6 +172,26 @@ TEST(LcmTypes, NegativeArrayCountsAreDecodeErrors) {
   int used = 0;
   EXPECT_NO_THROW(used = out.decode(bytes.data(), 0, static_cast<int>(bytes.size())));
   EXPECT_EQ(used, -1);
+}
+
+// A 60-byte signed command claiming 2^31 - 1 bytes of command: refused before anything is
+// allocated for it (as generated, the decoder resized to 2 GB first; found by fuzz_signed_command).
+TEST(LcmTypes, ArrayCountsBeyondTheBytesLeftAreDecodeErrors) {
+  furuta::rig_signed_command_t signed_command{};
+  signed_command.sender = "ana@rig";
+  signed_command.command_size = 1;
+  signed_command.command = {7};
+  std::vector<std::uint8_t> bytes = encoded(signed_command);
+  // fingerprint 8, sender length 4 + "ana@rig" 7 + NUL 1, time 8, nonce 8: the count is at 36.
+  ASSERT_EQ(bytes[39], 1);
+  for (const std::int32_t count : {std::numeric_limits<std::int32_t>::max(), 34, 33}) {
+    for (int i = 0; i < 4; ++i) bytes[36 + i] = static_cast<std::uint8_t>(count >> (24 - 8 * i));
+    furuta::rig_signed_command_t out;
+    int used = 0;
+    EXPECT_NO_THROW(used = out.decode(bytes.data(), 0, static_cast<int>(bytes.size())));
+    EXPECT_EQ(used, -1) << count;
+    EXPECT_LT(out.command.capacity(), 1024u) << count;
+  }
 }
 
 struct CommandSink {
