@@ -71,6 +71,7 @@ struct Rig {
     // The loop never runs here, so its clock never moves: without this every command after the
     // first burst would only meet the rate limit. The flood below uses the real limits.
     settings.command_limits.max_commands_per_s = 1'000'000'000;
+    settings.command_limits.max_stops_per_s = 1'000'000'000;
     settings.command_limits.max_status_requests_per_s = 1'000'000'000;
     daemon = std::make_unique<Daemon>(settings, *motor, *encoder, clock, lcm);
   }
@@ -148,9 +149,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (command.kind == rig_command_t::KIND_ESTOP) check(accepted == 0);
   if (command.kind != rig_command_t::KIND_ESTOP &&
       command.kind != rig_command_t::KIND_STATUS_REQUEST) {
-    // The burst, plus one token per 1/rate of the time the flood lasted.
+    // The burst, plus one token per 1/rate of the time the flood lasted; each kind its own.
+    const double rate = command.kind == rig_command_t::KIND_STOP ? limits.max_stops_per_s
+                                                                 : limits.max_commands_per_s;
     const double elapsed_s = static_cast<double>(step_ns) * (repeats - 1) * 1e-9;
-    check(accepted <= limits.max_commands_per_s + elapsed_s * limits.max_commands_per_s + 1e-6);
+    check(accepted <= rate + elapsed_s * rate + 1e-6);
   }
   if (command.kind == rig_command_t::KIND_ESTOP) {
     for (int i = 0; i < repeats; ++i) check(validator.validate(command, now).accepted);

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "furuta/command_auth/command_auth.hpp"
+#include "furuta/command_auth/status_signature.hpp"
 #include "furuta/firmware_bridge/clock.hpp"
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
@@ -17,6 +19,7 @@
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_command_t.hpp"
+#include "furuta/rig_status_t.hpp"
 #include "furuta/session_log/lcm_log.hpp"
 #include "furuta/session_log/session_log.hpp"
 
@@ -116,6 +119,30 @@ int main(int argc, char** argv) {
     flood.insert(flood.end(), bytes.begin(), bytes.end());
     write(root / "fuzz_command_handler" / (name + "_flood"), flood);
   }
+
+  // Signed commands as `furuta start` sends them (the key fuzz_signed_command checks with), and
+  // the daemon's signed statuses as the tools receive them.
+  command_auth::CommandKey fuzz_key{};
+  for (std::size_t i = 0; i < fuzz_key.size(); ++i)
+    fuzz_key[i] = static_cast<std::uint8_t>(3 * i + 1);
+  const std::int64_t signed_at = 1'800'000'000'000'000'000;
+  for (const auto& [name, c] : commands) {
+    write(root / "fuzz_signed_command" / name,
+          encode(command_auth::sign_command(c, fuzz_key, "ana@rig", signed_at, 1)));
+  }
+  const command_auth::StatusSigner daemon_key(command_auth::CommandKey{42});
+  rig_status_t status{};
+  status.state = rig_status_t::STATE_RUNNING;
+  status.session = "2026-11-28T12-00-00Z_run1";
+  status.cycles = 625;
+  status.reply_to_request_id = 7;
+  daemon_key.sign(status);
+  write(root / "fuzz_status_reply" / "running", encode(status));
+  status.request_accepted = false;
+  status.request_reason = "bad signature from \"\\x1b[2J\": not signed with this rig's command key";
+  status.refused_bad_signature = 1;
+  daemon_key.sign(status);
+  write(root / "fuzz_status_reply" / "refused", encode(status));
 
   // A short session log as the daemon writes it: start, samples, USB traffic, a fault, end.
   bridge::VirtualClock clock(1'000'000'000);
