@@ -273,6 +273,10 @@ namespace {
 // anything bigger is not decoded at all.
 constexpr int kMaxCommandMessageBytes = 2048;
 
+constexpr char kUnsignedReason[] =
+    "unsigned: a command that moves the motor must be signed with the rig's command key (furuta "
+    "start signs it when it may read the key; docs/security.md)";
+
 }  // namespace
 
 void Daemon::on_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
@@ -282,8 +286,15 @@ void Daemon::on_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
     refusals_.malformed.fetch_add(1);
     return;  // nothing to address a reply to
   }
-  publish_reply(handle_unsigned_command(command),
-                command.kind == furuta::rig_command_t::KIND_ESTOP);
+  if (command_auth::moves_motor(command)) {
+    note_unauthenticated(command_auth::Refusal::unsigned_command, kUnsignedReason);
+    if (reply_allowed(false, false)) publish(refusal_reply(command.request_id, kUnsignedReason));
+    return;
+  }
+  const CommandDecision decision = decide(command);
+  if (reply_allowed(decision.accepted, command.kind == furuta::rig_command_t::KIND_ESTOP)) {
+    publish(reply_for(command.request_id, decision));
+  }
 }
 
 void Daemon::on_signed_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
@@ -293,15 +304,18 @@ void Daemon::on_signed_command(const lcm::ReceiveBuffer* buffer, const std::stri
     refusals_.malformed.fetch_add(1);
     return;
   }
-  const furuta::rig_status_t reply = handle_signed_command(message);
-  bool estop = false;
-  if (reply.request_accepted) {
-    furuta::rig_command_t command{};
-    estop =
-        command.decode(message.command.data(), 0, static_cast<int>(message.command.size())) > 0 &&
-        command.kind == furuta::rig_command_t::KIND_ESTOP;
+  const command_auth::Verdict verdict = verify(message);
+  if (!verdict.accepted) {
+    note_unauthenticated(verdict.refusal, verdict.reason);
+    if (reply_allowed(false, false)) {
+      publish(refusal_reply(unverified_request_id(message), verdict.reason));
+    }
+    return;
   }
-  publish_reply(reply, estop);
+  const CommandDecision decision = take_signed(message, verdict.command);
+  if (reply_allowed(decision.accepted, verdict.command.kind == furuta::rig_command_t::KIND_ESTOP)) {
+    publish(reply_for(verdict.command.request_id, decision));
+  }
 }
 
 void Daemon::publish(furuta::rig_status_t status) {
@@ -310,21 +324,16 @@ void Daemon::publish(furuta::rig_status_t status) {
   lcm_.publish(session_log::kChannelStatus, &status);
 }
 
-void Daemon::publish_reply(furuta::rig_status_t reply, bool estop) {
+bool Daemon::reply_allowed(bool accepted, bool estop) {
   // The loop's time, as for the command budgets: exact in virtual time.
   const std::int64_t now = loop_->counters().clock_ns.load();
   const CommandLimits& limits = settings_.command_limits;
-  if (!reply.request_accepted &&
-      !refusal_replies_.take(std::max(0, limits.max_refusal_replies_per_s), now)) {
-    refusals_.replies_withheld.fetch_add(1);
-    return;
-  }
-  if (reply.request_accepted && estop &&
-      !estop_replies_.take(std::max(0, limits.max_estop_replies_per_s), now)) {
-    refusals_.replies_withheld.fetch_add(1);
-    return;
-  }
-  publish(std::move(reply));
+  const bool allowed =
+      !accepted ? refusal_replies_.take(std::max(0, limits.max_refusal_replies_per_s), now)
+      : estop   ? estop_replies_.take(std::max(0, limits.max_estop_replies_per_s), now)
+                : true;
+  if (!allowed) refusals_.replies_withheld.fetch_add(1);
+  return allowed;
 }
 
 void Daemon::count(CommandRefusal refusal) {
@@ -346,9 +355,7 @@ void Daemon::count(CommandRefusal refusal) {
   }
 }
 
-furuta::rig_status_t Daemon::refuse_unauthenticated(std::int64_t request_id,
-                                                    command_auth::Refusal refusal,
-                                                    const std::string& reason) {
+void Daemon::note_unauthenticated(command_auth::Refusal refusal, const std::string& reason) {
   using command_auth::Refusal;
   switch (refusal) {
     case Refusal::bad_signature:
@@ -373,48 +380,61 @@ furuta::rig_status_t Daemon::refuse_unauthenticated(std::int64_t request_id,
       refusals_.invalid.fetch_add(1);  // a start this daemon cannot take now
       break;
   }
-  {
-    std::lock_guard lock(snapshot_mutex_);
-    unauthenticated_reason_ = text::printable_text(reason, 512);
-  }
+  std::lock_guard lock(snapshot_mutex_);
+  unauthenticated_reason_ = text::printable_text(reason, 512);
+}
+
+furuta::rig_status_t Daemon::refusal_reply(std::int64_t request_id, const std::string& reason) {
+  return reply_for(request_id, CommandDecision{false, reason});
+}
+
+furuta::rig_status_t Daemon::reply_for(std::int64_t request_id, const CommandDecision& decision) {
   furuta::rig_status_t reply = status_message();
   reply.reply_to_request_id = request_id;
-  reply.request_accepted = false;
-  reply.request_reason = reason;
+  reply.request_accepted = decision.accepted;
+  reply.request_reason = decision.reason;
   return reply;
+}
+
+std::int64_t Daemon::unverified_request_id(const furuta::rig_signed_command_t& message) {
+  // The request id only addresses the reply; nothing else of an unverified command is used.
+  furuta::rig_command_t unverified{};
+  const bool decodable =
+      !message.command.empty() &&
+      unverified.decode(message.command.data(), 0, static_cast<int>(message.command.size())) > 0;
+  return decodable ? unverified.request_id : 0;
+}
+
+command_auth::Verdict Daemon::verify(const furuta::rig_signed_command_t& message) {
+  std::lock_guard lock(command_mutex_);
+  return verifier_.verify(message, wall_now_ns(), monotonic_now_ns());
+}
+
+CommandDecision Daemon::take_signed(const furuta::rig_signed_command_t& message,
+                                    const furuta::rig_command_t& command) {
+  if (command.kind == furuta::rig_command_t::KIND_START_SESSION) {
+    std::vector<std::uint8_t> encoded(static_cast<std::size_t>(message.getEncodedSize()));
+    message.encode(encoded.data(), 0, static_cast<int>(encoded.size()));
+    recorder_->note_signed_start(command.request_id, std::move(encoded));
+  }
+  return decide(command);
 }
 
 furuta::rig_status_t Daemon::handle_unsigned_command(const furuta::rig_command_t& command) {
   if (command_auth::moves_motor(command)) {
-    return refuse_unauthenticated(
-        command.request_id, command_auth::Refusal::unsigned_command,
-        "unsigned: a command that moves the motor must be signed with the rig's command key "
-        "(furuta start signs it when it may read the key; docs/security.md)");
+    note_unauthenticated(command_auth::Refusal::unsigned_command, kUnsignedReason);
+    return refusal_reply(command.request_id, kUnsignedReason);
   }
   return handle_command(command);
 }
 
 furuta::rig_status_t Daemon::handle_signed_command(const furuta::rig_signed_command_t& message) {
-  command_auth::Verdict verdict;
-  {
-    std::lock_guard lock(command_mutex_);
-    verdict = verifier_.verify(message, wall_now_ns(), monotonic_now_ns());
-  }
+  const command_auth::Verdict verdict = verify(message);
   if (!verdict.accepted) {
-    // The request id only addresses the reply; nothing else of an unverified command is used.
-    furuta::rig_command_t unverified{};
-    const bool decodable =
-        !message.command.empty() &&
-        unverified.decode(message.command.data(), 0, static_cast<int>(message.command.size())) > 0;
-    return refuse_unauthenticated(decodable ? unverified.request_id : 0, verdict.refusal,
-                                  verdict.reason);
+    note_unauthenticated(verdict.refusal, verdict.reason);
+    return refusal_reply(unverified_request_id(message), verdict.reason);
   }
-  if (verdict.command.kind == furuta::rig_command_t::KIND_START_SESSION) {
-    std::vector<std::uint8_t> encoded(static_cast<std::size_t>(message.getEncodedSize()));
-    message.encode(encoded.data(), 0, static_cast<int>(encoded.size()));
-    recorder_->note_signed_start(verdict.command.request_id, std::move(encoded));
-  }
-  return handle_command(verdict.command);
+  return reply_for(verdict.command.request_id, take_signed(message, verdict.command));
 }
 
 bool Daemon::start_replayed_session(const furuta::rig_session_t& start) {
@@ -434,6 +454,10 @@ bool Daemon::start_replayed_session(const furuta::rig_session_t& start) {
 }
 
 furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command) {
+  return reply_for(command.request_id, decide(command));
+}
+
+CommandDecision Daemon::decide(const furuta::rig_command_t& command) {
   CommandDecision decision;
   {
     // Held until the request is queued too: the loop's request queue is single-producer, and
@@ -445,11 +469,7 @@ furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command
     if (decision.accepted) decision = carry_out(command);
   }
   count(decision.refusal);
-  furuta::rig_status_t reply = status_message();
-  reply.reply_to_request_id = command.request_id;
-  reply.request_accepted = decision.accepted;
-  reply.request_reason = decision.reason;
-  return reply;
+  return decision;
 }
 
 CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {

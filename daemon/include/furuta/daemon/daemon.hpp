@@ -122,14 +122,22 @@ class Daemon {
   // printed (LCM's typed handlers print every decoding error).
   void on_command(const lcm::ReceiveBuffer* buffer, const std::string&);
   void on_signed_command(const lcm::ReceiveBuffer* buffer, const std::string&);
-  // Publishes a reply: bounded, signed, and, for a refusal or an e-stop, only within its reply
-  // budget (counted as withheld otherwise).
-  void publish_reply(furuta::rig_status_t reply, bool estop);
+  // Publishes a status: bounded and signed.
   void publish(furuta::rig_status_t status);
-  // A command refused for its signature: counted, and the reply says why.
-  furuta::rig_status_t refuse_unauthenticated(std::int64_t request_id,
-                                              command_auth::Refusal refusal,
-                                              const std::string& reason);
+  // Whether a command's reply may go out: a refusal or an e-stop only within its reply budget
+  // (counted as withheld otherwise), so a refusal's status is built only when it is sent.
+  bool reply_allowed(bool accepted, bool estop);
+  // A command refused for its signature: counted by reason, the reason kept for the status.
+  void note_unauthenticated(command_auth::Refusal refusal, const std::string& reason);
+  furuta::rig_status_t refusal_reply(std::int64_t request_id, const std::string& reason);
+  furuta::rig_status_t reply_for(std::int64_t request_id, const CommandDecision& decision);
+  static std::int64_t unverified_request_id(const furuta::rig_signed_command_t& message);
+  command_auth::Verdict verify(const furuta::rig_signed_command_t& message);
+  // A command whose signature checked out: a start's signed bytes kept for its log, then decided.
+  CommandDecision take_signed(const furuta::rig_signed_command_t& message,
+                              const furuta::rig_command_t& command);
+  // Validated, rate-limited and carried out (under command_mutex_), the refusal counted.
+  CommandDecision decide(const furuta::rig_command_t& command);
   void count(CommandRefusal refusal);
   std::int64_t wall_now_ns() const;
   std::int64_t monotonic_now_ns() const;
