@@ -22,7 +22,7 @@ namespace furuta::command_auth {
 namespace {
 
 // Bumped if the signed layout ever changes, so an old tag can never verify under a new layout.
-constexpr char kDomain[] = "furuta rig_signed_command_t v1";
+constexpr char kCommandDomain[] = "furuta rig_signed_command_t v1";
 
 struct HmacFree {
   void operator()(GHmac* hmac) const { g_hmac_unref(hmac); }
@@ -52,7 +52,7 @@ bool moves_motor(const furuta::rig_command_t& command) {
 
 CommandTag command_tag(const CommandKey& key, const furuta::rig_signed_command_t& message) {
   std::unique_ptr<GHmac, HmacFree> hmac(g_hmac_new(G_CHECKSUM_SHA256, key.data(), key.size()));
-  g_hmac_update(hmac.get(), reinterpret_cast<const guchar*>(kDomain), sizeof kDomain);
+  g_hmac_update(hmac.get(), reinterpret_cast<const guchar*>(kCommandDomain), sizeof kCommandDomain);
   put_u64(hmac.get(), static_cast<std::uint64_t>(message.signed_wall_ns));
   put_u64(hmac.get(), static_cast<std::uint64_t>(message.nonce));
   put_u64(hmac.get(), message.sender.size());

@@ -460,6 +460,18 @@ KeyCreation judge_existing(const fs::path& path, uid_t also_owner) {
 
 }  // namespace
 
+std::optional<CommandKey> key_from_hex(std::string_view text) {
+  CommandKey key{};
+  if (text.size() != 2 * key.size()) return std::nullopt;
+  for (std::size_t i = 0; i < key.size(); ++i) {
+    const int high = hex_digit(text[2 * i]);
+    const int low = hex_digit(text[2 * i + 1]);
+    if (high < 0 || low < 0) return std::nullopt;
+    key[i] = static_cast<std::uint8_t>(high * 16 + low);
+  }
+  return key;
+}
+
 KeyFile read_command_key(const std::filesystem::path& path, const std::string& owner_user) {
   return read_key(path, user_id(owner_user));
 }

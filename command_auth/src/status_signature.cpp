@@ -19,7 +19,7 @@ namespace furuta::command_auth {
 namespace {
 
 // Bumped if the signed layout ever changes, so an old signature never checks under a new layout.
-constexpr char kDomain[] = "furuta rig_status_t v1";
+constexpr char kStatusDomain[] = "furuta rig_status_t v1";
 
 void ensure_sodium() {
   static std::once_flag once;
@@ -32,17 +32,10 @@ void ensure_sodium() {
 std::vector<std::uint8_t> signed_bytes(furuta::rig_status_t status) {
   std::fill(std::begin(status.signature), std::end(status.signature), 0);
   const int size = status.getEncodedSize();
-  std::vector<std::uint8_t> bytes(sizeof kDomain + static_cast<std::size_t>(size));
-  std::memcpy(bytes.data(), kDomain, sizeof kDomain);
-  status.encode(bytes.data() + sizeof kDomain, 0, size);
+  std::vector<std::uint8_t> bytes(sizeof kStatusDomain + static_cast<std::size_t>(size));
+  std::memcpy(bytes.data(), kStatusDomain, sizeof kStatusDomain);
+  status.encode(bytes.data() + sizeof kStatusDomain, 0, size);
   return bytes;
-}
-
-int hex_digit(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
 }
 
 std::string hex_text(const DaemonPublicKey& key) {
@@ -55,9 +48,9 @@ std::string hex_text(const DaemonPublicKey& key) {
   return text + "\n";
 }
 
-struct FdCloser {
+struct ClosesFd {
   int fd = -1;
-  ~FdCloser() {
+  ~ClosesFd() {
     if (fd >= 0) ::close(fd);
   }
 };
@@ -132,7 +125,7 @@ PublicKeyFile read_daemon_public_key(const std::filesystem::path& path) {
         "cannot read the daemon's public key " + path.string() + ": " + std::strerror(errno);
     return result;
   }
-  FdCloser closer{fd};
+  ClosesFd closer{fd};
   struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     result.problem = "the daemon's public key " + path.string() + " is not a regular file";
@@ -160,19 +153,12 @@ PublicKeyFile read_daemon_public_key(const std::filesystem::path& path) {
   while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) {
     text.pop_back();
   }
-  DaemonPublicKey key{};
-  bool digits = text.size() == 2 * key.size();
-  for (std::size_t i = 0; digits && i < key.size(); ++i) {
-    const int high = hex_digit(text[2 * i]);
-    const int low = hex_digit(text[2 * i + 1]);
-    digits = high >= 0 && low >= 0;
-    key[i] = static_cast<std::uint8_t>(high * 16 + low);
-  }
-  if (!digits) {
+  const std::optional<CommandKey> key = key_from_hex(text);
+  if (!key) {
     result.problem = path.string() + ": line 1: expected 64 hexadecimal digits (a 32-byte key)";
     return result;
   }
-  result.key = key;
+  result.key = *key;
   return result;
 }
 
@@ -185,7 +171,7 @@ std::string write_daemon_public_key(const std::filesystem::path& path, const Dae
   if (fd < 0) return "cannot create " + temp + ": " + std::strerror(errno);
   std::string why;
   {
-    FdCloser closer{fd};
+    ClosesFd closer{fd};
     if (::fchmod(fd, 0644) != 0) why = std::string("chmod: ") + std::strerror(errno);
     if (why.empty() && ::write(fd, text.data(), text.size()) != static_cast<ssize_t>(text.size())) {
       why = std::string("write: ") + std::strerror(errno);

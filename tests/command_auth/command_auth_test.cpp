@@ -253,7 +253,7 @@ TEST(CommandAuth, SignedCommandsThatDoNotMoveTheMotorUseNoMemory) {
     const Verdict verdict =
         v.verify(sign_command(status, key_of(1), "a@b", kNow + kSecond, n), kNow, kNow);
     ASSERT_TRUE(verdict.accepted) << verdict.reason;
-    EXPECT_EQ(verdict.command.kind, furuta::rig_command_t::KIND_STATUS_REQUEST);
+    EXPECT_EQ(verdict.command.kind, +furuta::rig_command_t::KIND_STATUS_REQUEST);
   }
   EXPECT_TRUE(
       v.verify(sign_command(start_command(), key_of(1), "a@b", kNow, 1), kNow, kNow).accepted);

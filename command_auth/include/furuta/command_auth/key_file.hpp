@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 
 namespace furuta::command_auth {
 
@@ -48,6 +49,9 @@ KeyFile read_command_key(const std::filesystem::path& path, const std::string& o
 // effective user. A directory that does not exist or cannot be examined is a problem. The message
 // names the directory, who can write to it (a group, every user, or the ACL entry) and the fix.
 std::string key_directory_problem(const std::filesystem::path& key_path);
+
+// 64 hexadecimal digits, either case, as the key they spell; nothing for any other text.
+std::optional<CommandKey> key_from_hex(std::string_view text);
 
 // What ensure_command_key did.
 struct KeyCreation {
