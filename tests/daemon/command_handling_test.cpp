@@ -563,13 +563,13 @@ TEST(CommandHandling, AStopFloodDoesNotSpendTheStartBudget) {
     stops.push_back(rig.send(testing::simple_command(rig_command_t::KIND_STOP)));
     rig.send(status_request());
   }
-  // The loop takes the stops (a stop cancels a start that waits with it), 16 ms pass.
-  rig.step_cycles(1);
-  const rig_status_t start = rig.ask(testing::start_command("bang_bang", 0.2, 30.0, "through"));
-  EXPECT_TRUE(start.request_accepted) << start.request_reason;
+  // Every stop answered, then the loop takes them (a stop cancels a start that waits with it).
   int stops_refused = 0;
   for (std::int64_t id : stops) stops_refused += !rig.inbox.reply_to(id).request_accepted;
   EXPECT_EQ(stops_refused, 100 - rig.settings.command_limits.max_stops_per_s);
+  rig.step_cycles(1);
+  const rig_status_t start = rig.ask(testing::start_command("bang_bang", 0.2, 30.0, "through"));
+  EXPECT_TRUE(start.request_accepted) << start.request_reason;
   rig.step_cycles(3);
   EXPECT_EQ(rig.daemon->loop().counters().state.load(), LoopState::running);
   // The e-stop needs no budget at all.
