@@ -149,6 +149,12 @@ class AnswerCheck {
            " wrongly signed answer(s) were ignored: a furutad without its daemon key, or someone "
            "on the LCM group forging the daemon's answers (docs/security.md)";
   }
+  // Said once at the end of a command that got its signed answer all the same.
+  void warn_if_ignored(const std::string& name, std::ostream& err) const {
+    if (const std::string what = ignored(); !what.empty()) {
+      err << name << ": WARNING: " << what.substr(2) << "\n";  // past the "; "
+    }
+  }
 
  private:
   std::optional<command_auth::DaemonPublicKey> key_;
@@ -386,6 +392,13 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
     auto s = channel.receive(std::max(wait, std::chrono::milliseconds(1)));
     if (s && s->reply_to_request_id == id && check.trusted(*s)) reply = std::move(s);
   }
+  // Whatever follows, forged answers ignored on the way are said at the end.
+  struct SayIgnored {
+    const AnswerCheck& check;
+    const std::string& name;
+    std::ostream& err;
+    ~SayIgnored() { check.warn_if_ignored(name, err); }
+  };
   if (!reply) {
     err << name << ": no answer from furutad on " << channel.where() << " within "
         << remote.reply_timeout_s
@@ -394,6 +407,7 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
         << check.ignored() << "\n";
     return 2;
   }
+  const SayIgnored say_ignored{check, name, err};
   if (!reply->request_accepted) {
     err << name << ": refused: " << reply->request_reason << "\n";
     print_status(*reply, out);

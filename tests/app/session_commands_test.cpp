@@ -390,6 +390,11 @@ TEST(RemoteCommand, AForgedAnswerIsIgnoredAndTheDaemonsOwnBelieved) {
   EXPECT_EQ(forged, 2);
   EXPECT_EQ(started.code, 0) << started.out << started.err;
   EXPECT_FALSE(started.has("revoked")) << started.out << started.err;
+  // Believed only the daemon, and said that someone answered in its name.
+  EXPECT_TRUE(
+      started.has("furuta start: WARNING: 1 unsigned and 1 wrongly signed answer(s) were "
+                  "ignored"))
+      << started.err;
   EXPECT_TRUE(started.has("_real running")) << started.out;
   EXPECT_EQ(daemon.daemon().loop().counters().state.load(), daemon::LoopState::running);
 }
