@@ -67,28 +67,10 @@ fail() {
 CONFIG="$TMP/rig.toml"
 LOGS="$TMP/logs"
 KEY="$TMP/command.key"
-# As tests/daemon/udp_multicast_test.sh: no wait for the pendulum to hang still between sessions,
-# a bang-bang that flips at 20 deg (so that a session started right after an e-stop runs), and
-# every key and state file in the temporary directory. A key the configuration does not have (an
-# older furutad) is left out.
-sed -e "s|^lcm_url = .*|lcm_url = \"$URL\"|" \
-    -e "s|^logs_dir = .*|logs_dir = \"$LOGS\"|" \
-    -e "s|^rest_check_s = .*|rest_check_s = 0.0|" \
-    -e "s|^command_key_file = .*|command_key_file = \"$KEY\"|" \
-    -e "s|^command_state_file = .*|command_state_file = \"$TMP/command-replay.state\"|" \
-    -e "s|^daemon_key_file = .*|daemon_key_file = \"$TMP/daemon.key\"|" \
-    -e "s|^daemon_public_key_file = .*|daemon_public_key_file = \"$TMP/daemon.pub\"|" \
-    -e "s|^arm_switch_deg = [0-9.]*|arm_switch_deg = 20|" "$ROOT/config/rig.toml" > "$CONFIG"
-grep -q "^lcm_url = \"$URL\"" "$CONFIG" || fail "could not set lcm_url in the [daemon] table"
-grep -q "^logs_dir = \"$LOGS\"" "$CONFIG" || fail "could not set logs_dir in the [daemon] table"
-grep -q "^rest_check_s = 0.0$" "$CONFIG" || fail "could not set rest_check_s in the [daemon] table"
-grep -q "^command_key_file = \"$KEY\"" "$CONFIG" || fail "could not set command_key_file"
-grep -q "^arm_switch_deg = 20 " "$CONFIG" || fail "could not set arm_switch_deg in [excitation]"
-for key in command_state_file daemon_key_file daemon_public_key_file; do
-  if grep -q "^$key = " "$CONFIG"; then
-    grep -q "^$key = \"$TMP/" "$CONFIG" || fail "could not set $key in the [daemon] table"
-  fi
-done
+# As tests/daemon/udp_multicast_test.sh configures it (a session started right after an e-stop
+# runs at once), every key and state file in the temporary directory.
+. "$ROOT/tests/daemon/udp_rig_config.sh"
+udp_rig_config "$ROOT/config/rig.toml" "$CONFIG" "$URL" "$LOGS" "$TMP"
 
 # The keys first, as the unit's ExecStartPre makes them; the benchmark signs its starts with the
 # command key.

@@ -47,24 +47,8 @@ PLAY_URL="udpm://$GROUP:$((PORT + 1))?ttl=0"
 
 CONFIG="$TMP/rig.toml"
 LOGS="$TMP/logs"
-# rest_check_s 0: a session a safety rule ended leaves the pendulum swinging for minutes, and the
-# next one (below) must not wait for it. The bang-bang flips at 20 deg, at duty 0.15: room for
-# loop stalls of about half a second before the arm reaches its 150 deg limit (as the crash trials).
-sed -e "s|^lcm_url = .*|lcm_url = \"$URL\"|" \
-    -e "s|^logs_dir = .*|logs_dir = \"$LOGS\"|" \
-    -e "s|^rest_check_s = .*|rest_check_s = 0.0|" \
-    -e "s|^command_key_file = .*|command_key_file = \"$TMP/command.key\"|" \
-    -e "s|^command_state_file = .*|command_state_file = \"$TMP/command-replay.state\"|" \
-    -e "s|^daemon_key_file = .*|daemon_key_file = \"$TMP/daemon.key\"|" \
-    -e "s|^daemon_public_key_file = .*|daemon_public_key_file = \"$TMP/daemon.pub\"|" \
-    -e "s|^arm_switch_deg = [0-9.]*|arm_switch_deg = 20|" "$RIG_TOML" > "$CONFIG"
-grep -q "^lcm_url = \"$URL\"" "$CONFIG" || fail "could not set lcm_url in the [daemon] table"
-grep -q "^logs_dir = \"$LOGS\"" "$CONFIG" || fail "could not set logs_dir in the [daemon] table"
-grep -q "^rest_check_s = 0.0$" "$CONFIG" || fail "could not set rest_check_s in the [daemon] table"
-grep -q "^command_key_file = \"$TMP/command.key\"" "$CONFIG" || fail "could not set command_key_file"
-grep -q "^daemon_public_key_file = \"$TMP/daemon.pub\"" "$CONFIG" || fail "could not set daemon_public_key_file"
-grep -q "^command_state_file = \"$TMP/command-replay.state\"" "$CONFIG" || fail "could not set command_state_file"
-grep -q "^arm_switch_deg = 20 " "$CONFIG" || fail "could not set arm_switch_deg in [excitation]"
+. "$(dirname "$0")/udp_rig_config.sh"
+udp_rig_config "$RIG_TOML" "$CONFIG" "$URL" "$LOGS" "$TMP"
 
 cli() { "$FURUTA" "$@" --config "$CONFIG" --timeout 5; }
 status_line() { cli status 2>/dev/null; }
