@@ -216,6 +216,7 @@ int main(int argc, char** argv) {
       std::cerr << "furutad: cannot open LCM at " << lcm_url << "\n";
       return 2;
     }
+    settings.command_url = lcm_url;
     daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
     if (!daemon.command_state_problem().empty()) {
       std::cerr << "furutad: WARNING: " << daemon.command_state_problem() << "\n";

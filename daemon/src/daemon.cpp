@@ -71,6 +71,10 @@ Daemon::Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, br
     sessions_logged_.fetch_add(1);
     if (on_logged_) on_logged_(path);
   });
+  if (const std::optional<UdpmAddress> group = parse_udpm_url(settings_.command_url)) {
+    intake_ = std::make_unique<MulticastReceiver>(*group, settings_.command_socket_buffer_bytes);
+    return;
+  }
   subscription_ = lcm_.subscribe(session_log::kChannelCommand, &Daemon::on_command, this);
   signed_subscription_ =
       lcm_.subscribe(session_log::kChannelSignedCommand, &Daemon::on_signed_command, this);
@@ -264,14 +268,37 @@ void Daemon::io_thread_main() {
 
 void Daemon::lcm_thread_main() {
   if (settings_.realtime.enabled) keep_off_cpu(settings_.realtime.cpu);
-  while (!lcm_stop_.load()) lcm_.handleTimeout(50);
+  while (!lcm_stop_.load()) {
+    if (intake_) {
+      take_datagrams(intake_->receive(50));
+    } else {
+      lcm_.handleTimeout(50);
+    }
+  }
+}
+
+void Daemon::take_datagrams(std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::optional<LcmDatagram> datagram = parse_lcm_datagram(intake_->datagram(i));
+    if (!datagram) continue;  // not a one-datagram LCM message: no command is a fragment
+    const bool command = datagram->channel == session_log::kChannelCommand;
+    const bool signed_command = datagram->channel == session_log::kChannelSignedCommand;
+    if (!command && !signed_command) continue;
+    if (intake_->oversized(i)) {
+      refusals_.malformed.fetch_add(1);
+    } else if (command) {
+      take_command(datagram->message);
+    } else {
+      take_signed_command(datagram->message);
+    }
+  }
 }
 
 namespace {
 
 // Larger than any command or signed command the tools send (the verifier's limits are below it):
 // anything bigger is not decoded at all.
-constexpr int kMaxCommandMessageBytes = 2048;
+constexpr std::size_t kMaxCommandMessageBytes = 2048;
 
 constexpr char kUnsignedReason[] =
     "unsigned: a command that moves the motor must be signed with the rig's command key (furuta "
@@ -280,9 +307,17 @@ constexpr char kUnsignedReason[] =
 }  // namespace
 
 void Daemon::on_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
+  take_command({static_cast<const std::uint8_t*>(buffer->data), buffer->data_size});
+}
+
+void Daemon::on_signed_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
+  take_signed_command({static_cast<const std::uint8_t*>(buffer->data), buffer->data_size});
+}
+
+void Daemon::take_command(std::span<const std::uint8_t> bytes) {
   furuta::rig_command_t command{};
-  if (buffer->data_size > static_cast<std::uint32_t>(kMaxCommandMessageBytes) ||
-      command.decode(buffer->data, 0, static_cast<int>(buffer->data_size)) < 0) {
+  if (bytes.size() > kMaxCommandMessageBytes ||
+      command.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) {
     refusals_.malformed.fetch_add(1);
     return;  // nothing to address a reply to
   }
@@ -297,10 +332,10 @@ void Daemon::on_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
   }
 }
 
-void Daemon::on_signed_command(const lcm::ReceiveBuffer* buffer, const std::string&) {
+void Daemon::take_signed_command(std::span<const std::uint8_t> bytes) {
   furuta::rig_signed_command_t message{};
-  if (buffer->data_size > static_cast<std::uint32_t>(kMaxCommandMessageBytes) ||
-      message.decode(buffer->data, 0, static_cast<int>(buffer->data_size)) < 0) {
+  if (bytes.size() > kMaxCommandMessageBytes ||
+      message.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) {
     refusals_.malformed.fetch_add(1);
     return;
   }

@@ -4,7 +4,11 @@
 //
 // The loop runs on a clock the test steps one period at a time (safe to read from any thread), so
 // the rate limiter's notion of time, and every count, is exact.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -26,6 +30,7 @@
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_status_t.hpp"
+#include "lcm_datagram.hpp"
 #include "stepped_clock.hpp"
 #include "temp_dir.hpp"
 
@@ -547,6 +552,69 @@ TEST(CommandHandling, AMegabyteSenderNeitherBlindsTheStatusNorIsEchoed) {
   const rig_status_t escaped = rig.inbox.reply_to(8003);
   EXPECT_EQ(escaped.request_reason.find('\x1b'), std::string::npos) << escaped.request_reason;
   EXPECT_NE(escaped.request_reason.find("\\x1b[2J"), std::string::npos) << escaped.request_reason;
+}
+
+// With a udpm:// URL the daemon reads commands from the group's port itself, in batches: what LCM
+// would deliver is taken the same way, oversized command datagrams are counted as malformed, other
+// channels and fragments are passed over. Sent to the port on loopback, as the group's would come.
+TEST(CommandHandling, CommandsOnTheGroupAreReadByTheDaemonsOwnSocket) {
+  testing::TempDir dir("furuta-commands");
+  CommandRig rig;
+  const int probe = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof address;
+  ASSERT_EQ(::bind(probe, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+  ::getsockname(probe, reinterpret_cast<sockaddr*>(&address), &length);
+  ::close(probe);
+  rig.settings.command_url =
+      "udpm://239.255.201.18:" + std::to_string(ntohs(address.sin_port)) + "?ttl=0";
+  try {
+    rig.start(dir.path());
+  } catch (const std::system_error& e) {
+    GTEST_SKIP() << "no multicast here: " << e.what();
+  }
+  // The daemon no longer handles this memq LCM (it reads the socket): its answers are handled here.
+  std::atomic<bool> done{false};
+  std::thread answers([&] {
+    while (!done.load()) rig.lcm.handleTimeout(10);
+  });
+  const int sender = ::socket(AF_INET, SOCK_DGRAM, 0);
+  const auto send = [&](const std::string& channel, const std::vector<std::uint8_t>& bytes) {
+    const std::vector<std::uint8_t> datagram = furuta::testing::lcm_datagram(channel, bytes, 1);
+    ASSERT_EQ(::sendto(sender, datagram.data(), datagram.size(), 0,
+                       reinterpret_cast<const sockaddr*>(&address), sizeof address),
+              static_cast<ssize_t>(datagram.size()));
+  };
+  const auto encoded = [](const auto& message) {
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+    message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    return bytes;
+  };
+
+  send(session_log::kChannelCommand, std::vector<std::uint8_t>(5000, 0));  // oversized
+  send("RIG_SAMPLE", std::vector<std::uint8_t>(5000, 0));                  // not a command
+  send(session_log::kChannelSignedCommand, {1, 2, 3});                     // undecodable
+  rig_command_t start = testing::start_command("bang_bang", 0.2, 10.0, "x");
+  start.request_id = 9001;
+  send(session_log::kChannelSignedCommand,
+       encoded(command_auth::sign_command(start, rig.key, "test@rig", rig.wall_ns.load(), 1)));
+  rig_command_t ask = status_request();
+  ask.request_id = 9002;
+  send(session_log::kChannelCommand, encoded(ask));
+
+  const rig_status_t started = rig.inbox.reply_to(9001);
+  EXPECT_TRUE(started.request_accepted) << started.request_reason;
+  const rig_status_t status = rig.inbox.reply_to(9002);
+  EXPECT_EQ(status.refused_malformed, 2);
+  rig_command_t stop = testing::simple_command(rig_command_t::KIND_ESTOP);
+  stop.request_id = 9003;
+  send(session_log::kChannelCommand, encoded(stop));
+  EXPECT_TRUE(rig.inbox.reply_to(9003).request_accepted);
+  ::close(sender);
+  done.store(true);
+  answers.join();
 }
 
 // Stops, e-stops and status requests have budgets of their own: a flood of unsigned stops does not

@@ -14,6 +14,7 @@
 
 #include "furuta/command_auth/command_auth.hpp"
 #include "furuta/command_auth/status_signature.hpp"
+#include "furuta/daemon/command_intake.hpp"
 #include "furuta/daemon/control_loop.hpp"
 #include "furuta/daemon/session_recorder.hpp"
 #include "furuta/rig_command_t.hpp"
@@ -43,6 +44,10 @@ struct DaemonSettings {
   std::optional<command_auth::CommandKey> daemon_key;
   std::function<std::int64_t()> wall_clock_ns;       // empty: the system's UTC clock
   std::function<std::int64_t()> monotonic_clock_ns;  // empty: CLOCK_MONOTONIC (the replay floor)
+  // Where commands arrive: a udpm:// URL is read by the daemon's own batched reader
+  // (command_intake.hpp); anything else (memq:// in tests, or empty) through the `lcm` given.
+  std::string command_url;
+  int command_socket_buffer_bytes = 4 << 20;
 };
 
 // Refusals since start-up by reason, as rig_status_t counts them.
@@ -61,9 +66,11 @@ struct RefusalCounts {
 
 class Daemon {
  public:
-  // `lcm` must outlive the daemon; the daemon subscribes to RIG_COMMAND on it and handles it on its
-  // own thread. `clock` is the loop thread's alone (it may be a single-threaded VirtualClock): the
-  // other threads take time from the loop's counters.
+  // `lcm` must outlive the daemon; statuses and samples go out on it. Commands are read on the
+  // daemon's own thread, from `settings.command_url`'s group or, for other URLs, through `lcm`.
+  // Throws std::system_error when the command socket cannot be opened. `clock` is the loop thread's
+  // alone (it may be a single-threaded VirtualClock): the other threads take time from the loop's
+  // counters.
   Daemon(DaemonSettings settings, BoardLink& motor, BoardLink& encoder, bridge::Clock& clock,
          lcm::LCM& lcm);
   ~Daemon();  // stops everything (the motor at zero first)
@@ -122,6 +129,10 @@ class Daemon {
   // printed (LCM's typed handlers print every decoding error).
   void on_command(const lcm::ReceiveBuffer* buffer, const std::string&);
   void on_signed_command(const lcm::ReceiveBuffer* buffer, const std::string&);
+  void take_command(std::span<const std::uint8_t> bytes);
+  void take_signed_command(std::span<const std::uint8_t> bytes);
+  // One batch from the command socket, in arrival order; other channels are not looked at.
+  void take_datagrams(std::size_t count);
   // Publishes a status: bounded and signed.
   void publish(furuta::rig_status_t status);
   // Whether a command's reply may go out: a refusal or an e-stop only within its reply budget
@@ -172,6 +183,7 @@ class Daemon {
   std::thread loop_thread_;
   std::thread io_thread_;
   std::thread lcm_thread_;
+  std::unique_ptr<MulticastReceiver> intake_;  // null: commands come through lcm_
   lcm::Subscription* subscription_ = nullptr;
   lcm::Subscription* signed_subscription_ = nullptr;
 };
