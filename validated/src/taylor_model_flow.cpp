@@ -240,6 +240,11 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
                                   "enclosure width " + describe(width) + " > max_width " +
                                       describe(o.max_width) + " at t = " + describe(step.t1)};
   }
+  if (options.keep_end_models) {
+    const std::vector<Interval> error = from_point(frame.b) * frame.r;
+    step.end_models = p_next;
+    for (std::size_t v = 0; v < n; ++v) step.end_models[v].add_to_remainder(error[v]);
+  }
   result.steps.push_back(std::move(step));
   state.wrapped = false;
   if (options.shrink_wrap_max_delta > 0.0) {
@@ -247,6 +252,7 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
         shrink_wrap(p_next, frame.box, live.live, setup.wrap_slots, options.shrink_wrap_max_delta,
                     options.wrap_without_collapsed, options.wrap_at_base_point);
     if (wrap.done) {
+      result.steps.back().wrapped = true;
       ++result.shrink_wraps;
       result.partial_wraps += wrap.kept < setup.wrap_slots.size();
       state.wrapped = wrap.kept >= setup.wrap_slots.size();

@@ -47,6 +47,9 @@ struct TaylorModelFlowOptions {
   // parameters' spread (the Furuta tubes: bench/README.md, "Taylor models V"), looser where the
   // slots' derivatives vary much over the start box (the pendulum with its stiffness carried).
   bool wrap_at_base_point = false;
+  // Keep each step's end set as models (TaylorModelFlowStep::end_models): what set inversion
+  // tests data against. Costs a copy of the polynomials per step.
+  bool keep_end_models = false;
 };
 
 struct TaylorModelFlowStep {
@@ -55,6 +58,15 @@ struct TaylorModelFlowStep {
   Box over;                      // every solution over [t0, t1]
   Box end;                       // every solution at t1
   double remainder_width = 0.0;  // the widest component of the error part B r at t1
+  // With keep_end_models: component v at t1 is in end_models[v] for some z in [-1, 1]^n: the
+  // polynomial with the error part (B r)_v in its remainder. The variables of the carried
+  // parameters keep their meaning (parameter = mid + rad z) through the whole flow; the start
+  // variables do until the first shrink wrap, which widens them into the error they absorb, so
+  // after it they only range over [-1, 1].
+  std::vector<TaylorModel> end_models;
+  // The error part was wrapped into the start variables at t1: the steps after this one have
+  // start variables of their own (the parameters' are the same).
+  bool wrapped = false;
 };
 
 struct TaylorModelFlowResult {
