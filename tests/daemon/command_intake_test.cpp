@@ -47,13 +47,14 @@ TEST(CommandIntake, OtherProvidersAndBadAddressesAreNotMulticastGroups) {
 
 TEST(CommandIntake, AOneDatagramMessageGivesItsChannelAndBytes) {
   const std::vector<std::uint8_t> bytes{1, 2, 0, 3};
-  const std::vector<std::uint8_t> datagram = testing::lcm_datagram("RIG_COMMAND", bytes, 77);
+  const std::vector<std::uint8_t> datagram =
+      furuta::testing::lcm_datagram("RIG_COMMAND", bytes, 77);
   const auto message = parse_lcm_datagram(datagram);
   ASSERT_TRUE(message);
   EXPECT_EQ(message->channel, "RIG_COMMAND");
   EXPECT_EQ(std::vector<std::uint8_t>(message->message.begin(), message->message.end()), bytes);
 
-  const std::vector<std::uint8_t> no_bytes = testing::lcm_datagram("X", {}, 0);
+  const std::vector<std::uint8_t> no_bytes = furuta::testing::lcm_datagram("X", {}, 0);
   const auto empty = parse_lcm_datagram(no_bytes);
   ASSERT_TRUE(empty);
   EXPECT_EQ(empty->channel, "X");
@@ -61,18 +62,19 @@ TEST(CommandIntake, AOneDatagramMessageGivesItsChannelAndBytes) {
 }
 
 TEST(CommandIntake, FragmentsAndDamagedHeadersAreNotMessages) {
-  std::vector<std::uint8_t> fragment = testing::lcm_datagram("RIG_COMMAND", {1, 2, 3}, 1);
+  std::vector<std::uint8_t> fragment = furuta::testing::lcm_datagram("RIG_COMMAND", {1, 2, 3}, 1);
   fragment[3] = 0x33;  // "LC03": one fragment of a message too large for a datagram
   EXPECT_FALSE(parse_lcm_datagram(fragment));
 
-  const std::vector<std::uint8_t> whole = testing::lcm_datagram("RIG_COMMAND", {1, 2, 3}, 1);
+  const std::vector<std::uint8_t> whole =
+      furuta::testing::lcm_datagram("RIG_COMMAND", {1, 2, 3}, 1);
   for (std::size_t cut = 0; cut < 8 + 11 + 1; ++cut) {  // header, channel and its NUL
     EXPECT_FALSE(parse_lcm_datagram(std::span(whole).first(cut))) << cut << " bytes";
   }
   // A channel is at most 63 characters: 64 without a NUL are not a header.
-  std::vector<std::uint8_t> long_name = testing::lcm_datagram(std::string(70, 'C'), {1}, 1);
+  std::vector<std::uint8_t> long_name = furuta::testing::lcm_datagram(std::string(70, 'C'), {1}, 1);
   EXPECT_FALSE(parse_lcm_datagram(long_name));
-  EXPECT_TRUE(parse_lcm_datagram(testing::lcm_datagram(std::string(63, 'C'), {1}, 1)));
+  EXPECT_TRUE(parse_lcm_datagram(furuta::testing::lcm_datagram(std::string(63, 'C'), {1}, 1)));
 }
 
 // A port no one holds now, on the loopback interface.
@@ -113,10 +115,10 @@ TEST(CommandIntake, TakesWhatIsQueuedInOneBatchAndMarksWhatDidNotFit) {
   EXPECT_EQ(receiver->receive(0), 0u);  // nothing queued: returns at once
 
   for (std::uint32_t i = 0; i < 5; ++i) {
-    send_to_port(address.port, testing::lcm_datagram("RIG_COMMAND", {std::uint8_t(i)}, i));
+    send_to_port(address.port, furuta::testing::lcm_datagram("RIG_COMMAND", {std::uint8_t(i)}, i));
   }
   send_to_port(address.port,
-               testing::lcm_datagram("RIG_COMMAND", std::vector<std::uint8_t>(5000, 7), 5));
+               furuta::testing::lcm_datagram("RIG_COMMAND", std::vector<std::uint8_t>(5000, 7), 5));
   std::vector<std::uint8_t> seen;
   std::vector<bool> oversized;
   for (int tries = 0; tries < 100 && seen.size() < 6; ++tries) {
