@@ -12,7 +12,7 @@ set(FURUTA_MODULE_DEPENDENCIES
   "command_auth:lcmtypes,common"
   "session_log:lcmtypes,firmware_bridge"
   "daemon:firmware_bridge,config,session_log,lcmtypes,model,command_auth,common"
-  "identification:model,interval,config,session_log"
+  "identification:model,interval,config,session_log,validated"
   "validated:model,interval,common"
   "pipeline:identification,validated,session_log,config,model,interval"
   "report:pipeline,identification,validated,session_log,config,model,interval,common"

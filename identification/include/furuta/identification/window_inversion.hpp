@@ -1,0 +1,87 @@
+#pragma once
+// Set inversion through the ODE over one short window of a recording: which parameters can
+// explain every angle read in the window, for some start state in a given box.
+//
+// The window's start state and the scaled parameters (physical_inputs.hpp: the duty is the
+// input) are the variables of the Taylor-model flow (validated/taylor_model_flow.hpp); the flow
+// stops at every reading's time, where the read joint's angle is a model m(z) = c + a.z + h(z)
+// that must meet the reading's interval. Each such constraint contracts z: for each variable,
+// z_v is within (reading - c - h - the other linear terms) / a_v, h bounded over the current
+// box. Sweeps over all readings repeat while they contract. An empty z proves no parameter of the
+// box explains the window (`inconsistent`); otherwise the parameters' box shrinks to what the
+// contracted z allows (`contracted`). Every step is in outward-rounded interval arithmetic, so
+// nothing consistent is ever removed.
+//
+// The start variables keep their meaning only until the flow wraps its error part into them
+// (shrink wrapping): readings after a wrap constrain start variables of their own, while the
+// parameters' variables are shared by every reading of the window.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "furuta/interval/box.hpp"
+#include "furuta/interval/interval.hpp"
+#include "furuta/model/model.hpp"
+#include "furuta/validated/ode.hpp"
+#include "furuta/validated/taylor_model_flow.hpp"
+
+namespace furuta::identification {
+
+// One encoder reading: the joint (0: arm q1, 1: pendulum q2) and the interval its true angle is
+// in, at its time.
+struct AngleReading {
+  double t_s = 0.0;
+  int joint = 0;
+  interval::Interval angle_rad;
+};
+
+struct RecordingWindow {
+  double t0_s = 0.0;
+  double t1_s = 0.0;
+  interval::Box start;  // [q1, dq1, q2, dq2] at t0_s
+  // The duty (the scaled model's input) as pieces; the first starts at t0_s.
+  std::vector<validated::InputPiece> duty;
+  std::vector<AngleReading> readings;  // t0_s < t_s <= t1_s, sorted by time
+};
+
+struct WindowOptions {
+  validated::TaylorModelFlowOptions flow;  // t_start, t_end and keep_end_models are the window's
+  int max_sweeps = 8;                      // contraction sweeps over all readings
+  double min_sweep_gain = 0.01;            // stop once a sweep shrinks no width by this fraction
+};
+
+enum class WindowVerdict {
+  inconsistent,  // no parameter in the box explains the window from any start in the box
+  contracted,    // the box, shrunk (possibly not at all) to what the window allows
+  flow_failed,   // the flow did not carry the box through the window: nothing is concluded
+};
+
+struct WindowOutcome {
+  WindowVerdict verdict = WindowVerdict::flow_failed;
+  model::Parameters<interval::Interval> parameters;  // contracted (as given when flow_failed)
+  interval::Box start;                               // the start state, contracted
+  std::string reason;                                // why the flow failed, or which reading
+  std::size_t flow_steps = 0;
+  std::size_t sweeps = 0;
+  // The widest prediction of a reading before contraction, in units of its reading's width: how
+  // much of the data the flow's set resolves (below 1: every reading can cut).
+  double widest_prediction = 0.0;
+  double flow_seconds = 0.0;
+};
+
+// The parameters are the scaled ones (theta, b, fv2 / g), the state box the window's own start.
+// Throws std::invalid_argument for a window without duty pieces, with readings outside
+// (t0_s, t1_s] or a joint other than 0 or 1.
+WindowOutcome invert_window(const RecordingWindow& window,
+                            const model::Parameters<interval::Interval>& parameters,
+                            const WindowOptions& options);
+
+// Several windows of one rig: each with start variables of its own, all sharing the parameters'
+// (so that windows which pin different combinations of the parameters contract them together).
+// The outcome's `start` is the first window's; steps and seconds are summed over the windows.
+WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
+                             const model::Parameters<interval::Interval>& parameters,
+                             const WindowOptions& options);
+
+}  // namespace furuta::identification
