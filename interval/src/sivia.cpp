@@ -95,10 +95,17 @@ Outcome stop(const SiviaOptions& options, Box&& work, Box& slot, std::vector<Box
   return Outcome::boundary;
 }
 
+// Whether a test contracted its box, and (when the record is kept) the box before and after.
+struct Shrink {
+  bool contracted = false;
+  Contraction record;
+};
+
 // Tests box `slot` (in place: it ends as the box to keep, contracted unless outer) and, when it is
-// to be bisected, leaves the lower half in `slot` and the upper one in `upper`.
+// to be bisected, leaves the lower half in `slot` and the upper one in `upper`. A box contracted
+// but not outer is noted in `shrink` (with copies of both boxes when `record`).
 Outcome process(const BoxTest& test, const std::vector<double>& scale, const SiviaOptions& options,
-                Box& slot, Box& upper, std::vector<Box>& rest) {
+                bool record, Box& slot, Box& upper, std::vector<Box>& rest, Shrink& shrink) {
   const double epsilon = options.epsilon;
   Box work = slot;
   const BoxDecision decision = test(work);
@@ -113,6 +120,12 @@ Outcome process(const BoxTest& test, const std::vector<double>& scale, const Siv
     work = intersect(work, slot);
     if (work.is_empty()) {
       return Outcome::outer;
+    }
+  }
+  if (!(work == slot)) {
+    shrink.contracted = true;
+    if (record) {
+      shrink.record = Contraction{slot, work};
     }
   }
   if (decision.verdict == BoxVerdict::inner) {
@@ -207,6 +220,7 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
   std::vector<Box> upper;
   std::vector<std::vector<Box>> rests;  // the boundary rests of carved boxes
   std::vector<Outcome> outcomes;
+  std::vector<Shrink> shrinks;
   std::vector<Box> next;
   while (!current.empty()) {
     if (cancelled() || result.boxes_tested + current.size() > options.max_boxes) {
@@ -222,6 +236,14 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
     rests.clear();
     rests.resize(n);
     outcomes.assign(n, Outcome::skipped);
+    shrinks.clear();
+    shrinks.resize(n);
+    // Copies are made only while the record has room at the generation's start: at most one
+    // generation's worth is copied and then not kept.
+    const bool record = result.contractions.size() < options.max_kept_contractions;
+    const auto process_slot = [&](std::size_t i) {
+      return process(test, scale, options, record, current[i], upper[i], rests[i], shrinks[i]);
+    };
 
     // The first exception thrown by a test stops the generation; it is rethrown below.
     std::atomic<bool> failed{false};
@@ -231,26 +253,26 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
     ParallelEdges edges;  // for ThreadSanitizer only (furuta/common/tsan.hpp)
     edges.start();
     arena.execute([&] {
-      tbb::parallel_for(
-          tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
-            edges.body_begins();
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-              if (failed.load(std::memory_order_relaxed) || cancelled()) {
-                continue;  // skipped: stays pending, goes to boundary
-              }
-              try {
-                outcomes[i] = process(test, scale, options, current[i], upper[i], rests[i]);
-              } catch (...) {
-                failed.store(true, std::memory_order_relaxed);
-                const std::lock_guard<std::mutex> lock(error_mutex);
-                if (i < error_index) {
-                  error_index = i;
-                  error = std::current_exception();
-                }
-              }
-            }
-            edges.body_ends();
-          });
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          edges.body_begins();
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                            if (failed.load(std::memory_order_relaxed) || cancelled()) {
+                              continue;  // skipped: stays pending, goes to boundary
+                            }
+                            try {
+                              outcomes[i] = process_slot(i);
+                            } catch (...) {
+                              failed.store(true, std::memory_order_relaxed);
+                              const std::lock_guard<std::mutex> lock(error_mutex);
+                              if (i < error_index) {
+                                error_index = i;
+                                error = std::current_exception();
+                              }
+                            }
+                          }
+                          edges.body_ends();
+                        });
     });
     edges.finish();
     if (error) {
@@ -259,6 +281,12 @@ SubPaving sivia(const Box& prior, const BoxTest& test, const SiviaOptions& optio
 
     next.clear();
     for (std::size_t i = 0; i < n; ++i) {
+      if (shrinks[i].contracted) {
+        ++result.contraction_count;
+        if (result.contractions.size() < options.max_kept_contractions) {
+          result.contractions.push_back(std::move(shrinks[i].record));
+        }
+      }
       switch (outcomes[i]) {
         case Outcome::inner:
           result.inner.push_back(std::move(current[i]));

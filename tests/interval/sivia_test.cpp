@@ -294,13 +294,77 @@ TEST(Sivia, ContractingTestGivesTheSameSetWithFewerTests) {
   const double v_contracted = contracted.inner_volume() + contracted.boundary_volume();
   EXPECT_GT(v_contracted, 3 * kPi);
   EXPECT_LE(v_contracted, v_plain);
-  // Contracted-away slices are neither tested nor listed: outer holds whole tested boxes only.
+  // Contracted-away slices are not outer boxes (they are in `contractions`): outer holds whole
+  // tested boxes only.
   EXPECT_EQ(contracted.outer.size(), contracted.outer_count);
   EXPECT_LT(contracted.boxes_tested, plain.boxes_tested);
   std::printf(
       "[ measured ] ring eps 0.01: plain %zu tests (outer approx. %.4f), contracting %zu "
       "tests (outer approx. %.4f), 3pi = %.4f\n",
       plain.boxes_tested, v_plain, contracted.boxes_tested, v_contracted, 3 * kPi);
+}
+
+// What a contracting test cut off a box it did not call outer is kept as the box before and after,
+// so that a reader can check it: no point of before \ after is in the set, and with it the paving
+// accounts for every point of the prior.
+TEST(Sivia, ContractionsAreKeptSoWhatTheyRemovedCanBeChecked) {
+  const Box prior = ring_prior();
+  const SubPaving p = sivia(prior, contracting_ring_test, ring_options());
+  ASSERT_GT(p.contraction_count, 0u);
+  ASSERT_EQ(p.contractions.size(), p.contraction_count);
+  std::mt19937_64 rng(21);
+  std::size_t removed_points = 0;
+  for (const Contraction& c : p.contractions) {
+    ASSERT_TRUE(c.after.is_subset(c.before)) << c.before << " -> " << c.after;
+    ASSERT_NE(c.after, c.before);
+    for (const auto& x : samples(c.before, 20, rng)) {
+      if (c.after.contains(x)) continue;
+      ++removed_points;
+      // Proven outside; a point within rounding of the ring's edge is not a counterexample.
+      const double r = x[0] * x[0] + x[1] * x[1];
+      ASSERT_TRUE(r < 1.0 + 1e-12 || r > 4.0 - 1e-12)
+          << "(" << x[0] << ", " << x[1] << ") removed from " << c.before << " -> " << c.after;
+    }
+  }
+  EXPECT_GT(removed_points, 0u);
+  // Every point of the prior is in an inner, boundary or outer box or in a removed part.
+  const auto removed = [&](const std::vector<double>& x) {
+    for (const Contraction& c : p.contractions) {
+      if (c.before.contains(x) && !c.after.contains(x)) return true;
+    }
+    return false;
+  };
+  for (int k = 0; k < 2000; ++k) {
+    const std::vector<double> x = {uniform_in(prior[0], rng), uniform_in(prior[1], rng)};
+    ASSERT_TRUE(in_any(p.inner, p.boundary, x) || in_any(p.outer, x) || removed(x))
+        << x[0] << ", " << x[1];
+  }
+  // A test that never contracts leaves no record.
+  const SubPaving plain = sivia(prior, ring_test, ring_options());
+  EXPECT_EQ(plain.contraction_count, 0u);
+  EXPECT_TRUE(plain.contractions.empty());
+}
+
+TEST(Sivia, KeptContractionsStopAtTheCapInTheSameOrderForEveryThreadCount) {
+  SiviaOptions o = ring_options(1);
+  const SubPaving all = sivia(ring_prior(), contracting_ring_test, o);
+  ASSERT_GT(all.contraction_count, 10u);
+  for (int threads : {1, 2, 0}) {
+    o.threads = threads;
+    o.max_kept_contractions = 10;
+    const SubPaving capped = sivia(ring_prior(), contracting_ring_test, o);
+    EXPECT_EQ(capped.contraction_count, all.contraction_count) << threads << " threads";
+    ASSERT_EQ(capped.contractions.size(), 10u);
+    for (std::size_t i = 0; i < 10; ++i) {
+      EXPECT_EQ(capped.contractions[i].before, all.contractions[i].before) << i;
+      EXPECT_EQ(capped.contractions[i].after, all.contractions[i].after) << i;
+    }
+    EXPECT_EQ(capped.boundary, all.boundary);
+    o.max_kept_contractions = 0;
+    const SubPaving none = sivia(ring_prior(), contracting_ring_test, o);
+    EXPECT_TRUE(none.contractions.empty());
+    EXPECT_EQ(none.contraction_count, all.contraction_count);
+  }
 }
 
 TEST(Sivia, EmptySetHasNoInnerNorBoundary) {

@@ -39,6 +39,10 @@ struct SiviaOptions {
   int threads = 0;
   // Keep the outer boxes (for drawing); else only counted.
   bool keep_outer = true;
+  // Keep (before, after) of at most this many boxes a test contracted, the first ones in the
+  // paving's order (generation by generation, each in index order); all are counted. Each kept one
+  // costs two boxes, so this bounds the memory the record takes. 0: count only.
+  std::size_t max_kept_contractions = 100'000;
   // A hard cap on tests run; reached, the remaining boxes are returned as boundary and
   // `SubPaving::truncated` is set.
   std::size_t max_boxes = 50'000'000;
@@ -53,15 +57,26 @@ struct SiviaOptions {
   std::function<std::optional<Box>(const Box&)> inner_probe;
 };
 
+// A box a test contracted without deciding it outer: every point of `before` outside `after` is
+// proven outside the set (the test's contract), and `after` went on (inner, boundary or bisected).
+struct Contraction {
+  Box before, after;
+};
+
 struct SubPaving {
   Box prior;
-  // outer: the tested boxes (before contraction) proven outside; the slices a contracting test
-  // cut off are not listed. boundary also holds the untested boxes of a truncated run.
+  // outer: the tested boxes (before contraction) proven outside; what a contracting test cut off
+  // a box it did not decide outer is in `contractions`. boundary also holds the untested boxes of
+  // a truncated run.
   std::vector<Box> inner, boundary, outer;
+  // The first SiviaOptions::max_kept_contractions contractions. When every outer box and every
+  // contraction is kept, inner, boundary, outer and the before \ after together cover the prior.
+  std::vector<Contraction> contractions;
   std::size_t boxes_tested = 0;
   std::size_t bisections = 0;
-  std::size_t outer_count = 0;   // also counted when not kept
-  std::size_t probed_inner = 0;  // inner boxes found by options.inner_probe
+  std::size_t outer_count = 0;        // also counted when not kept
+  std::size_t contraction_count = 0;  // also counted when not kept
+  std::size_t probed_inner = 0;       // inner boxes found by options.inner_probe
   bool truncated = false;
   double seconds = 0;
 
