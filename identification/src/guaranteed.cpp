@@ -144,6 +144,31 @@ Interval point_of(const Interval& x) {
 
 }  // namespace
 
+Box inner_test_carried(const Box& prior, const std::array<bool, model::kParameterCount>& unknown,
+                       InnerTest kind) {
+  Box carried = prior;
+  const bool at_midpoint = kind == InnerTest::witness || kind == InnerTest::intermediate_value;
+  for (std::size_t k = 0; k < prior.size() && k < model::kParameterCount; ++k) {
+    if (!unknown[k] && at_midpoint) carried[k] = point_of(prior[k]);
+  }
+  return carried;
+}
+
+Box GuaranteedResult::proven_inner(const Box& inner_box) const {
+  Box proven = inner_box;
+  for (std::size_t k = 0; k < proven.size() && k < inner_carried.size(); ++k) {
+    if (!unknown[k]) proven[k] = inner_carried[k];
+  }
+  return proven;
+}
+
+std::vector<Box> GuaranteedResult::proven_inner_boxes() const {
+  std::vector<Box> out;
+  out.reserve(paving.inner.size());
+  for (const Box& b : paving.inner) out.push_back(proven_inner(b));
+  return out;
+}
+
 std::vector<IntervalSample> interval_samples(const std::vector<const JointSeries*>& experiments,
                                              const DataErrorBounds& bounds, std::size_t trim) {
   std::vector<IntervalSample> out;
@@ -192,8 +217,8 @@ SampleConstraints::SampleConstraints(std::vector<IntervalSample> samples, const 
   if (prior.size() != static_cast<std::size_t>(model::kParameterCount)) {
     throw std::invalid_argument("guaranteed identification: the prior box needs 7 components");
   }
-  Box midpoints = prior;
-  for (std::size_t k = 0; k < model::kParameterCount; ++k) midpoints[k] = Interval(prior[k].mid());
+  // The witness rows: carried components at the points the inner test proves with.
+  const Box midpoints = inner_test_carried(prior, unknown, InnerTest::witness);
   pre_.reserve(samples_.size());
   for (const IntervalSample& d : samples_) {
     Precomputed p;
@@ -516,6 +541,7 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
   sivia.threads = options.threads;
   sivia.progress = options.progress;
   sivia.max_boxes = options.max_boxes;
+  sivia.max_kept_contractions = options.max_kept_contractions;
   sivia.cancel = options.cancel;
   sivia.scale.assign(model::kParameterCount, 0.0);
   for (std::size_t k = 0; k < model::kParameterCount; ++k) {
@@ -526,6 +552,8 @@ GuaranteedResult guaranteed_identification(const SampleConstraints& constraints,
 
   GuaranteedResult result;
   result.unknown = options.unknown;
+  result.inner = options.inner;
+  result.inner_carried = inner_test_carried(options.prior, options.unknown, options.inner);
   result.samples = n;
   result.q = options.q;
   result.paving = interval::sivia(options.prior, test, sivia);

@@ -52,6 +52,33 @@ Json bound_json(const identification::ChannelErrorBound& b) {
   return Json{{"absolute", b.absolute}, {"relative", b.relative}};
 }
 
+const char* inner_test_name(identification::InnerTest kind) {
+  switch (kind) {
+    case identification::InnerTest::witness:
+      return "witness";
+    case identification::InnerTest::intermediate_value:
+      return "intermediate_value";
+    case identification::InnerTest::for_all_data:
+      return "for_all_data";
+    case identification::InnerTest::none:
+      return "none";
+  }
+  return "none";
+}
+
+// The two rows every sample constrains p with (docs/model.md, eq. 5), as text: the file names the
+// set it paves.
+Json constraint_json() {
+  return Json{
+      {"row1",
+       "mu1 ddq1 + mu2 (s^2 ddq1 + 2 s c dq1 dq2) + mu3 (c ddq2 - s dq2^2) + fv1 dq1 = tau"},
+      {"row2", "-mu2 s c dq1^2 + mu3 c ddq1 + mu4 ddq2 + mug s + fv2 dq2 = 0"},
+      {"where", "s = sin q2, c = cos q2"},
+      {"set",
+       "p in prior such that, for all samples but at most q, some (q2, dq1, dq2, ddq1, ddq2, "
+       "tau) in its data boxes satisfies row1 and row2"}};
+}
+
 }  // namespace
 
 Json tubes_json(const pipeline::Simulation& s) {
@@ -80,20 +107,36 @@ Json paving_json(const pipeline::Guaranteed& g) {
     if (r.unknown[k]) j["unknowns"].push_back(model::kParameterNames[k]);
   }
   j["prior"] = box_json(p.prior);
+  j["constraint"] = constraint_json();
   j["q"] = r.q;
   j["empty"] = r.empty;
   j["truncated"] = p.truncated;
+  j["inner_test"] = inner_test_name(r.inner);
+  // The carried components' values the inner boxes are proven (and listed) with.
+  j["inner_carried"] = Json::object();
+  for (std::size_t k = 0; k < model::kParameterCount && k < r.inner_carried.size(); ++k) {
+    if (!r.unknown[k]) {
+      j["inner_carried"][model::kParameterNames[k]] = interval_json(r.inner_carried[k]);
+    }
+  }
   j["outer_count"] = p.outer_count;
   j["outer_kept"] = p.outer.size();
+  j["contraction_count"] = p.contraction_count;
+  j["contractions_kept"] = p.contractions.size();
   j["boxes"] = Json::array();
   const auto boxes = [&](const std::vector<interval::Box>& list, const char* verdict) {
     for (const interval::Box& b : list) {
       j["boxes"].push_back(Json{{"verdict", verdict}, {"box", box_json(b)}});
     }
   };
-  boxes(p.inner, "inner");
+  // A box called inner is listed as its proof holds: every point of it is in the set.
+  boxes(r.proven_inner_boxes(), "inner");
   boxes(p.boundary, "boundary");
   boxes(p.outer, "outer");
+  j["contractions"] = Json::array();
+  for (const interval::Contraction& c : p.contractions) {
+    j["contractions"].push_back(Json{{"before", box_json(c.before)}, {"after", box_json(c.after)}});
+  }
   j["data_error_bounds"] =
       Json{{"q2", bound_json(g.bounds.q2)},     {"dq1", bound_json(g.bounds.dq1)},
            {"dq2", bound_json(g.bounds.dq2)},   {"ddq1", bound_json(g.bounds.ddq1)},

@@ -70,6 +70,8 @@ Json results_json(const identification::Identification& id,
 Json sivia_json(const identification::GuaranteedResult& r,
                 const std::vector<identification::IntervalSample>& samples) {
   const interval::SubPaving& p = r.paving;
+  // Inner boxes as their proof holds (the carried components where the inner test fixed them).
+  const std::vector<interval::Box> proven_inner = r.proven_inner_boxes();
   Json j;
   j["unknowns"] = Json::array();
   j["parameters"] = Json::array();
@@ -91,14 +93,17 @@ Json sivia_json(const identification::GuaranteedResult& r,
   j["empty"] = r.empty;
   if (!r.empty) {
     j["outer_hull"] = box_json(p.outer_hull());
-    if (!p.inner.empty()) {
-      j["inner_hull"] = box_json(p.inner_hull());
+    if (!proven_inner.empty()) {
+      interval::Box hull(p.prior.size(), interval::Interval::empty());
+      for (const interval::Box& b : proven_inner) hull = interval::hull(hull, b);
+      j["inner_hull"] = box_json(hull);
       // The largest inner box: parameters every one of which is proven consistent with the data.
-      const auto largest = std::max_element(
-          p.inner.begin(), p.inner.end(), [&](const interval::Box& a, const interval::Box& b) {
-            return identification::unknowns_volume({a}, r.unknown) <
-                   identification::unknowns_volume({b}, r.unknown);
-          });
+      const auto largest =
+          std::max_element(proven_inner.begin(), proven_inner.end(),
+                           [&](const interval::Box& a, const interval::Box& b) {
+                             return identification::unknowns_volume({a}, r.unknown) <
+                                    identification::unknowns_volume({b}, r.unknown);
+                           });
       j["central_feasible_box"] = box_json(*largest);
     }
   }
@@ -116,7 +121,7 @@ Json sivia_json(const identification::GuaranteedResult& r,
   j["inconsistent_samples"] = sample_list(r.inconsistent_samples);
   j["excluding_samples"] = sample_list(r.excluding_samples);
   j["inner"] = Json::array();
-  for (const interval::Box& b : p.inner) j["inner"].push_back(box_json(b));
+  for (const interval::Box& b : proven_inner) j["inner"].push_back(box_json(b));
   j["boundary"] = Json::array();
   for (const interval::Box& b : p.boundary) j["boundary"].push_back(box_json(b));
   return j;

@@ -75,6 +75,35 @@ TEST(Guaranteed, RegressorEnclosureContainsThePointRegressor) {
   }
 }
 
+// An inner box is proven only where the inner test fixed the carried components: at their prior's
+// midpoints for the witness and the faces, over their whole prior for the for-all test.
+TEST(Guaranteed, ProvenInnerBoxesCarryTheValuesTheInnerTestFixed) {
+  const Box prior = paper_prior(model::paper_run1());
+  const std::array<bool, model::kParameterCount> unknown{false, false, false, false,
+                                                         false, true,  true};
+  for (const InnerTest kind : {InnerTest::witness, InnerTest::intermediate_value}) {
+    const Box carried = inner_test_carried(prior, unknown, kind);
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      EXPECT_EQ(carried[k], unknown[k] ? prior[k] : Interval(prior[k].mid())) << k;
+    }
+  }
+  EXPECT_EQ(inner_test_carried(prior, unknown, InnerTest::for_all_data), prior);
+  EXPECT_EQ(inner_test_carried(prior, unknown, InnerTest::none), prior);
+
+  GuaranteedResult r;
+  r.unknown = unknown;
+  r.inner_carried = inner_test_carried(prior, unknown, InnerTest::witness);
+  Box inner = prior;
+  inner[5] = Interval(0.01, 0.02);
+  inner[6] = Interval(0.001, 0.002);
+  r.paving.inner = {inner};
+  const Box proven = r.proven_inner(inner);
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    EXPECT_EQ(proven[k], unknown[k] ? inner[k] : Interval(prior[k].mid())) << k;
+  }
+  EXPECT_EQ(r.proven_inner_boxes(), std::vector<Box>{proven});
+}
+
 TEST(Guaranteed, TheTruthIsInsideOnTwentySeedsWithTwoUnknowns) {
   int with_inner = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {

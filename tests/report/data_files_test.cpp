@@ -6,15 +6,20 @@
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
+#include "furuta/identification/guaranteed.hpp"
 #include "furuta/pipeline/pipeline.hpp"
+#include "furuta/report/json.hpp"
 #include "furuta/report/outputs.hpp"
 #include "simulated_logs.hpp"
+#include "simulated_sessions.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::report {
@@ -148,6 +153,175 @@ TEST(DataFiles, PavingJsonHoldsEveryBoxWithItsVerdictAndEverySamplesDataBoxes) {
     }
     EXPECT_EQ(s["tau"][0].get<double>(), samples[i].tau.lo());
     EXPECT_EQ(s["tau"][1].get<double>(), samples[i].tau.hi());
+  }
+}
+
+// paving.json read by someone who has only the file: its inner boxes, its removed parts and the
+// data boxes of its samples, checked point by point against the rows of "constraint".
+class PavingJsonOnOneSession : public ::testing::Test {
+ protected:
+  // The paper's problem (fv1, fv2 unknown, the mu's carried as Table II intervals around the
+  // truth) on one simulated session, at the paper's epsilon: the inner probe gives inner boxes.
+  static void SetUpTestSuite() {
+    const furuta::testing::SimulatedSession session = furuta::testing::simulate(3);
+    identification::GuaranteedOptions o;
+    o.prior = identification::paper_prior(model::paper_run1());
+    o.epsilon = 0.01;
+    o.threads = 2;
+    pipeline::Guaranteed g;
+    g.bounds = furuta::testing::bounds_covering({session});
+    g.samples =
+        identification::interval_samples({&session.processed}, g.bounds, furuta::testing::trim());
+    const identification::SampleConstraints constraints(g.samples, o.prior, o.unknown);
+    g.result = identification::guaranteed_identification(constraints, o);
+    paving_ = std::make_unique<json>(json::parse(json_text(paving_json(g))));
+  }
+  static void TearDownTestSuite() { paving_.reset(); }
+
+  static interval::Interval interval_of(const json& x) {
+    return interval::Interval(x[0].get<double>(), x[1].get<double>());
+  }
+  static double uniform_in(const json& x, std::mt19937_64& rng) {
+    const double lo = x[0].get<double>(), hi = x[1].get<double>();
+    return std::min(hi, lo + std::uniform_real_distribution<double>(0, 1)(rng) * (hi - lo));
+  }
+
+  // Data exist in the sample's data boxes meeting both rows at the point p, searched by brute
+  // force: q2, dq1, dq2 drawn in their intervals (the centre first), tau swept over its interval;
+  // the rows are then a 2x2 linear system in (ddq1, ddq2).
+  static bool has_data(const json& sample, const std::vector<double>& p, std::mt19937_64& rng) {
+    const auto pick = [&](const char* channel, bool centre) {
+      const json& x = sample[channel];
+      return centre ? 0.5 * (x[0].get<double>() + x[1].get<double>()) : uniform_in(x, rng);
+    };
+    const interval::Interval tau = interval_of(sample["tau"]);
+    const interval::Interval ddq1 = interval_of(sample["ddq1"]), ddq2 = interval_of(sample["ddq2"]);
+    for (int k = 0; k < 30; ++k) {
+      const double q2 = pick("q2", k == 0), dq1 = pick("dq1", k == 0), dq2 = pick("dq2", k == 0);
+      const double s = std::sin(q2), c = std::cos(q2);
+      const double m11 = p[0] + p[1] * s * s, m12 = p[2] * c, m22 = p[3];
+      const double rest1 = 2 * p[1] * s * c * dq1 * dq2 - p[2] * s * dq2 * dq2 + p[5] * dq1;
+      const double rest2 = -p[1] * s * c * dq1 * dq1 + p[4] * s + p[6] * dq2;
+      const double det = m11 * m22 - m12 * m12;
+      for (int j = 0; j <= 20; ++j) {
+        const double t = tau.lo() + (tau.hi() - tau.lo()) * j / 20.0;
+        const double b1 = t - rest1, b2 = -rest2;
+        if (ddq1.contains((m22 * b1 - m12 * b2) / det) &&
+            ddq2.contains((m11 * b2 - m12 * b1) / det)) {
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+
+  // No data in the sample's data boxes meet both rows at p: the rows' interval enclosures over
+  // the data boxes miss their outputs.
+  static bool proves_no_data(const json& sample, const std::vector<double>& p) {
+    const identification::RegressorEnclosure e = identification::regressor_enclosure(
+        interval_of(sample["q2"]), interval_of(sample["dq1"]), interval_of(sample["dq2"]),
+        interval_of(sample["ddq1"]), interval_of(sample["ddq2"]));
+    interval::Interval row1(0.0), row2(0.0);
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      row1 += e.row1[k] * interval::Interval(p[k]);
+      row2 += e.row2[k] * interval::Interval(p[k]);
+    }
+    return row1.is_disjoint(interval_of(sample["tau"])) || !row2.contains(0.0);
+  }
+
+  static std::unique_ptr<json> paving_;
+};
+std::unique_ptr<json> PavingJsonOnOneSession::paving_;
+
+// A box called inner is inner for everything the file says it holds: points drawn from every
+// component of the listed box, the carried mu's included, have data at every sample.
+TEST_F(PavingJsonOnOneSession, InnerBoxesAreConsistentAtEveryPointTheyList) {
+  const json& paving = *paving_;
+  EXPECT_EQ(paving["q"], 0);
+  EXPECT_EQ(paving["inner_test"], "witness");
+  std::vector<const json*> inner;
+  for (const json& b : paving["boxes"]) {
+    if (b["verdict"] == "inner") inner.push_back(&b["box"]);
+  }
+  ASSERT_FALSE(inner.empty());
+  // The carried components are listed at the points the proof fixed them at.
+  const json& names = paving["parameters"];
+  for (const json* box : inner) {
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      const std::string name = names[k];
+      if (!paving["inner_carried"].contains(name)) continue;
+      EXPECT_EQ((*box)[k], paving["inner_carried"][name]) << name;
+    }
+  }
+  std::mt19937_64 rng(17);
+  const json& samples = paving["samples"];
+  for (int trial = 0; trial < 30; ++trial) {
+    const json& box = *inner[rng() % inner.size()];
+    std::vector<double> p;
+    for (const json& component : box) p.push_back(uniform_in(component, rng));
+    for (std::size_t i = 0; i < samples.size(); i += 5) {
+      ASSERT_TRUE(has_data(samples[i], p, rng))
+          << "point " << trial << " of inner box " << box.dump() << " has no data at sample " << i;
+    }
+  }
+}
+
+// Every part contraction removed is listed with the box before and after, every point of before
+// \ after (the carried mu's anywhere in their prior) is excluded by some sample, and with the
+// inner, boundary and outer boxes the removed parts account for the whole prior.
+TEST_F(PavingJsonOnOneSession, WhatContractionRemovedIsListedAndExcludedBySomeSample) {
+  const json& paving = *paving_;
+  const json& contractions = paving["contractions"];
+  ASSERT_FALSE(contractions.empty());
+  EXPECT_EQ(paving["contractions_kept"], contractions.size());
+  EXPECT_EQ(paving["contraction_count"], contractions.size());
+  const json& prior = paving["prior"];
+  const std::size_t n = prior.size();
+  const auto inside = [](const json& box, const std::vector<double>& p) {
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      if (p[k] < box[k][0].get<double>() || p[k] > box[k][1].get<double>()) return false;
+    }
+    return true;
+  };
+  std::mt19937_64 rng(19);
+  const json& samples = paving["samples"];
+  std::size_t removed_points = 0;
+  for (const json& c : contractions) {
+    ASSERT_EQ(c["before"].size(), n);
+    for (std::size_t k = 0; k < n; ++k) {
+      EXPECT_LE(c["before"][k][0].get<double>(), c["after"][k][0].get<double>()) << k;
+      EXPECT_GE(c["before"][k][1].get<double>(), c["after"][k][1].get<double>()) << k;
+    }
+    for (int trial = 0; trial < 200; ++trial) {
+      std::vector<double> p;
+      for (std::size_t k = 0; k < n; ++k) p.push_back(uniform_in(c["before"][k], rng));
+      if (inside(c["after"], p)) continue;
+      ++removed_points;
+      bool excluded = false;
+      for (std::size_t i = 0; i < samples.size() && !excluded; ++i) {
+        excluded = proves_no_data(samples[i], p);
+      }
+      ASSERT_TRUE(excluded) << "removed point " << json(p).dump() << " of " << c.dump();
+    }
+  }
+  EXPECT_GT(removed_points, 100u);
+  // Every point of the prior is in a listed box (inner boxes with the carried components at
+  // their prior: the outer approximation) or in a removed part.
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<double> p;
+    for (std::size_t k = 0; k < n; ++k) p.push_back(uniform_in(prior[k], rng));
+    bool accounted = false;
+    for (const json& b : paving["boxes"]) {
+      json box = b["box"];
+      for (std::size_t k = 0; k < n; ++k) {
+        if (paving["inner_carried"].contains(paving["parameters"][k])) box[k] = prior[k];
+      }
+      accounted = accounted || inside(box, p);
+    }
+    for (const json& c : contractions) {
+      accounted = accounted || (inside(c["before"], p) && !inside(c["after"], p));
+    }
+    ASSERT_TRUE(accounted) << json(p).dump();
   }
 }
 

@@ -68,6 +68,13 @@ enum class InnerTest {
 
 enum class SampleVerdict { consistent, inconsistent, unknown };
 
+// The values of the carried components (not unknown) for which the inner test proves a box: the
+// point of each one's prior midpoint for `witness` and `intermediate_value` (their rows are built
+// there, see SampleConstraints), the whole prior for `for_all_data` and `none` (their rows carry
+// the prior). Unknown components keep their prior interval.
+Box inner_test_carried(const Box& prior, const std::array<bool, model::kParameterCount>& unknown,
+                       InnerTest kind);
+
 // The per-sample constraints of one problem (prior box and which components are unknown), with
 // what the tests need precomputed. The model is linear in p, so each row is a fixed interval
 // coefficient per parameter (depending on the data only); the carried components (not unknown)
@@ -140,12 +147,20 @@ struct GuaranteedOptions {
   std::function<void(std::size_t tested, std::size_t pending)> progress;
   // A cap on boxes tested (the rest stays boundary: sound, marked truncated) and a stop flag.
   std::size_t max_boxes = 50'000'000;
+  // At most this many contractions kept with their boxes (interval::SiviaOptions).
+  std::size_t max_kept_contractions = 100'000;
   const std::atomic<bool>* cancel = nullptr;
 };
 
 struct GuaranteedResult {
+  // paving.inner holds the boxes as SIVIA bisected them, the carried components at their whole
+  // prior (so that inner and boundary stay an outer approximation); the inner test proved them
+  // only with the carried components at `inner_carried`: see proven_inner.
   interval::SubPaving paving;
   std::array<bool, model::kParameterCount> unknown{};
+  InnerTest inner = InnerTest::witness;  // options.inner
+  // inner_test_carried(prior, unknown, options.inner).
+  Box inner_carried;
   std::size_t samples = 0;
   int q = 0;
   // Samples inconsistent with every parameter of the outer approximation (with q > 0: the faulty
@@ -155,6 +170,13 @@ struct GuaranteedResult {
   bool empty = false;
   std::string finding;
   std::vector<std::size_t> excluding_samples;
+
+  // An inner box as its proof holds: the unknowns' intervals with the carried components at
+  // `inner_carried`. Every point of it is in the set; a point of the paving's box with a carried
+  // component elsewhere in its prior is only not excluded.
+  Box proven_inner(const Box& inner_box) const;
+  // proven_inner of every paving.inner box, in order.
+  std::vector<Box> proven_inner_boxes() const;
 };
 
 // The constraints must have been built with options.prior and options.unknown.

@@ -64,9 +64,11 @@ Json simulation_json(const pipeline::Simulation& simulation);
 // "end", one [lo, hi] per component. Every solution from the initial box lies in `over` at every
 // t in [t0, t1] (for a split run: in some piece's).
 Json tubes_json(const pipeline::Simulation& simulation);
-// paving.json: every SIVIA box with its verdict (inner, boundary, outer when kept), the prior and
-// the unknowns, the data error bounds and every sample's data boxes (q2, dq1, dq2, ddq1, ddq2, tau
-// as [lo, hi]), from which the constraint rows are built.
+// paving.json: every SIVIA box with its verdict (inner, boundary, outer when kept; inner boxes
+// with the carried components where their proof fixed them, `inner_carried`), what contraction
+// removed (each kept contraction's box before and after), the prior, the unknowns, the constraint
+// rows and q, the data error bounds and every sample's data boxes (q2, dq1, dq2, ddq1, ddq2, tau
+// as [lo, hi]). docs/outputs.md says what each field promises.
 Json paving_json(const pipeline::Guaranteed& guaranteed);
 
 // results.json's "output_error": laid out like "combined" (estimate, std_dev) plus the lag, the
