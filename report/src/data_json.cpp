@@ -35,15 +35,25 @@ Json tube_json(const validated::ScenarioResult& r, const pipeline::TubeSet& tube
     run["components"].push_back(kComponents[i]);
     run["units"].push_back(kUnits[i]);
   }
+  // What the integrator was given: the start box (at the pieces' t_start_s) and the torque.
+  run["initial_box"] = box_json(tubes.initial);
+  run["input_torque_nm"] = interval_json(tubes.torque_nm);
   run["pieces"] = Json::array();
-  for (const std::vector<pipeline::StepBoxes>& piece : tubes.pieces) {
+  for (const pipeline::TubePiece& piece : tubes.pieces) {
     Json steps = Json::array();
-    for (const pipeline::StepBoxes& s : piece) {
+    for (const pipeline::StepBoxes& s : piece.steps) {
       steps.push_back(Json{{"t", Json::array({s.t0_s, s.t1_s})},
                            {"over", box_json(s.over)},
                            {"end", box_json(s.end)}});
     }
-    run["pieces"].push_back(Json{{"steps", steps}});
+    Json inherits = nullptr;
+    if (piece.inherits_from) {
+      inherits = Json{{"piece", *piece.inherits_from}, {"steps", piece.inherited_steps}};
+    }
+    run["pieces"].push_back(Json{{"start_t_s", piece.t_start_s},
+                                 {"start_box", box_json(piece.start)},
+                                 {"inherits", inherits},
+                                 {"steps", steps}});
   }
   return run;
 }

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -233,7 +235,7 @@ TEST_F(PipelineOnSimulatedSessions, ScenariosRunWithSiviasHullAndLsmiAndKeepThei
     EXPECT_EQ(result.parameters.name, sets[i % 3]);
     EXPECT_EQ(result.scenario.duration_s, 0.2);
     ASSERT_EQ(s.tubes[i].pieces.size(), 1u);
-    EXPECT_EQ(s.tubes[i].pieces[0].size(), result.steps);
+    EXPECT_EQ(s.tubes[i].pieces[0].steps.size(), result.steps);
     EXPECT_EQ(s.tubes[i].dimension, i % 3 == 0 ? 11u : 4u) << "parameters carried as state";
     if (result.parameters.name != "SIVIA") {
       EXPECT_DOUBLE_EQ(result.t_reached_s, 0.2) << result.reason;
@@ -298,6 +300,45 @@ TEST(PipelineSettings, FromTheConfiguration) {
   EXPECT_TRUE(has_data_error_bounds(sivia));
   EXPECT_EQ(data_error_bounds(sivia).tau.absolute, 0.01);
   EXPECT_EQ(data_error_bounds(sivia).tau.relative, 0.05);
+}
+
+// A split run's pieces hold each step once: all_steps rebuilds every piece's tube from the piece it
+// inherits from, step for step as the integrator made it.
+TEST(Simulate, SplitPiecesHoldTheirOwnStepsAndAllStepsRebuildsEachTube) {
+  validated::Scenario scenario = validated::paper_scenario(2);
+  scenario.duration_s = 0.2;
+  const model::Parameters<double> truth = model::paper_run1();
+  const validated::ParameterSet set = validated::point_parameters("truth", truth);
+  const Simulation s = simulate({scenario}, {set}, truth, {}, 4);
+  const validated::ScenarioTubes raw =
+      validated::run_scenario_tubes(scenario, set.parameters, s.uncertainty, s.integrator,
+                                    validated::scenario_split_options(4, scenario.duration_s));
+  ASSERT_EQ(s.tubes.size(), 1u);
+  const TubeSet& tubes = s.tubes[0];
+  EXPECT_EQ(tubes.initial, raw.initial);
+  EXPECT_EQ(tubes.torque_nm, raw.torque_nm);
+  ASSERT_EQ(tubes.pieces.size(), raw.pieces.size());
+  ASSERT_GT(tubes.pieces.size(), 1u);
+  std::size_t held = 0, integrated = 0;
+  for (std::size_t j = 0; j < tubes.pieces.size(); ++j) {
+    const TubePiece& piece = tubes.pieces[j];
+    EXPECT_EQ(piece.start, raw.pieces[j].initial);
+    EXPECT_EQ(piece.t_start_s, raw.pieces[j].t_start);
+    EXPECT_EQ(piece.inherits_from.has_value(), j > 0) << j;
+    const std::vector<StepBoxes> steps = tubes.all_steps(j);
+    ASSERT_EQ(steps.size(), raw.pieces[j].steps.size()) << j;
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      EXPECT_EQ(steps[k].t0_s, raw.pieces[j].steps[k].t0);
+      EXPECT_EQ(steps[k].over, raw.pieces[j].steps[k].over) << j << " " << k;
+      EXPECT_EQ(steps[k].end, raw.pieces[j].steps[k].end) << j << " " << k;
+    }
+    held += piece.steps.size();
+    integrated += steps.size();
+  }
+  EXPECT_LT(held, integrated);
+  std::printf("[ measured ] 4 pieces over 0.2 s: %zu steps held, %zu with the copies\n", held,
+              integrated);
+  EXPECT_THROW(tubes.all_steps(tubes.pieces.size()), std::out_of_range);
 }
 
 }  // namespace

@@ -108,6 +108,95 @@ TEST(DataFiles, ATubeInTubesJsonHoldsTheTrueTrajectoryAtTheSampleTimes) {
   }
 }
 
+// A box in tubes.json equals a box of the integrator's, bound for bound.
+bool same_box(const json& written, const interval::Box& box) {
+  if (written.size() != box.size()) return false;
+  for (std::size_t k = 0; k < box.size(); ++k) {
+    if (written[k][0].get<double>() != box[k].lo() || written[k][1].get<double>() != box[k].hi()) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// A split run: the file gives what the integrator started from (the start box, the torque), each
+// piece's own start box, and each step once; a piece's steps are rebuilt from the piece it
+// inherits from, and they are the integrator's own, step for step.
+TEST(DataFiles, ASplitRunInTubesJsonHoldsEachStepOnceAndEveryPiecesStartBox) {
+  validated::Scenario scenario = validated::paper_scenario(3);  // u = 0.17 N m
+  scenario.duration_s = 0.2;
+  const model::Parameters<double> truth = model::paper_run1();
+  const validated::ParameterSet set = validated::point_parameters("truth", truth);
+  const pipeline::Simulation simulation = pipeline::simulate({scenario}, {set}, truth, {}, 4);
+  TempDir dir;
+  write_simulation(dir.path(), simulation, "test", std::nullopt);
+  const json tubes = read_json(dir.path() / "tubes.json");
+  // The same run straight from the integrator, every piece with all its steps.
+  const validated::ScenarioTubes raw = validated::run_scenario_tubes(
+      scenario, set.parameters, simulation.uncertainty, simulation.integrator,
+      validated::scenario_split_options(4, scenario.duration_s));
+  ASSERT_GT(raw.pieces.size(), 1u);
+
+  ASSERT_EQ(tubes["runs"].size(), 1u);
+  const json& run = tubes["runs"][0];
+  EXPECT_TRUE(
+      same_box(run["initial_box"], validated::initial_state_box(scenario, simulation.uncertainty)));
+  EXPECT_EQ(run["input_torque_nm"], json({0.17, 0.17}));
+  const json& pieces = run["pieces"];
+  ASSERT_EQ(pieces.size(), raw.pieces.size());
+  std::vector<json> steps_of(pieces.size());
+  std::size_t listed = 0, integrated = 0;
+  for (std::size_t j = 0; j < pieces.size(); ++j) {
+    const json& piece = pieces[j];
+    const validated::Tube& tube = raw.pieces[j];
+    EXPECT_EQ(piece["start_t_s"], 0.0);
+    EXPECT_TRUE(same_box(piece["start_box"], tube.initial)) << j;
+    steps_of[j] = json::array();
+    if (j == 0) {
+      EXPECT_TRUE(piece["inherits"].is_null());
+    } else {
+      // The planned split comes after the first steps: every later piece shares them.
+      ASSERT_TRUE(piece["inherits"].is_object()) << j;
+      const std::size_t parent = piece["inherits"]["piece"];
+      const std::size_t shared = piece["inherits"]["steps"];
+      ASSERT_LT(parent, j);
+      ASSERT_GT(shared, 0u);
+      ASSERT_LE(shared, steps_of[parent].size());
+      for (std::size_t k = 0; k < shared; ++k) steps_of[j].push_back(steps_of[parent][k]);
+    }
+    for (const json& step : piece["steps"]) steps_of[j].push_back(step);
+    listed += piece["steps"].size();
+    integrated += tube.steps.size();
+    ASSERT_EQ(steps_of[j].size(), tube.steps.size()) << j;
+    for (std::size_t k = 0; k < tube.steps.size(); ++k) {
+      const json& step = steps_of[j][k];
+      ASSERT_EQ(step["t"][0].get<double>(), tube.steps[k].t0) << j << " " << k;
+      ASSERT_EQ(step["t"][1].get<double>(), tube.steps[k].t1) << j << " " << k;
+      ASSERT_TRUE(same_box(step["over"], tube.steps[k].over)) << j << " " << k;
+      ASSERT_TRUE(same_box(step["end"], tube.steps[k].end)) << j << " " << k;
+    }
+  }
+  EXPECT_LT(listed, integrated) << "the steps before the split are listed once";
+  // The pieces' start boxes cover the initial box: every solution starts in some piece.
+  std::mt19937_64 rng(23);
+  const json& initial = run["initial_box"];
+  for (int trial = 0; trial < 500; ++trial) {
+    std::vector<double> x;
+    for (const json& c : initial) {
+      const double lo = c[0].get<double>(), hi = c[1].get<double>();
+      x.push_back(lo + std::uniform_real_distribution<double>(0, 1)(rng) * (hi - lo));
+    }
+    bool in_some_piece = false;
+    for (const json& piece : pieces) {
+      bool inside = true;
+      for (std::size_t k = 0; k < x.size(); ++k)
+        inside = inside && holds(piece["start_box"][k], x[k]);
+      in_some_piece = in_some_piece || inside;
+    }
+    ASSERT_TRUE(in_some_piece) << trial;
+  }
+}
+
 TEST(DataFiles, PavingJsonHoldsEveryBoxWithItsVerdictAndEverySamplesDataBoxes) {
   TempDir dir;
   const fs::path fit1 = furuta::testing::simulated_session_log(dir.path() / "logs", "a", 1, 4.0);

@@ -177,12 +177,13 @@ ScenarioTubes run_scenario_tubes(const Scenario& scenario,
   const Box state = initial_state_box(scenario, uncertainty);
   // Point parameters need not be carried as state: the 4-dimensional system is several times
   // cheaper per step and its q1, dq1, q2, dq2 are the same components.
-  SplitResult r =
-      all_points(parameters)
-          ? integrate_split(FurutaStateDynamics(parameters, torque), state, options, split)
-          : integrate_split(FurutaDynamics(torque), FurutaDynamics::initial_box(state, parameters),
-                            options, split);
+  const bool points = all_points(parameters);
   ScenarioTubes out;
+  out.initial = points ? state : FurutaDynamics::initial_box(state, parameters);
+  out.torque_nm = torque;
+  SplitResult r =
+      points ? integrate_split(FurutaStateDynamics(parameters, torque), out.initial, options, split)
+             : integrate_split(FurutaDynamics(torque), out.initial, options, split);
   out.status = r.status;
   out.reason = r.reason;
   out.steps = r.steps;

@@ -185,10 +185,27 @@ struct StepBoxes {
   double t0_s = 0, t1_s = 0;
   interval::Box over, end;
 };
-// A scenario run's tube set: its pieces' steps (one piece unless the run was split).
+// One piece of a tube set: the sub-box of the initial box its solutions start from at
+// t_start_s, and its steps. A piece made by a split shares the steps before the split with an
+// earlier piece: its first `inherited_steps` steps are the first ones of piece `inherits_from`, and
+// `steps` holds only the rest (each step is held once, not copied into every piece).
+struct TubePiece {
+  double t_start_s = 0;
+  interval::Box start;
+  std::optional<std::size_t> inherits_from;
+  std::size_t inherited_steps = 0;
+  std::vector<StepBoxes> steps;
+};
+// A scenario run's tube set (one piece unless the run was split), with what the integrator was
+// given: the start box (the pieces' start boxes cover it) and the constant arm torque.
 struct TubeSet {
-  std::vector<std::vector<StepBoxes>> pieces;
+  interval::Box initial;
+  interval::Interval torque_nm;
+  std::vector<TubePiece> pieces;
   std::size_t dimension = 0;
+
+  // Every step of piece `piece`, the inherited ones first (std::out_of_range for no such piece).
+  std::vector<StepBoxes> all_steps(std::size_t piece) const;
 };
 
 struct Simulation {

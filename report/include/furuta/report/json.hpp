@@ -59,10 +59,12 @@ Json scenarios_json(const std::vector<validated::ScenarioResult>& results);
 // tubes_file (tubes.json beside it), results.
 Json simulation_json(const pipeline::Simulation& simulation);
 
-// tubes.json: per scenario run (scenario, parameter set, parameters, status, components) every
-// piece's every step: its time interval "t" [t0, t1], the box "over" the step and the box at its
-// "end", one [lo, hi] per component. Every solution from the initial box lies in `over` at every
-// t in [t0, t1] (for a split run: in some piece's).
+// tubes.json: per scenario run (scenario, parameter set, parameters, status, components, the
+// integrator's start box and torque) every piece: its start time and box, the earlier piece and
+// number of steps it inherits (a split piece shares the steps before its split), and its own
+// steps, each listed once: its time interval "t" [t0, t1], the box "over" the step and the box at
+// its "end", one [lo, hi] per component. Every solution from a piece's start box lies in `over` at
+// every t in [t0, t1] of each of its steps. docs/outputs.md says what each field promises.
 Json tubes_json(const pipeline::Simulation& simulation);
 // paving.json: every SIVIA box with its verdict (inner, boundary, outer when kept; inner boxes
 // with the carried components where their proof fixed them, `inner_carried`), what contraction

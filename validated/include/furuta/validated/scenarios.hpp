@@ -111,6 +111,10 @@ SplitOptions scenario_split_options(std::size_t pieces, double duration_s);
 
 // The tube set of one scenario: one piece from `integrate`, or the pieces of a split run.
 struct ScenarioTubes {
+  // What the integrator was given: the start box at t = 0 ([q1, dq1, q2, dq2], then the
+  // parameters when they are carried as state) and the constant arm torque.
+  interval::Box initial;
+  Interval torque_nm;
   std::vector<Tube> pieces;
   IntegrationResult::Status status = IntegrationResult::Status::ok;
   std::string reason;  // why the run ended early (empty when it reached the end)
