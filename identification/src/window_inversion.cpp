@@ -119,9 +119,12 @@ bool contract(const Constraint& c, std::vector<Interval>& z) {
 }
 
 // All readings together: with A the readings' linear coefficients (a row per reading, a column
-// per variable: the parameters' then each epoch's start), A z lies in y - c - h. Multiplied by a
-// left inverse P of A (any P is sound; the pseudo-inverse makes P A close to the identity), the
-// system P A z in P (y - c - h) is contracted by Gauss-Seidel, each z_i against the others.
+// per variable: the parameters' then each epoch's start), A z lies in r = y - c - h. For any
+// matrix P, z = P A z + (I - P A) z, so z_i lies in (P r)_i + sum_j (I - P A)_ij z_j: sound
+// whatever P is, evaluated in interval arithmetic. The P's tried are ridge-regularised weighted
+// least-squares inverses, P = (A' W^2 A + mu I)^-1 A' W^2 with W the rows' inverse widths: with
+// mu small P A is close to I but P amplifies the rows' widths; larger mu leaves more of the other
+// variables' ranges in, with less amplification. Each mu gives an enclosure; all are intersected.
 // Columns: the parameters' variables 4..10 first, then 4 per epoch. False when z is emptied.
 bool contract_together(const std::vector<Constraint>& constraints,
                        std::vector<std::vector<Interval>>& starts, std::vector<Interval>& shared) {
@@ -137,8 +140,10 @@ bool contract_together(const std::vector<Constraint>& constraints,
   for (std::size_t e = 0; e < starts.size(); ++e) {
     for (std::size_t v = 0; v < kStateVariables; ++v) z[column_of(e, v)] = starts[e][v];
   }
-  Eigen::MatrixXd a =
-      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(columns));
+  const auto n = static_cast<Eigen::Index>(columns);
+  const auto m_rows = static_cast<Eigen::Index>(rows);
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m_rows, n);
+  Eigen::VectorXd weight(m_rows);
   std::vector<Interval> residual(rows);
   for (std::size_t k = 0; k < rows; ++k) {
     const TaylorModel& m = *constraints[k].model;
@@ -150,32 +155,39 @@ bool contract_together(const std::vector<Constraint>& constraints,
     }
     residual[k] = constraints[k].reading - Interval(m.coefficient(0)) -
                   nonlinear_part(m, variables_of(starts, shared, constraints[k].epoch));
+    const double width = residual[k].width();
+    if (!(width > 0.0) || !std::isfinite(width)) return true;
+    weight(static_cast<Eigen::Index>(k)) = 1.0 / width;
   }
-  const Eigen::MatrixXd p = a.completeOrthogonalDecomposition().pseudoInverse();
-  if (!p.allFinite()) return true;
-  // P A and P (y - c - h) in interval arithmetic.
-  std::vector<Interval> pa(columns * columns, Interval(0.0));
-  std::vector<Interval> pr(columns, Interval(0.0));
-  for (std::size_t i = 0; i < columns; ++i) {
-    for (std::size_t k = 0; k < rows; ++k) {
-      const Interval pik(p(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)));
-      if (pik.lo() == 0.0 && pik.hi() == 0.0) continue;
-      pr[i] = pr[i] + pik * residual[k];
-      for (std::size_t j = 0; j < columns; ++j) {
-        const double akj = a(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
-        if (akj != 0.0) pa[i * columns + j] = pa[i * columns + j] + pik * Interval(akj);
+  const Eigen::MatrixXd weighted = weight.asDiagonal() * a;
+  const Eigen::MatrixXd gram = weighted.transpose() * weighted;
+  const double scale = gram.diagonal().maxCoeff();
+  if (!(scale > 0.0) || !std::isfinite(scale)) return true;
+  for (const double relative : {1e-10, 1e-7, 1e-4, 1e-2}) {
+    const Eigen::MatrixXd regularised = gram + relative * scale * Eigen::MatrixXd::Identity(n, n);
+    const Eigen::MatrixXd p =
+        regularised.ldlt().solve(weighted.transpose() * weight.asDiagonal().toDenseMatrix());
+    if (!p.allFinite()) continue;
+    for (std::size_t i = 0; i < columns; ++i) {
+      const auto row = static_cast<Eigen::Index>(i);
+      Interval bound(0.0);
+      std::vector<Interval> coupling(columns, Interval(0.0));  // (P A)_ij
+      for (std::size_t k = 0; k < rows; ++k) {
+        const Interval pik(p(row, static_cast<Eigen::Index>(k)));
+        if (pik.lo() == 0.0 && pik.hi() == 0.0) continue;
+        bound = bound + pik * residual[k];
+        for (std::size_t j = 0; j < columns; ++j) {
+          const double akj = a(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
+          if (akj != 0.0) coupling[j] = coupling[j] + pik * Interval(akj);
+        }
       }
+      for (std::size_t j = 0; j < columns; ++j) {
+        const Interval identity(i == j ? 1.0 : 0.0);
+        bound = bound + (identity - coupling[j]) * z[j];
+      }
+      z[i] = intersect(z[i], bound);
+      if (z[i].is_empty()) return false;
     }
-  }
-  for (std::size_t i = 0; i < columns; ++i) {
-    const Interval& diagonal = pa[i * columns + i];
-    if (diagonal.contains(0.0)) continue;
-    Interval others = pr[i];
-    for (std::size_t j = 0; j < columns; ++j) {
-      if (j != i) others = others - pa[i * columns + j] * z[j];
-    }
-    z[i] = intersect(z[i], others / diagonal);
-    if (z[i].is_empty()) return false;
   }
   for (std::size_t v = kStateVariables; v < kVariables; ++v) shared[v] = z[column_of(0, v)];
   for (std::size_t e = 0; e < starts.size(); ++e) {

@@ -293,6 +293,24 @@ bool has_data_error_bounds(const config::SiviaConfig& cfg) {
   return false;
 }
 
+std::vector<EstimateOutsideSet> estimates_outside(const interval::Box& hull,
+                                                  const model::Parameters<double>& estimate,
+                                                  const model::Parameters<double>& std_dev) {
+  std::vector<EstimateOutsideSet> out;
+  for (std::size_t k = 0; k < model::kParameterCount && k < hull.size(); ++k) {
+    const interval::Interval& set = hull[k];
+    const double value = estimate[k];
+    if (set.is_empty() || set.contains(value)) continue;
+    const double gap = value < set.lo() ? set.lo() - value : value - set.hi();
+    const double sd = std_dev[k];
+    out.push_back({k, value, set, sd > 0.0 ? gap / sd : std::numeric_limits<double>::infinity()});
+  }
+  std::sort(out.begin(), out.end(), [](const EstimateOutsideSet& a, const EstimateOutsideSet& b) {
+    return a.sd_away < b.sd_away;
+  });
+  return out;
+}
+
 Run run(const Batch& batch, const Settings& settings, Progress* progress) {
   Run out;
   out.kind = batch.kind;
@@ -337,6 +355,11 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
     const identification::GuaranteedResult& r = out.sivia->result;
     if (r.empty) out.warnings.push_back({Warning::Stage::sivia, "empty set: " + r.finding});
     if (r.paving.truncated) out.warnings.push_back({Warning::Stage::sivia, "paving truncated"});
+    if (!r.empty && out.output_error && out.output_error->result.converged) {
+      out.sivia_excludes_output_error =
+          estimates_outside(r.paving.outer_hull(), out.output_error->result.estimate,
+                            out.output_error->result.std_dev);
+    }
   }
   if (settings.simulation.run) {
     out.simulation = run_simulation(settings.simulation, out, batch, progress);

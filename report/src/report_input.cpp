@@ -120,7 +120,12 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
                            : "the band is the pendulum encoder's quantisation";
   page.table_two = table_two(id.combined.estimate, run.settings.sivia.config,
                              run.sivia ? &run.sivia->result : nullptr);
-  if (run.sivia) page.sivia = sivia_summary(run.sivia->result, paving_svg);
+  if (run.sivia) {
+    page.sivia = sivia_summary(run.sivia->result, paving_svg);
+    for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {
+      page.sivia->excludes_output_error.push_back(excluded_estimate_text(e));
+    }
+  }
   if (run.simulation) {
     page.simulation =
         SimulationSummary{measurement_source_text(run.simulation->source), run.simulation->results};
@@ -204,6 +209,7 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
     if (s.truncated) {
       out.push_back({"SIVIA", "the paving was truncated: the untested boxes count as boundary"});
     }
+    for (const std::string& excluded : s.excludes_output_error) out.push_back({"SIVIA", excluded});
     if (s.inconsistent_samples > 0) {
       out.push_back({"SIVIA", std::to_string(s.inconsistent_samples) +
                                   " samples inconsistent with the whole set (tolerated by q = " +

@@ -234,6 +234,19 @@ Json results_json(const pipeline::Run& run, const std::string& software_version)
   if (run.sivia) {
     more["sivia"] = sivia_json(run.sivia->result, run.sivia->samples);
     more["sivia"]["paving_file"] = "paving.json";
+    // Only when the set excludes it: a consistent run's results.json stays as it was.
+    if (!run.sivia_excludes_output_error.empty()) {
+      Json excluded = Json::array();
+      for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {
+        excluded.push_back(
+            Json{{"parameter", model::kParameterNames[e.parameter]},
+                 {"output_error_estimate", e.estimate},
+                 {"set", interval_json(e.set)},
+                 {"sd_away", std::isinf(e.sd_away) ? Json(nullptr) : Json(e.sd_away)},
+                 {"text", excluded_estimate_text(e)}});
+      }
+      more["sivia"]["excludes_output_error"] = excluded;
+    }
   }
   if (run.simulation) more["simulation"] = simulation_json(*run.simulation);
   // Only when there is something to say: a consistent fit's results.json stays as it was.

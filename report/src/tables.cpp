@@ -111,6 +111,17 @@ std::string sivia_summary_text(const identification::GuaranteedResult& r,
   return s.str();
 }
 
+std::string excluded_estimate_text(const pipeline::EstimateOutsideSet& e) {
+  std::ostringstream s;
+  s << "the set excludes the output-error estimate of " << model::kParameterNames[e.parameter]
+    << ": " << short_number(e.estimate, 4) << " lies "
+    << (std::isinf(e.sd_away) ? std::string("(its sd is 0)") : short_number(e.sd_away, 3) + " sd")
+    << " " << (e.estimate < e.set.lo() ? "below" : "above") << " "
+    << interval_text(e.set.lo(), e.set.hi())
+    << " (the set rests on [sivia]'s assumed bounds, or the model does not fit)";
+  return s.str();
+}
+
 std::string format_table_three(const std::vector<validated::ScenarioResult>& results) {
   std::ostringstream out;
   out << "Table III: coverage of the measurements by the tubes, over all samples (and over the "
@@ -187,6 +198,9 @@ std::string terminal_text_after_lsmi(const pipeline::Run& run) {
     text += held_out_free_run_text(*run.output_error->held_out);
   }
   if (run.sivia) text += sivia_summary_text(run.sivia->result, run.identification.truth);
+  for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {
+    text += "warning: " + excluded_estimate_text(e) + "\n";
+  }
   if (run.simulation) {
     text += simulation_summary_text(measurement_source_text(run.simulation->source),
                                     run.sivia && run.sivia->result.empty, run.simulation->results);

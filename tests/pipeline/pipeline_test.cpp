@@ -269,6 +269,35 @@ TEST_F(PipelineOnSimulatedSessions, NothingInTheRunIsFormattedText) {
   }
 }
 
+// The simulated rig's set (assumed bounds that hold) holds the output-error estimate: nothing said.
+TEST_F(PipelineOnSimulatedSessions, ASetHoldingTheOutputErrorEstimateRaisesNoWarning) {
+  const pipeline::Run& r = *run_;
+  ASSERT_TRUE(r.sivia && r.output_error);
+  EXPECT_TRUE(r.sivia_excludes_output_error.empty());
+}
+
+TEST(EstimatesOutsideSet, NamesEachParameterOutsideAndHowManySdAway) {
+  interval::Box hull(model::kParameterCount, interval::Interval(0.0, 1.0));
+  hull[6] = interval::Interval(-0.0047, 0.0057);  // fv2
+  hull[5] = interval::Interval(0.0632, 0.0965);   // fv1
+  model::Parameters<double> estimate{0.5, 0.5, 0.5, 0.5, 0.5, 0.0800, 0.0050};
+  model::Parameters<double> sd{0.1, 0.1, 0.1, 0.1, 0.1, 0.0008, 0.0001};
+  EXPECT_TRUE(estimates_outside(hull, estimate, sd).empty());
+  estimate.fv1 = 0.0600;  // 0.0032 below: 4 sd
+  estimate.fv2 = 0.0059;  // 0.0002 above: 2 sd
+  estimate.mu1 = 1.5;
+  sd.mu1 = 0.0;  // no spread: infinitely far
+  const std::vector<EstimateOutsideSet> out = estimates_outside(hull, estimate, sd);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(out[0].parameter, 6u);
+  EXPECT_NEAR(out[0].sd_away, 2.0, 1e-9);
+  EXPECT_EQ(out[1].parameter, 5u);
+  EXPECT_NEAR(out[1].sd_away, 4.0, 1e-9);
+  EXPECT_EQ(out[2].parameter, 0u);
+  EXPECT_TRUE(std::isinf(out[2].sd_away));
+  EXPECT_EQ(out[1].set.lo(), 0.0632);
+}
+
 TEST(PipelineSettings, FromTheConfiguration) {
   config::RigConfig rig;
   rig.identification.cutoff_hz = 12;

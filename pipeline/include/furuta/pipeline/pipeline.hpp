@@ -248,6 +248,22 @@ struct Warning {
   std::string text;
 };
 
+// A parameter whose output-error estimate lies outside a guaranteed set's hull: either the set
+// rests on bounds the data break, or the model does not fit; a reader must be told which parameter
+// and by how far.
+struct EstimateOutsideSet {
+  std::size_t parameter = 0;  // index in model::kParameterNames
+  double estimate = 0.0;
+  interval::Interval set;  // the set's hull in that parameter
+  double sd_away = 0.0;    // the estimate's distance to the hull in its sd (infinite when sd is 0)
+};
+
+// The parameters of `estimate` outside `hull` (one interval per parameter, in kParameterNames'
+// order), nearest first by sd_away.
+std::vector<EstimateOutsideSet> estimates_outside(const interval::Box& hull,
+                                                  const model::Parameters<double>& estimate,
+                                                  const model::Parameters<double>& std_dev);
+
 struct Run {
   InputKind kind = InputKind::session_logs;
   std::vector<identification::InputFile> inputs;         // Batch::files with their SHA-256
@@ -264,7 +280,10 @@ struct Run {
   identification::PhysicalCheck physical;
   std::optional<OutputError> output_error;  // settings.output_error.run, when it could run
   std::optional<Guaranteed> sivia;          // settings.sivia.run
-  std::optional<Simulation> simulation;     // settings.simulation.run
+  // SIVIA's set against the output-error estimate (when both ran and the fit converged): the
+  // report and the terminal say each.
+  std::vector<EstimateOutsideSet> sivia_excludes_output_error;
+  std::optional<Simulation> simulation;  // settings.simulation.run
   std::vector<Warning> warnings;
 };
 

@@ -54,6 +54,8 @@ struct SiviaSummary {
   bool empty = false;
   std::string finding;  // why it is empty
   std::size_t inconsistent_samples = 0;
+  // The output-error estimate's parameters outside the set (excluded_estimate_text says each).
+  std::vector<std::string> excludes_output_error;
   std::string svg;  // Fig. 4 (svg_paving)
 };
 

@@ -33,6 +33,10 @@ std::string format_table_one(const identification::Identification& id,
 std::string sivia_summary_text(const identification::GuaranteedResult& result,
                                const std::optional<model::Parameters<double>>& truth);
 
+// "the set excludes the output-error estimate of fv2: 6.42e-04 lies 3.2 sd above [a, b] (the set
+// rests on [sivia]'s assumed bounds)": one line, no newline.
+std::string excluded_estimate_text(const pipeline::EstimateOutsideSet& excluded);
+
 // Table III: per scenario and parameter set, time reached, steps, coverage of q2 (both modes,
 // over all samples and over those reached) and q1, the q2 tube's mean width, the status; with
 // the paper's figures for comparison. The integrator's reason for an early end has its numbers
