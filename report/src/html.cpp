@@ -353,6 +353,10 @@ void section_sivia(Html& h, const ReportInput& in) {
                 " boundary and " + std::to_string(s.outer) + " outer boxes; " +
                 std::to_string(s.tested) + " tested in " + short_number(s.seconds, 3) + " s" +
                 (s.truncated ? " (truncated)" : "") + ".");
+    h.paragraph(std::string(kSiviaAssumedBoundsNote) + ".");
+    for (const std::string& excluded : s.excludes_output_error) {
+      h.paragraph("Warning: " + excluded + ".");
+    }
     if (s.empty) h.paragraph("The feasible set is empty. " + s.finding);
     h.figure("fig-4", s.svg,
              "Fig. 4: the SIVIA paving projected on the viscous frictions (fv1, fv2) [N m s]: "

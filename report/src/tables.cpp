@@ -90,7 +90,7 @@ std::string sivia_summary_text(const identification::GuaranteedResult& r,
     << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
     << " outer boxes; " << r.paving.boxes_tested << " tested in "
     << short_number(r.paving.seconds, 3) << " s" << (r.paving.truncated ? " (truncated)" : "")
-    << "\n";
+    << "\n  (" << kSiviaAssumedBoundsNote << ")\n";
   if (r.empty) {
     s << r.finding << "\n";
     return s.str();

@@ -28,6 +28,13 @@ std::string scenario_description(const validated::Scenario& scenario);
 std::string format_table_one(const identification::Identification& id,
                              const identification::OutputErrorResult* refined = nullptr);
 
+// What --sivia's set rests on, said wherever the set is shown: the paper's method takes the data's
+// error bounds (velocities, accelerations, torque) from [sivia], which the data do not prove.
+inline constexpr const char* kSiviaAssumedBoundsNote =
+    "SIVIA is the paper's method: its set rests on [sivia]'s assumed error bounds of the "
+    "velocities, "
+    "accelerations and torque, which the data do not prove";
+
 // "\nSIVIA (n samples, q = ..): counts ..." and each unknown's hull (6 digits, rounded outward)
 // (with whether it holds the truth, when there is one), or the finding when the set is empty.
 std::string sivia_summary_text(const identification::GuaranteedResult& result,
