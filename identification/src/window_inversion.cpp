@@ -93,7 +93,7 @@ Interval nonlinear_part(const TaylorModel& m, const std::vector<Interval>& z) {
 }
 
 // Narrows z with one constraint; false when it proves the constraint cannot hold.
-bool contract(const Constraint& c, std::vector<Interval>& z) {
+bool contract_with_reading(const Constraint& c, std::vector<Interval>& z) {
   const TaylorModel& m = *c.model;
   const Interval constant(m.coefficient(0));
   const Interval rest = nonlinear_part(m, z);
@@ -275,7 +275,7 @@ WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
     const std::vector<Interval> starts_before = starts.front();
     for (std::size_t k = 0; k < constraints.size(); ++k) {
       std::vector<Interval> z = variables_of(starts, shared, constraints[k].epoch);
-      if (!contract(constraints[k], z)) {
+      if (!contract_with_reading(constraints[k], z)) {
         out.verdict = WindowVerdict::inconsistent;
         out.reason =
             "the reading at t = " + std::to_string(constraints[k].t_s) + " s cannot be met";
