@@ -76,6 +76,12 @@ std::optional<LcmDatagram> parse_lcm_datagram(std::span<const std::uint8_t> data
 
 MulticastReceiver::MulticastReceiver(const UdpmAddress& address, int receive_buffer_bytes)
     : buffers_(kBatch * kMaxDatagramBytes) {
+  for (std::size_t i = 0; i < kBatch; ++i) {
+    slots_[i].iov_base = buffers_.data() + i * kMaxDatagramBytes;
+    slots_[i].iov_len = kMaxDatagramBytes;
+    messages_[i].msg_hdr.msg_iov = &slots_[i];
+    messages_[i].msg_hdr.msg_iovlen = 1;
+  }
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   if (fd_ < 0) throw_socket_error(address, "socket");
   try {
@@ -114,29 +120,17 @@ MulticastReceiver::~MulticastReceiver() {
 std::size_t MulticastReceiver::receive(int timeout_ms) {
   pollfd waiting{fd_, POLLIN, 0};
   if (::poll(&waiting, 1, timeout_ms) <= 0) return 0;
-  std::array<iovec, kBatch> pieces{};
-  std::array<mmsghdr, kBatch> messages{};
-  for (std::size_t i = 0; i < kBatch; ++i) {
-    pieces[i].iov_base = buffers_.data() + i * kMaxDatagramBytes;
-    pieces[i].iov_len = kMaxDatagramBytes;
-    messages[i].msg_hdr.msg_iov = &pieces[i];
-    messages[i].msg_hdr.msg_iovlen = 1;
-  }
-  const int taken = ::recvmmsg(fd_, messages.data(), kBatch, MSG_DONTWAIT, nullptr);
-  if (taken <= 0) return 0;
-  for (int i = 0; i < taken; ++i) {
-    sizes_[i] = messages[i].msg_len;
-    truncated_[i] = (messages[i].msg_hdr.msg_flags & MSG_TRUNC) != 0;
-  }
-  return static_cast<std::size_t>(taken);
+  const int taken = ::recvmmsg(fd_, messages_.data(), kBatch, MSG_DONTWAIT, nullptr);
+  return taken > 0 ? static_cast<std::size_t>(taken) : 0;
 }
 
 std::span<const std::uint8_t> MulticastReceiver::datagram(std::size_t i) const {
-  return {buffers_.data() + i * kMaxDatagramBytes, std::min(sizes_[i], kMaxDatagramBytes)};
+  return {buffers_.data() + i * kMaxDatagramBytes,
+          std::min<std::size_t>(messages_[i].msg_len, kMaxDatagramBytes)};
 }
 
 bool MulticastReceiver::oversized(std::size_t i) const {
-  return truncated_[i];
+  return (messages_[i].msg_hdr.msg_flags & MSG_TRUNC) != 0;
 }
 
 }  // namespace furuta::daemon

@@ -560,14 +560,10 @@ TEST(CommandHandling, AMegabyteSenderNeitherBlindsTheStatusNorIsEchoed) {
 TEST(CommandHandling, CommandsOnTheGroupAreReadByTheDaemonsOwnSocket) {
   testing::TempDir dir("furuta-commands");
   CommandRig rig;
-  const int probe = ::socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in address{};
   address.sin_family = AF_INET;
   address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof address;
-  ASSERT_EQ(::bind(probe, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
-  ::getsockname(probe, reinterpret_cast<sockaddr*>(&address), &length);
-  ::close(probe);
+  address.sin_port = htons(furuta::testing::free_loopback_udp_port());
   rig.settings.command_url =
       "udpm://239.255.201.18:" + std::to_string(ntohs(address.sin_port)) + "?ttl=0";
   try {

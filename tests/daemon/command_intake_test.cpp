@@ -77,19 +77,6 @@ TEST(CommandIntake, FragmentsAndDamagedHeadersAreNotMessages) {
   EXPECT_TRUE(parse_lcm_datagram(furuta::testing::lcm_datagram(std::string(63, 'C'), {1}, 1)));
 }
 
-// A port no one holds now, on the loopback interface.
-std::uint16_t free_udp_port() {
-  const int probe = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t length = sizeof address;
-  ::bind(probe, reinterpret_cast<sockaddr*>(&address), sizeof address);
-  ::getsockname(probe, reinterpret_cast<sockaddr*>(&address), &length);
-  ::close(probe);
-  return ntohs(address.sin_port);
-}
-
 void send_to_port(std::uint16_t port, const std::vector<std::uint8_t>& datagram) {
   const int sender = ::socket(AF_INET, SOCK_DGRAM, 0);
   sockaddr_in to{};
@@ -105,7 +92,7 @@ void send_to_port(std::uint16_t port, const std::vector<std::uint8_t>& datagram)
 // The socket is bound to the group's port on every address: datagrams sent to that port on
 // loopback reach it as the group's do, so the batches are tested where multicast is not routed.
 TEST(CommandIntake, TakesWhatIsQueuedInOneBatchAndMarksWhatDidNotFit) {
-  const UdpmAddress address{"239.255.201.17", free_udp_port()};
+  const UdpmAddress address{"239.255.201.17", furuta::testing::free_loopback_udp_port()};
   std::optional<MulticastReceiver> receiver;
   try {
     receiver.emplace(address, 1 << 20);

@@ -12,6 +12,9 @@
 // both big-endian, the channel name ending in a NUL, then the message's bytes. Larger messages
 // travel as fragments ("LC03"); no command is that large, so fragments are not messages here.
 
+#include <sys/socket.h>
+#include <sys/uio.h>
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -67,8 +70,9 @@ class MulticastReceiver {
  private:
   int fd_ = -1;
   std::vector<std::uint8_t> buffers_;  // kBatch slots of kMaxDatagramBytes
-  std::array<std::size_t, kBatch> sizes_{};
-  std::array<bool, kBatch> truncated_{};
+  // Set up once: recvmmsg writes only each message's length and flags.
+  std::array<iovec, kBatch> slots_{};
+  std::array<mmsghdr, kBatch> messages_{};
 };
 
 }  // namespace furuta::daemon
