@@ -165,8 +165,7 @@ bool contract_together(const std::vector<Constraint>& constraints,
   if (!(scale > 0.0) || !std::isfinite(scale)) return true;
   for (const double relative : {1e-10, 1e-7, 1e-4, 1e-2}) {
     const Eigen::MatrixXd regularised = gram + relative * scale * Eigen::MatrixXd::Identity(n, n);
-    const Eigen::MatrixXd p =
-        regularised.ldlt().solve(weighted.transpose() * weight.asDiagonal().toDenseMatrix());
+    const Eigen::MatrixXd p = regularised.ldlt().solve(weighted.transpose() * weight.asDiagonal());
     if (!p.allFinite()) continue;
     for (std::size_t i = 0; i < columns; ++i) {
       const auto row = static_cast<Eigen::Index>(i);
