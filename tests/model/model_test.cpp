@@ -9,6 +9,8 @@
 #include <random>
 #include <vector>
 
+#include "furuta/interval/interval.hpp"
+
 namespace furuta::model {
 namespace {
 
@@ -58,6 +60,31 @@ TEST(RigModel, ForwardDynamicsSatisfiesTheRegressorRows) {
                         p.mug * s + p.fv2 * x.dq2;
     EXPECT_NEAR(row1, tau, 1e-12);
     EXPECT_NEAR(row2, 0.0, 1e-12);
+  }
+}
+
+// In intervals (the validated integrator's a priori enclosure) the accelerations over a wide range
+// of the pendulum's angle stay bounded and hold every point's: det M must not be enclosed by an
+// interval around 0 (s * s over sin q2's range spanning 0 would reach below 0).
+TEST(RigModel, IntervalAccelerationsOverAWideAngleRangeAreBoundedAndHoldEveryPoint) {
+  using interval::Interval;
+  const model::Parameters<double> p = model::paper_run1();
+  const model::Parameters<Interval> box =
+      p.map([](double v) { return Interval(0.99 * v, 1.01 * v); });
+  const Interval q2(-1.54, 0.98);
+  const Interval dq1(7.5, 10.4);
+  const Interval dq2(-8.5, -5.5);
+  const Interval tau(0.3);
+  const model::JointAccelerations<Interval> a = model::accelerations(box, q2, dq1, dq2, tau);
+  ASSERT_TRUE(a.ddq1.is_bounded() && a.ddq2.is_bounded());
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto pick = [&](const Interval& x) { return x.lo() + unit(rng) * x.width(); };
+  for (int i = 0; i < 500; ++i) {
+    const model::Parameters<double> point = box.map(pick);
+    const model::JointAccelerations<double> at =
+        model::accelerations(point, pick(q2), pick(dq1), pick(dq2), 0.3);
+    EXPECT_TRUE(a.ddq1.contains(at.ddq1) && a.ddq2.contains(at.ddq2)) << "sample " << i;
   }
 }
 

@@ -34,9 +34,19 @@ MassMatrix<S> mass_matrix(const Parameters<S>& p, const S& q2) {
   return {p.mu1 + p.mu2 * s * s, p.mu3 * cos(q2), p.mu4};
 }
 
+// Scalars that enclose sets (intervals, interval jets, Taylor models, the validated integrator's
+// recorder) square with `sqr`, found by argument-dependent lookup.
+template <class S>
+concept EnclosureScalar = requires(const S& x) {
+  sqr(x);
+};
+
 // ddq = M^-1 (Gamma - B - Q) with the 2x2 inverse written out, det M = (mu1 + mu2 s^2) mu4 -
 // mu3^2 c^2 (s = sin q2, c = cos q2). The order of operations is part of the contract: the
-// validated integrator's figures and the simulated rig's logs are reproduced bit for bit.
+// simulated rig's logs are reproduced bit for bit, so doubles (and Ceres' jets) multiply as
+// written. Enclosure scalars take each square with sqr: x * x over an interval spanning 0 is no
+// square's enclosure (sin q2 in [-1, 0.8] gives s * s down to -0.8, and with mu2 above mu1, m11
+// and det M would reach 0: a validated step would then find no a priori enclosure).
 template <class S>
 JointAccelerations<S> accelerations(const Parameters<S>& p, const S& q2, const S& dq1, const S& dq2,
                                     const S& tau) {
@@ -44,15 +54,25 @@ JointAccelerations<S> accelerations(const Parameters<S>& p, const S& q2, const S
   using std::sin;
   const S s = sin(q2);
   const S c = cos(q2);
-  const S m11 = p.mu1 + p.mu2 * s * s;
   const S m12 = p.mu3 * c;
   const S sc = s * c;
-  const S b1 = S(2.0) * p.mu2 * sc * dq1 * dq2 - p.mu3 * s * dq2 * dq2;
-  const S b2 = -(p.mu2 * sc * dq1 * dq1);
-  const S rhs1 = tau - p.fv1 * dq1 - b1;
-  const S rhs2 = -(p.fv2 * dq2) - b2 - p.mug * s;
-  const S det = m11 * p.mu4 - m12 * m12;
-  return {(p.mu4 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det};
+  if constexpr (EnclosureScalar<S>) {
+    const S m11 = p.mu1 + p.mu2 * sqr(s);
+    const S b1 = S(2.0) * p.mu2 * sc * dq1 * dq2 - p.mu3 * s * sqr(dq2);
+    const S b2 = -(p.mu2 * sc * sqr(dq1));
+    const S rhs1 = tau - p.fv1 * dq1 - b1;
+    const S rhs2 = -(p.fv2 * dq2) - b2 - p.mug * s;
+    const S det = m11 * p.mu4 - sqr(m12);
+    return {(p.mu4 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det};
+  } else {
+    const S m11 = p.mu1 + p.mu2 * s * s;
+    const S b1 = S(2.0) * p.mu2 * sc * dq1 * dq2 - p.mu3 * s * dq2 * dq2;
+    const S b2 = -(p.mu2 * sc * dq1 * dq1);
+    const S rhs1 = tau - p.fv1 * dq1 - b1;
+    const S rhs2 = -(p.fv2 * dq2) - b2 - p.mug * s;
+    const S det = m11 * p.mu4 - m12 * m12;
+    return {(p.mu4 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det};
+  }
 }
 
 // The accelerations at a state. With the arm clamped (a physics check of the pendulum alone),
