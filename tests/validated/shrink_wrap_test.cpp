@@ -58,11 +58,14 @@ const std::vector<Interval> kError{Interval(-2e-6, 2e-6), Interval(-5e-6, 4e-6),
                                    Interval(-3e-6, 3e-6), Interval(-1e-6, 2e-6)};
 
 // Newton in double on the slots that were widened and on the left-out row's part c: p_new(w with
-// z's other variables) + rest_mid + c e_kept = p(z) + e. Returns the worst excess of |w| over 1 and
-// of c outside the rest on the kept row (relative), both <= ~0 when sound.
-double worst_excess(const std::vector<TaylorModel>& p, const std::vector<TaylorModel>& wrapped,
-                    const ShrinkWrap& wrap, const std::vector<double>& z,
-                    const std::vector<double>& e) {
+// z's other variables) + rest_mid + c e_kept = p(z) + e. w: the point's variables after the wrap.
+struct Representation {
+  std::vector<double> w;
+  double c = 0.0;
+};
+Representation represent(const std::vector<TaylorModel>& p, const std::vector<TaylorModel>& wrapped,
+                         const ShrinkWrap& wrap, const std::vector<double>& z,
+                         const std::vector<double>& e) {
   std::vector<double> target(kSlots);
   for (std::size_t i = 0; i < kSlots; ++i) target[i] = p[i].evaluate(z).mid() + e[i];
   std::vector<double> w = z;
@@ -89,6 +92,15 @@ double worst_excess(const std::vector<TaylorModel>& p, const std::vector<TaylorM
       }
     }
   }
+  return {w, c};
+}
+
+// The worst excess of |w| over 1 and of c outside the rest on the kept row (relative), both <= ~0
+// when sound.
+double worst_excess(const std::vector<TaylorModel>& p, const std::vector<TaylorModel>& wrapped,
+                    const ShrinkWrap& wrap, const std::vector<double>& z,
+                    const std::vector<double>& e) {
+  const auto [w, c] = represent(p, wrapped, wrap, z, e);
   double excess = -1.0;
   for (std::size_t j = 0; j < kSlots; ++j) {
     if (j != wrap.kept) excess = std::max(excess, std::abs(w[j]) - 1.0);
@@ -145,6 +157,53 @@ TEST(ShrinkWrap, IndependentColumnsAreWrappedWhole) {
   ASSERT_TRUE(wrap.done);
   EXPECT_EQ(wrap.kept, static_cast<std::size_t>(-1));
   EXPECT_LE(worst_over_samples(k.p, wrapped, wrap, 12), 1e-9);
+}
+
+// What the wrap reports ties each point's variables before (z) and after (w) it: scale_j w_j - z_j
+// within delta_j on the widened slots, the kept slot and the parameter unchanged. Set inversion
+// over the flow relies on it to carry a start through the wraps of a window.
+TEST(ShrinkWrap, TheWrapTiesEachPointsVariablesBeforeAndAfter) {
+  for (const double off : {0.0, 4e-4}) {
+    const Case k(off);
+    const std::vector<std::size_t> slots{0, 1, 2, 3};
+    std::vector<TaylorModel> wrapped = k.p;
+    const ShrinkWrap wrap = shrink_wrap(wrapped, kError, kRows, slots, 1.0, true);
+    ASSERT_TRUE(wrap.done) << "off " << off;
+    ASSERT_EQ(wrap.scale.size(), kVariables);
+    ASSERT_EQ(wrap.delta.size(), kVariables);
+    EXPECT_EQ(wrap.scale[4], 1.0);
+    EXPECT_EQ(wrap.delta[4], 0.0);
+    for (std::size_t j = 0; j < kSlots; ++j) {
+      if (j == wrap.kept) {
+        EXPECT_EQ(wrap.scale[j], 1.0);
+        EXPECT_EQ(wrap.delta[j], 0.0);
+      } else {
+        EXPECT_GT(wrap.delta[j], 0.0) << "slot " << j;
+        EXPECT_GE(wrap.scale[j], 1.0 + wrap.delta[j]) << "slot " << j;
+      }
+    }
+    std::mt19937_64 rng(21);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    double worst = -1.0;  // the largest |scale w - z| - delta, relative to delta
+    for (int sample = 0; sample < 200; ++sample) {
+      std::vector<double> z(kVariables);
+      for (double& v : z) v = u(rng);
+      std::vector<double> e(kSlots);
+      for (std::size_t i = 0; i < kSlots; ++i) {
+        e[i] = (sample >> i) & 1 ? kError[i].hi() : kError[i].lo();
+      }
+      const Representation r = represent(k.p, wrapped, wrap, z, e);
+      for (std::size_t j = 0; j < kSlots; ++j) {
+        if (j == wrap.kept) {
+          EXPECT_EQ(r.w[j], z[j]);
+          continue;
+        }
+        const double gap = std::abs(wrap.scale[j] * r.w[j] - z[j]);
+        worst = std::max(worst, (gap - wrap.delta[j]) / wrap.delta[j]);
+      }
+    }
+    EXPECT_LE(worst, 1e-6) << "off " << off;
+  }
 }
 
 // The widening of slot j, 1 + delta_j, read from the rescaled linear coefficient of a row.

@@ -212,6 +212,11 @@ ShrinkWrap widened(std::vector<TaylorModel>& p, const std::vector<std::size_t>& 
   for (std::size_t j = 0; j < slots.size(); ++j) {
     if (j != kept) widen[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
   }
+  out.scale = widen;
+  out.delta.assign(widen.size(), 0.0);
+  for (std::size_t j = 0; j < slots.size(); ++j) {
+    if (j != kept) out.delta[slots[j]] = delta[j];
+  }
   out.rest.assign(p.size(), Interval(0.0));
   for (std::size_t v = 0; v < p.size(); ++v) {
     TaylorModel q = p[v].rescaled(widen);

@@ -20,6 +20,10 @@ struct ShrinkWrap {
   // The slot (index into slots) left out when the whole error part could not be wrapped: its
   // start variable keeps its scale and the error along its own row stays in `rest`.
   std::size_t kept = static_cast<std::size_t>(-1);
+  // Per variable, when done: the widening q (p is now p(q z)) and delta, such that a point z of
+  // the variables before the wrap (with its error) is p(q z') for some z' with q z' - z in
+  // [-delta, delta] (Krawczyk's fixed point); 1 and 0 for the variables left alone.
+  std::vector<double> scale, delta;
 };
 
 // The slots' linear coefficients in the rows, L (entry i, j: p[rows[i]]'s coefficient of

@@ -253,6 +253,8 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
                     options.wrap_without_collapsed, options.wrap_at_base_point);
     if (wrap.done) {
       result.steps.back().wrapped = true;
+      result.steps.back().wrap_scale = wrap.scale;
+      result.steps.back().wrap_delta = wrap.delta;
       ++result.shrink_wraps;
       result.partial_wraps += wrap.kept < setup.wrap_slots.size();
       state.wrapped = wrap.kept >= setup.wrap_slots.size();

@@ -67,6 +67,11 @@ struct TaylorModelFlowStep {
   // The error part was wrapped into the start variables at t1: the steps after this one have
   // start variables of their own (the parameters' are the same).
   bool wrapped = false;
+  // With `wrapped`, per variable: a solution represented by variables z before the wrap is
+  // represented after it by z' with wrap_scale[v] z'_v - z_v in [-wrap_delta[v], wrap_delta[v]]
+  // (1 and 0 for the variables the wrap left alone, the parameters' among them): how the start
+  // variables of the steps after the wrap are tied to those before.
+  std::vector<double> wrap_scale, wrap_delta;
 };
 
 struct TaylorModelFlowResult {
