@@ -28,10 +28,15 @@ using interval::Interval;
 constexpr double kArmResolution_rad = 2 * std::numbers::pi / (1024 * 26.0);
 constexpr double kPendulumResolution_rad = 2 * std::numbers::pi / 4096;
 
-// A swinging start, bang-bang +-DUTY switching every 0.15 s (instantly: the board's ramp is not
-// modelled here), the readings of each joint every 8 ms; windows of `length_s` every `every_s`,
-// each with its start box the truth +- the widths given (the start as a measurement would not
-// give it: this measures the parameters' side alone).
+double first_t0_s() {
+  const char* at = std::getenv("FURUTA_FIRST_T0");
+  return at ? std::atof(at) : 0.05;
+}
+
+// A swinging start (FURUTA_REST=1: at rest, hanging), bang-bang +-DUTY switching every 0.15 s
+// (instantly: the board's ramp is not modelled here), the readings of each joint every 8 ms;
+// windows of `length_s` every `every_s`, each with its start box the truth +- the widths given (the
+// start as a measurement would not give it: this measures the parameters' side alone).
 std::vector<RecordingWindow> windows_from(const model::Parameters<double>& p,
                                           model::PendulumState x, double duty, double length_s,
                                           int count, double every_s, double dq_width) {
@@ -50,7 +55,7 @@ std::vector<RecordingWindow> windows_from(const model::Parameters<double>& p,
     }
   };
   for (int i = 0; i < count; ++i) {
-    const double t0 = 0.05 + i * every_s;
+    const double t0 = first_t0_s() + i * every_s;
     advance(t0);
     RecordingWindow w;
     w.t0_s = t0;
@@ -91,7 +96,9 @@ int main(int argc, char** argv) {
   const double dq_width = argc > 5 ? std::atof(argv[5]) : 0.02;
   const int order = argc > 6 ? std::atoi(argv[6]) : 3;
   const double duty = argc > 7 ? std::atof(argv[7]) : 0.3;
-  const model::PendulumState s{0.0, 0.0, 0.6, -4.0};
+  const model::PendulumState s = std::getenv("FURUTA_REST")
+                                     ? model::PendulumState{}
+                                     : model::PendulumState{0.0, 0.0, 0.6, -4.0};
   const model::Parameters<double> p = model::paper_run1();
   const double g = 7.3;
   const model::Parameters<double> truth{p.mu1 / g, p.mu2 / g,           p.mu3 / g, p.mu4 / g,
@@ -108,7 +115,7 @@ int main(int argc, char** argv) {
   o.flow.space_order = order;
   o.flow.wrap_without_collapsed = true;
   o.flow.wrap_at_base_point = true;
-  o.flow.shrink_wrap_max_delta = 0.0;  // as the tests: every reading constrains one start
+  o.flow.shrink_wrap_max_delta = 1.0;  // the wraps tie the start variables (FURUTA_WRAP_DELTA)
   if (const char* wrap = std::getenv("FURUTA_WRAP_DELTA"))
     o.flow.shrink_wrap_max_delta = std::atof(wrap);
   if (const char* jo = std::getenv("FURUTA_JACOBIAN_ORDER")) o.flow.jacobian_order = std::atoi(jo);

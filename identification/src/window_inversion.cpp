@@ -1,7 +1,11 @@
 #include "furuta/identification/window_inversion.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Dense>
+#include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -57,6 +61,87 @@ void check_window(const RecordingWindow& window) {
   }
 }
 
+// The variables of all windows as columns: the parameters' (flow variables 4..10) first, then
+// the start variables of each epoch (a window's steps between shrink wraps). A wrap that leaves a
+// start variable alone keeps its column; one that widens it opens a column tied to the one before
+// by a link.
+class Columns {
+ public:
+  static constexpr std::size_t kParameters = kVariables - kStateVariables;
+
+  Columns() : values_(kParameters, Interval(-1, 1)) {}
+
+  // A window's first epoch: start variables of its own.
+  std::size_t open_window() {
+    std::array<std::size_t, kStateVariables> columns{};
+    for (std::size_t v = 0; v < kStateVariables; ++v) columns[v] = add();
+    epochs_.push_back(columns);
+    return epochs_.size() - 1;
+  }
+  // The epoch after a wrap of epoch `before` with the step's scales and deltas.
+  std::size_t wrap(std::size_t before, const std::vector<double>& scale,
+                   const std::vector<double>& delta) {
+    std::array<std::size_t, kStateVariables> columns = epochs_[before];
+    for (std::size_t v = 0; v < kStateVariables; ++v) {
+      const double q = v < scale.size() ? scale[v] : 0.0;
+      const double d = v < delta.size() ? delta[v] : HUGE_VAL;
+      if (q == 1.0 && d == 0.0) continue;  // left alone: the same variable
+      const std::size_t after = add();
+      if (q > 0.0 && std::isfinite(d)) links_.push_back({columns[v], after, q, d});
+      columns[v] = after;
+    }
+    epochs_.push_back(columns);
+    return epochs_.size() - 1;
+  }
+
+  std::size_t column(std::size_t epoch, std::size_t v) const {
+    return v >= kStateVariables ? v - kStateVariables : epochs_[epoch][v];
+  }
+  std::vector<Interval> variables(std::size_t epoch) const {
+    std::vector<Interval> z(kVariables);
+    for (std::size_t v = 0; v < kVariables; ++v) z[v] = values_[column(epoch, v)];
+    return z;
+  }
+  void set_variables(std::size_t epoch, const std::vector<Interval>& z) {
+    for (std::size_t v = 0; v < kVariables; ++v) values_[column(epoch, v)] = z[v];
+  }
+
+  // scale * after - before in [-delta, delta]: each side narrowed by the other; false when one
+  // empties.
+  bool contract_links() {
+    for (int pass = 0; pass < 2; ++pass) {
+      for (std::size_t i = 0; i < links_.size(); ++i) {
+        const Link& l = pass == 0 ? links_[i] : links_[links_.size() - 1 - i];
+        const Interval slack(-l.delta, l.delta);
+        Interval& before = values_[l.before];
+        Interval& after = values_[l.after];
+        after = intersect(after, (before + slack) / Interval(l.scale));
+        if (after.is_empty()) return false;
+        before = intersect(before, Interval(l.scale) * after - slack);
+        if (before.is_empty()) return false;
+      }
+    }
+    return true;
+  }
+
+  struct Link {
+    std::size_t before, after;
+    double scale, delta;
+  };
+  const std::vector<Link>& links() const { return links_; }
+  std::vector<Interval>& values() { return values_; }
+  const std::vector<Interval>& values() const { return values_; }
+
+ private:
+  std::size_t add() {
+    values_.push_back(Interval(-1, 1));
+    return values_.size() - 1;
+  }
+  std::vector<Interval> values_;
+  std::vector<std::array<std::size_t, kStateVariables>> epochs_;
+  std::vector<Link> links_;
+};
+
 // A reading's constraint: the read joint's model at the reading's time, its epoch of start
 // variables.
 struct Constraint {
@@ -65,14 +150,6 @@ struct Constraint {
   std::size_t epoch;
   double t_s;
 };
-
-// The variables' box of one constraint: the start's of its epoch, the parameters' shared.
-std::vector<Interval> variables_of(const std::vector<std::vector<Interval>>& starts,
-                                   const std::vector<Interval>& shared, std::size_t epoch) {
-  std::vector<Interval> z = shared;
-  for (std::size_t v = 0; v < kStateVariables; ++v) z[v] = starts[epoch][v];
-  return z;
-}
 
 // The terms of degree 2 and above, and the remainder, over z.
 Interval nonlinear_part(const TaylorModel& m, const std::vector<Interval>& z) {
@@ -118,79 +195,144 @@ bool contract_with_reading(const Constraint& c, std::vector<Interval>& z) {
   return true;
 }
 
-// All readings together: with A the readings' linear coefficients (a row per reading, a column
-// per variable: the parameters' then each epoch's start), A z lies in r = y - c - h. For any
-// matrix P, z = P A z + (I - P A) z, so z_i lies in (P r)_i + sum_j (I - P A)_ij z_j: sound
-// whatever P is, evaluated in interval arithmetic. The P's tried are ridge-regularised weighted
-// least-squares inverses, P = (A' W^2 A + mu I)^-1 A' W^2 with W the rows' inverse widths: with
-// mu small P A is close to I but P amplifies the rows' widths; larger mu leaves more of the other
-// variables' ranges in, with less amplification. Each mu gives an enclosure; all are intersected.
-// Columns: the parameters' variables 4..10 first, then 4 per epoch. False when z is emptied.
-bool contract_together(const std::vector<Constraint>& constraints,
-                       std::vector<std::vector<Interval>>& starts, std::vector<Interval>& shared) {
-  const std::size_t parameters = kVariables - kStateVariables;
-  const std::size_t columns = parameters + kStateVariables * starts.size();
-  const std::size_t rows = constraints.size();
-  if (rows < 2) return true;
-  const auto column_of = [&](std::size_t epoch, std::size_t v) {
-    return v >= kStateVariables ? v - kStateVariables : parameters + kStateVariables * epoch + v;
-  };
-  std::vector<Interval> z(columns);
-  for (std::size_t v = kStateVariables; v < kVariables; ++v) z[column_of(0, v)] = shared[v];
-  for (std::size_t e = 0; e < starts.size(); ++e) {
-    for (std::size_t v = 0; v < kStateVariables; ++v) z[column_of(e, v)] = starts[e][v];
+// One linear row of the joint system: sum of coefficient * column in residual.
+struct SparseRow {
+  std::vector<std::pair<std::size_t, double>> terms;
+  Interval residual;
+};
+
+// Each column as an affine image of its chain's first column: z_c in factor * z_root + slack,
+// from the links (after = (before + [-delta, delta]) / scale), in column order (a link's before
+// column is always older than its after column).
+struct RootForm {
+  std::vector<std::size_t> root;
+  std::vector<double> factor;
+  std::vector<Interval> slack;
+};
+
+RootForm root_form(const Columns& columns) {
+  const std::size_t n = columns.values().size();
+  RootForm form{std::vector<std::size_t>(n), std::vector<double>(n, 1.0),
+                std::vector<Interval>(n, Interval(0.0))};
+  for (std::size_t c = 0; c < n; ++c) form.root[c] = c;
+  std::vector<Interval> factor(n, Interval(1.0));
+  for (const Columns::Link& l : columns.links()) {
+    const Interval q(l.scale);
+    form.root[l.after] = form.root[l.before];
+    factor[l.after] = factor[l.before] / q;
+    form.slack[l.after] = (form.slack[l.before] + Interval(-l.delta, l.delta)) / q;
   }
-  const auto n = static_cast<Eigen::Index>(columns);
-  const auto m_rows = static_cast<Eigen::Index>(rows);
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(m_rows, n);
-  Eigen::VectorXd weight(m_rows);
-  std::vector<Interval> residual(rows);
-  for (std::size_t k = 0; k < rows; ++k) {
-    const TaylorModel& m = *constraints[k].model;
-    if (!m.space()) return true;
-    for (std::size_t v = 0; v < kVariables; ++v) {
-      a(static_cast<Eigen::Index>(k),
-        static_cast<Eigen::Index>(column_of(constraints[k].epoch, v))) =
-          m.coefficient(m.space()->variable(v));
+  // The factor's rounding goes into the slack, over the root's range.
+  const std::vector<Interval>& z = columns.values();
+  for (std::size_t c = 0; c < n; ++c) {
+    form.factor[c] = factor[c].mid();
+    form.slack[c] = form.slack[c] + (factor[c] - Interval(form.factor[c])) * z[form.root[c]];
+  }
+  return form;
+}
+
+// All readings together, each window's start columns replaced by the first epoch's through the
+// links (a column whose slack is wider than its own range stays out, its term in the residual):
+// with A the rows' linear coefficients in the parameters' columns and the windows' first start
+// columns, A z lies in r = y - c - h - (the slack terms). For any matrix P, z = P A z + (I - P
+// A) z, so z_i lies in (P r)_i + sum_j (I - P A)_ij z_j: sound whatever P is, evaluated in
+// interval arithmetic. The P's tried are ridge-regularised weighted least-squares inverses, P =
+// (A' W^2 A + mu I)^-1 A' W^2 with W the rows' inverse widths: with mu small P A is close to I
+// but P amplifies the rows' widths; larger mu leaves more of the other variables' ranges in, with
+// less amplification. Each mu gives an enclosure; all are intersected, and carried back to every
+// column through its chain. False when a column is emptied.
+bool contract_together(const std::vector<Constraint>& constraints, Columns& columns) {
+  std::vector<Interval>& values = columns.values();
+  const RootForm form = root_form(columns);
+  // The reduced columns: every root, numbered.
+  std::vector<std::size_t> reduced_of(values.size(), static_cast<std::size_t>(-1));
+  std::vector<std::size_t> column_of_reduced;
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    if (form.root[c] == c) {
+      reduced_of[c] = column_of_reduced.size();
+      column_of_reduced.push_back(c);
     }
-    residual[k] = constraints[k].reading - Interval(m.coefficient(0)) -
-                  nonlinear_part(m, variables_of(starts, shared, constraints[k].epoch));
-    const double width = residual[k].width();
-    if (!(width > 0.0) || !std::isfinite(width)) return true;
-    weight(static_cast<Eigen::Index>(k)) = 1.0 / width;
   }
-  const Eigen::MatrixXd weighted = weight.asDiagonal() * a;
-  const Eigen::MatrixXd gram = weighted.transpose() * weighted;
+  const std::size_t n = column_of_reduced.size();
+  std::vector<SparseRow> rows;
+  for (const Constraint& c : constraints) {
+    const TaylorModel& m = *c.model;
+    if (!m.space()) return true;
+    SparseRow row;
+    row.residual =
+        c.reading - Interval(m.coefficient(0)) - nonlinear_part(m, columns.variables(c.epoch));
+    for (std::size_t v = 0; v < kVariables; ++v) {
+      const double a = m.coefficient(m.space()->variable(v));
+      if (a == 0.0) continue;
+      const std::size_t col = columns.column(c.epoch, v);
+      const Interval through_root = Interval(a) * form.slack[col];
+      const Interval own = Interval(a) * values[col];
+      if (form.root[col] != col && through_root.width() >= own.width()) {
+        row.residual = row.residual - own;
+        continue;
+      }
+      row.residual = row.residual - through_root;
+      const double coefficient = (Interval(a) * Interval(form.factor[col])).mid();
+      row.residual =
+          row.residual - (Interval(a) * Interval(form.factor[col]) - Interval(coefficient)) *
+                             values[form.root[col]];
+      // Each slot's chain has its own root, so a row meets a root once.
+      row.terms.push_back({reduced_of[form.root[col]], coefficient});
+    }
+    rows.push_back(std::move(row));
+  }
+  if (rows.size() < 2) return true;
+  std::vector<Interval> z(n);
+  for (std::size_t i = 0; i < n; ++i) z[i] = values[column_of_reduced[i]];
+  const auto cols = static_cast<Eigen::Index>(n);
+  Eigen::SparseMatrix<double> weighted(static_cast<Eigen::Index>(rows.size()), cols);
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::VectorXd weight(static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const double width = rows[k].residual.width();
+    // A row without width (or unbounded) is left out: P may ignore any row.
+    const double w = (width > 0.0 && std::isfinite(width)) ? 1.0 / width : 0.0;
+    weight(static_cast<Eigen::Index>(k)) = w;
+    for (const auto& [j, a] : rows[k].terms) {
+      triplets.emplace_back(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j), w * a);
+    }
+  }
+  weighted.setFromTriplets(triplets.begin(), triplets.end());
+  const Eigen::MatrixXd gram = Eigen::MatrixXd(weighted.transpose() * weighted);
   const double scale = gram.diagonal().maxCoeff();
   if (!(scale > 0.0) || !std::isfinite(scale)) return true;
+  const Eigen::MatrixXd weighted_t = Eigen::MatrixXd(weighted.transpose()) * weight.asDiagonal();
   for (const double relative : {1e-10, 1e-7, 1e-4, 1e-2}) {
-    const Eigen::MatrixXd regularised = gram + relative * scale * Eigen::MatrixXd::Identity(n, n);
-    const Eigen::MatrixXd p = regularised.ldlt().solve(weighted.transpose() * weight.asDiagonal());
+    const Eigen::MatrixXd regularised =
+        gram + relative * scale * Eigen::MatrixXd::Identity(cols, cols);
+    const Eigen::MatrixXd p = regularised.ldlt().solve(weighted_t);
     if (!p.allFinite()) continue;
-    for (std::size_t i = 0; i < columns; ++i) {
+    for (std::size_t i = 0; i < n; ++i) {
       const auto row = static_cast<Eigen::Index>(i);
       Interval bound(0.0);
-      std::vector<Interval> coupling(columns, Interval(0.0));  // (P A)_ij
-      for (std::size_t k = 0; k < rows; ++k) {
-        const Interval pik(p(row, static_cast<Eigen::Index>(k)));
-        if (pik.lo() == 0.0 && pik.hi() == 0.0) continue;
-        bound = bound + pik * residual[k];
-        for (std::size_t j = 0; j < columns; ++j) {
-          const double akj = a(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(j));
-          if (akj != 0.0) coupling[j] = coupling[j] + pik * Interval(akj);
-        }
+      std::vector<Interval> coupling(n, Interval(0.0));  // (P A)_ij
+      for (std::size_t k = 0; k < rows.size(); ++k) {
+        const double pik_value = p(row, static_cast<Eigen::Index>(k));
+        if (pik_value == 0.0) continue;
+        const Interval pik(pik_value);
+        bound = bound + pik * rows[k].residual;
+        for (const auto& [j, a] : rows[k].terms) coupling[j] = coupling[j] + pik * Interval(a);
       }
-      for (std::size_t j = 0; j < columns; ++j) {
-        const Interval identity(i == j ? 1.0 : 0.0);
-        bound = bound + (identity - coupling[j]) * z[j];
+      for (std::size_t j = 0; j < n; ++j) {
+        const Interval c = Interval(i == j ? 1.0 : 0.0) - coupling[j];
+        if (c.lo() == 0.0 && c.hi() == 0.0) continue;
+        bound = bound + c * z[j];
       }
       z[i] = intersect(z[i], bound);
       if (z[i].is_empty()) return false;
     }
   }
-  for (std::size_t v = kStateVariables; v < kVariables; ++v) shared[v] = z[column_of(0, v)];
-  for (std::size_t e = 0; e < starts.size(); ++e) {
-    for (std::size_t v = 0; v < kStateVariables; ++v) starts[e][v] = z[column_of(e, v)];
+  for (std::size_t i = 0; i < n; ++i) values[column_of_reduced[i]] = z[i];
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    if (form.root[c] == c) continue;
+    values[c] =
+        intersect(values[c], Interval(form.factor[c]) * values[form.root[c]] + form.slack[c]);
+    if (values[c].is_empty()) return false;
   }
   return true;
 }
@@ -221,27 +363,35 @@ WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
   out.parameters = parameters;
   out.start = windows.front().start;
   std::vector<Box> x0s;
-  std::vector<validated::TaylorModelFlowResult> results;
   for (const RecordingWindow& window : windows) {
     x0s.push_back(FurutaDynamics::initial_box(window.start, parameters));
+  }
+  // The windows' flows are independent: run side by side (a paver calling this from its own
+  // threads shares TBB's workers with it).
+  std::vector<validated::TaylorModelFlowResult> results(windows.size());
+  tbb::parallel_for(std::size_t{0}, windows.size(), [&](std::size_t w) {
     validated::TaylorModelFlowOptions flow = options.flow;
-    flow.integrator.t_start = window.t0_s;
-    flow.integrator.t_end = window.t1_s;
+    flow.integrator.t_start = windows[w].t0_s;
+    flow.integrator.t_end = windows[w].t1_s;
     flow.keep_end_models = true;
-    results.push_back(validated::integrate_taylor_models(
-        FurutaDynamics(pieces_with_reading_times(window)), x0s.back(), flow));
-    out.flow_steps += results.back().steps.size();
-    out.flow_seconds += results.back().seconds;
-    if (!results.back().ok() && out.reason.empty()) out.reason = results.back().reason;
+    results[w] = validated::integrate_taylor_models(
+        FurutaDynamics(pieces_with_reading_times(windows[w])), x0s[w], flow);
+  });
+  for (const validated::TaylorModelFlowResult& result : results) {
+    out.flow_steps += result.steps.size();
+    out.shrink_wraps += result.shrink_wraps;
+    out.flow_seconds += result.seconds;
+    if (!result.ok() && out.reason.empty()) out.reason = result.reason;
   }
 
   // Each reading against the step that ends at its time (the flow ends a step at every switch);
-  // each window's start variables are its own (and renewed at each shrink wrap), the parameters'
-  // are shared by all.
+  // each window's start variables are its own, tied across its shrink wraps; the parameters' are
+  // shared by all.
+  Columns columns;
   std::vector<Constraint> constraints;
-  std::size_t epoch = 0;
   for (std::size_t w = 0; w < windows.size(); ++w) {
     const RecordingWindow& window = windows[w];
+    std::size_t epoch = columns.open_window();
     std::size_t next = 0;
     for (const validated::TaylorModelFlowStep& step : results[w].steps) {
       for (; next < window.readings.size() && window.readings[next].t_s <= step.t1; ++next) {
@@ -255,9 +405,8 @@ WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
               std::max(out.widest_prediction, step.end_models[joint].bound().width() / width);
         }
       }
-      if (step.wrapped) ++epoch;
+      if (step.wrapped) epoch = columns.wrap(epoch, step.wrap_scale, step.wrap_delta);
     }
-    ++epoch;
   }
   if (constraints.empty()) {
     out.verdict = WindowVerdict::flow_failed;
@@ -265,40 +414,36 @@ WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
     return out;
   }
 
-  std::vector<std::vector<Interval>> starts(
-      epoch, std::vector<Interval>(kStateVariables, Interval(-1, 1)));
-  std::vector<Interval> shared(kVariables, Interval(-1, 1));
   for (out.sweeps = 0; out.sweeps < static_cast<std::size_t>(options.max_sweeps);) {
     ++out.sweeps;
-    const std::vector<Interval> before = shared;
-    const std::vector<Interval> starts_before = starts.front();
-    for (std::size_t k = 0; k < constraints.size(); ++k) {
-      std::vector<Interval> z = variables_of(starts, shared, constraints[k].epoch);
-      if (!contract_with_reading(constraints[k], z)) {
+    const std::vector<Interval> before = columns.values();
+    for (const Constraint& c : constraints) {
+      std::vector<Interval> z = columns.variables(c.epoch);
+      if (!contract_with_reading(c, z)) {
         out.verdict = WindowVerdict::inconsistent;
-        out.reason =
-            "the reading at t = " + std::to_string(constraints[k].t_s) + " s cannot be met";
+        out.reason = "the reading at t = " + std::to_string(c.t_s) + " s cannot be met";
         return out;
       }
-      for (std::size_t v = 0; v < kStateVariables; ++v) starts[constraints[k].epoch][v] = z[v];
-      for (std::size_t v = kStateVariables; v < kVariables; ++v) shared[v] = z[v];
+      columns.set_variables(c.epoch, z);
     }
-    if (!contract_together(constraints, starts, shared)) {
+    if (!columns.contract_links()) {
+      out.verdict = WindowVerdict::inconsistent;
+      out.reason = "the readings before and after a shrink wrap cannot be met together";
+      return out;
+    }
+    if (!contract_together(constraints, columns)) {
       out.verdict = WindowVerdict::inconsistent;
       out.reason = "the window's readings together cannot be met";
       return out;
     }
-    if (std::max(widest_relative_width(before, shared),
-                 widest_relative_width(starts_before, starts.front())) < options.min_sweep_gain) {
-      break;
-    }
+    if (widest_relative_width(before, columns.values()) < options.min_sweep_gain) break;
   }
 
   // Back from z to the parameters and the start: each as the flow's own variable over its part.
   const auto space = std::make_shared<validated::MonomialSpace>(kVariables, 1);
   std::vector<std::size_t> all(kVariables);
   for (std::size_t v = 0; v < kVariables; ++v) all[v] = v;
-  const std::vector<Interval> z = variables_of(starts, shared, 0);
+  const std::vector<Interval> z = columns.variables(0);
   const Box& x0 = x0s.front();
   Box x = x0;
   for (std::size_t v = 0; v < kVariables; ++v) {

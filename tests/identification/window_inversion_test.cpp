@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "furuta/model/model.hpp"
@@ -29,24 +30,29 @@ model::Parameters<double> scaled_truth() {
   return {p.mu1 / g, p.mu2 / g, p.mu3 / g, p.mu4 / g, p.mug / g, (p.fv1 + 0.155) / g, p.fv2 / g};
 }
 
-// The window's readings from the trajectory of `p` from `start` under a constant duty: each
-// joint every 8 ms (the pendulum 3 ms after the arm), the true angle's count interval (floor).
+// The window's readings from the trajectory of `p` from `start` under the duty `pieces` (each
+// (start time, duty), the first at 0): each joint every 8 ms (the pendulum 3 ms after the arm), the
+// true angle's count interval (floor).
 RecordingWindow window_from(const model::Parameters<double>& p, const model::PendulumState& start,
-                            double duty, double length_s) {
+                            const std::vector<std::pair<double, double>>& pieces, double length_s) {
   RecordingWindow w;
   w.t0_s = 0.0;
   w.t1_s = length_s;
-  w.duty = {{0.0, Interval(duty)}};
+  for (const auto& [at, duty] : pieces) w.duty.push_back({at, Interval(duty)});
   std::vector<std::pair<double, int>> times;
   for (int k = 1; 0.008 * k <= length_s; ++k) times.push_back({0.008 * k, 0});
   for (int k = 0; 0.003 + 0.008 * k <= length_s; ++k) times.push_back({0.003 + 0.008 * k, 1});
   std::sort(times.begin(), times.end());
   model::PendulumState x = start;
   double t = 0.0;
+  std::size_t piece = 0;
   constexpr double kStep_s = 1e-5;
   for (const auto& [at, joint] : times) {
     while (t < at - 1e-12) {
-      const double h = std::min(kStep_s, at - t);
+      while (piece + 1 < pieces.size() && pieces[piece + 1].first <= t + 1e-12) ++piece;
+      const double next = piece + 1 < pieces.size() ? pieces[piece + 1].first : at;
+      const double h = std::min({kStep_s, at - t, next - t});
+      const double duty = pieces[piece].second;
       x = model::rk4_step(p, x, h, [&](const model::PendulumState&) { return duty; });
       t += h;
     }
@@ -56,6 +62,11 @@ RecordingWindow window_from(const model::Parameters<double>& p, const model::Pen
     w.readings.push_back({at, joint, Interval(count * resolution, (count + 1) * resolution)});
   }
   return w;
+}
+
+RecordingWindow window_from(const model::Parameters<double>& p, const model::PendulumState& start,
+                            double duty, double length_s) {
+  return window_from(p, start, {{0.0, duty}}, length_s);
 }
 
 model::Parameters<Interval> around(const model::Parameters<double>& p, double relative) {
@@ -80,6 +91,13 @@ WindowOptions options() {
   // No shrink wrap: the start variables keep their meaning through the window, so that every
   // reading constrains the same start.
   o.flow.shrink_wrap_max_delta = 0.0;
+  return o;
+}
+
+// With shrink wrapping: the start variables are renewed at each wrap and tied to the ones before.
+WindowOptions wrapping_options() {
+  WindowOptions o = options();
+  o.flow.shrink_wrap_max_delta = 1.0;
   return o;
 }
 
@@ -139,6 +157,47 @@ TEST(WindowInversion, EveryParameterThatExplainsItsDataIsKept) {
     EXPECT_TRUE(out.start[1].contains(start.dq1) && out.start[3].contains(start.dq2))
         << "trial " << trial;
   }
+}
+
+// The same with the flow wrapping its error part: every drawn parameter and start is kept through
+// the wraps that tie each window's start variables together.
+TEST(WindowInversion, ThroughShrinkWrapsEveryParameterThatExplainsItsDataIsKept) {
+  const model::Parameters<double> centre = scaled_truth();
+  const model::Parameters<Interval> box = around(centre, 0.01);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 3; ++trial) {
+    const auto pick = [&](const Interval& x) {
+      const double u = trial < 2 ? double(1 - trial) : unit(rng);
+      return x.lo() + u * (x.hi() - x.lo());
+    };
+    const model::Parameters<double> p = box.map(pick);
+    const model::PendulumState start{kSwinging.q1 + 1e-4 * (unit(rng) - 0.5),
+                                     kSwinging.dq1 + 0.01 * (unit(rng) - 0.5), kSwinging.q2,
+                                     kSwinging.dq2 + 0.01 * (unit(rng) - 0.5)};
+    RecordingWindow w = window_from(p, start, 0.3, 0.04);
+    w.start = start_around(kSwinging);
+    const WindowOutcome out = invert_window(w, box, wrapping_options());
+    ASSERT_EQ(out.verdict, WindowVerdict::contracted) << "trial " << trial << ": " << out.reason;
+    EXPECT_GT(out.shrink_wraps, 5u) << "trial " << trial;
+    EXPECT_TRUE(inside(p, out.parameters)) << "trial " << trial;
+    EXPECT_TRUE(out.start[1].contains(start.dq1) && out.start[3].contains(start.dq2))
+        << "trial " << trial;
+  }
+}
+
+// Across a duty switch the flow without wraps ends within tenths of a second on +-1 %; with them
+// it carries the window, keeps the truth and pins the damping.
+TEST(WindowInversion, AWindowAcrossASwitchIsCarriedThroughShrinkWraps) {
+  const model::Parameters<double> truth = scaled_truth();
+  RecordingWindow w = window_from(truth, kSwinging, {{0.0, 0.3}, {0.05, -0.3}}, 0.12);
+  w.start = start_around(kSwinging);
+  const model::Parameters<Interval> box = around(truth, 0.01);
+  const WindowOutcome out = invert_window(w, box, wrapping_options());
+  ASSERT_EQ(out.verdict, WindowVerdict::contracted) << out.reason;
+  EXPECT_TRUE(out.reason.empty()) << out.reason;  // the flow reached the window's end
+  EXPECT_TRUE(inside(truth, out.parameters));
+  EXPECT_LT(out.parameters.fv1.width(), 0.3 * box.fv1.width());
 }
 
 TEST(WindowInversion, AReadingOutsideTheWindowIsRefused) {
