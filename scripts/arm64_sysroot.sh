@@ -13,7 +13,7 @@ dir="$(realpath -m "${1:-build/arm64-sysroot}")"
 packages=(
   libc6-dev
   liblcm-dev libglib2.0-dev libsodium-dev libusb-1.0-0-dev libhidapi-dev
-  libeigen3-dev libboost-dev libliquid-dev libmpfr-dev libgmp-dev libtbb-dev libceres-dev
+  libeigen3-dev libboost-dev libliquid-dev libglpk-dev libmpfr-dev libgmp-dev libtbb-dev libceres-dev
   libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libsystemd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
 )

@@ -33,7 +33,8 @@ packages=(
   # the arm64 build (scripts/test_arm64.sh): cross compilers, and qemu-user for its tests; its
   # libraries are arm64 packages unpacked into a sysroot (scripts/arm64_sysroot.sh)
   crossbuild-essential-arm64 qemu-user-static
-  # benchmarks: the LP bound of the seven-unknown problem (bench/sivia_lp_hull)
+  # linear programming: set inversion over windows (identification), the LP bound of the
+  # seven-unknown problem (bench/sivia_lp_hull)
   libglpk-dev
 )
 

@@ -1,5 +1,6 @@
 #include "furuta/identification/window_inversion.hpp"
 
+#include <glpk.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Dense>
@@ -201,6 +202,99 @@ struct SparseRow {
   Interval residual;
 };
 
+// The linear relaxation's exact hull, made rigorous: for each column i and each direction, the
+// linear program min (max) z_i over the rows' slabs (A z in r) and the box gives row multipliers
+// y (its duals); whatever y is, z_i = y' A z + (e_i - A' y)' z lies in y' r + (e_i - A' y)' [z],
+// evaluated in interval arithmetic, so the floating-point LP only chooses y. Where many readings
+// each pin a slab, their intersection (a polytope) is far narrower than what one preconditioner
+// P (a weighted average of the rows, whose worst case is the sum of |P| times the rows' widths)
+// can show: the slabs' hull shrinks with the count of readings, the sum does not. False when a
+// column is emptied.
+bool contract_by_linear_programs(const std::vector<SparseRow>& rows, std::vector<Interval>& z) {
+  struct ProblemDeleter {
+    void operator()(glp_prob* p) const { glp_delete_prob(p); }
+  };
+  const std::unique_ptr<glp_prob, ProblemDeleter> lp(glp_create_prob());
+  const int m = static_cast<int>(rows.size());
+  const int n = static_cast<int>(z.size());
+  glp_add_rows(lp.get(), m);
+  glp_add_cols(lp.get(), n);
+  // Each row scaled by its width (the LP's conditioning; the multipliers are scaled back).
+  std::vector<double> scale(rows.size(), 1.0);
+  std::vector<int> ia{0}, ja{0};
+  std::vector<double> ar{0.0};
+  for (int k = 0; k < m; ++k) {
+    const SparseRow& row = rows[static_cast<std::size_t>(k)];
+    const double width = row.residual.width();
+    if (!(width > 0.0) || !std::isfinite(width)) {
+      glp_set_row_bnds(lp.get(), k + 1, GLP_FR, 0.0, 0.0);
+      continue;
+    }
+    scale[static_cast<std::size_t>(k)] = 1.0 / width;
+    const double lo = row.residual.lo() / width;
+    const double hi = row.residual.hi() / width;
+    glp_set_row_bnds(lp.get(), k + 1, lo < hi ? GLP_DB : GLP_FX, lo, lo < hi ? hi : lo);
+    for (const auto& [j, a] : row.terms) {
+      ia.push_back(k + 1);
+      ja.push_back(static_cast<int>(j) + 1);
+      ar.push_back(a / width);
+    }
+  }
+  glp_load_matrix(lp.get(), static_cast<int>(ar.size()) - 1, ia.data(), ja.data(), ar.data());
+  for (int j = 0; j < n; ++j) {
+    const Interval& zj = z[static_cast<std::size_t>(j)];
+    if (zj.lo() < zj.hi()) {
+      glp_set_col_bnds(lp.get(), j + 1, GLP_DB, zj.lo(), zj.hi());
+    } else {
+      glp_set_col_bnds(lp.get(), j + 1, GLP_FX, zj.lo(), zj.lo());
+    }
+  }
+  glp_smcp parameters;
+  glp_init_smcp(&parameters);
+  parameters.msg_lev = GLP_MSG_OFF;
+  std::vector<double> y(rows.size());
+  for (int i = 0; i < n; ++i) {
+    for (const int direction : {GLP_MIN, GLP_MAX}) {
+      for (int j = 0; j < n; ++j) glp_set_obj_coef(lp.get(), j + 1, j == i ? 1.0 : 0.0);
+      glp_set_obj_dir(lp.get(), direction);
+      if (glp_simplex(lp.get(), &parameters) != 0) continue;
+      const int status = glp_get_status(lp.get());
+      if (status == GLP_NOFEAS) {
+        // The relaxation looks empty; only the rigorous bound below may say so.
+      } else if (status != GLP_OPT) {
+        continue;
+      }
+      for (int k = 0; k < m; ++k) {
+        y[static_cast<std::size_t>(k)] =
+            glp_get_row_dual(lp.get(), k + 1) * scale[static_cast<std::size_t>(k)];
+      }
+      Interval bound(0.0);
+      std::vector<Interval> coupling(z.size(), Interval(0.0));  // (A' y)_j
+      for (std::size_t k = 0; k < rows.size(); ++k) {
+        if (y[k] == 0.0 || !std::isfinite(y[k])) continue;
+        const Interval yk(y[k]);
+        bound = bound + yk * rows[k].residual;
+        for (const auto& [j, a] : rows[k].terms) coupling[j] = coupling[j] + yk * Interval(a);
+      }
+      for (std::size_t j = 0; j < z.size(); ++j) {
+        const Interval c = Interval(static_cast<int>(j) == i ? 1.0 : 0.0) - coupling[j];
+        if (c.lo() == 0.0 && c.hi() == 0.0) continue;
+        bound = bound + c * z[j];
+      }
+      Interval& zi = z[static_cast<std::size_t>(i)];
+      zi = direction == GLP_MIN ? intersect(zi, Interval(bound.lo(), zi.hi()))
+                                : intersect(zi, Interval(zi.lo(), bound.hi()));
+      if (zi.is_empty()) return false;
+      if (zi.lo() < zi.hi()) {
+        glp_set_col_bnds(lp.get(), i + 1, GLP_DB, zi.lo(), zi.hi());
+      } else {
+        glp_set_col_bnds(lp.get(), i + 1, GLP_FX, zi.lo(), zi.lo());
+      }
+    }
+  }
+  return true;
+}
+
 // Each column as an affine image of its chain's first column: z_c in factor * z_root + slack,
 // from the links (after = (before + [-delta, delta]) / scale), in column order (a link's before
 // column is always older than its after column).
@@ -327,6 +421,7 @@ bool contract_together(const std::vector<Constraint>& constraints, Columns& colu
       if (z[i].is_empty()) return false;
     }
   }
+  if (!contract_by_linear_programs(rows, z)) return false;
   for (std::size_t i = 0; i < n; ++i) values[column_of_reduced[i]] = z[i];
   for (std::size_t c = 0; c < values.size(); ++c) {
     if (form.root[c] == c) continue;
