@@ -5,6 +5,10 @@
 //
 //   window_inversion PERCENT WINDOW_S [COUNT] [EVERY_S] [DQ_WIDTH_RAD_S] [SPACE_ORDER] [DUTY]
 //
+// Environment: FURUTA_WRAP_DELTA (shrink wrapping's limit, 0: none), FURUTA_JACOBIAN_ORDER,
+// FURUTA_TIME_ORDER, FURUTA_PASSES (flows re-run over each pass's contracted box), FURUTA_REST=1
+// with FURUTA_FIRST_T0=0 (the first window from rest).
+//
 // Prints the verdict, the flow's steps and time, the widest prediction against its reading,
 // and each parameter's box after contraction against the one given.
 #include "furuta/identification/window_inversion.hpp"
@@ -119,7 +123,16 @@ int main(int argc, char** argv) {
   if (const char* wrap = std::getenv("FURUTA_WRAP_DELTA"))
     o.flow.shrink_wrap_max_delta = std::atof(wrap);
   if (const char* jo = std::getenv("FURUTA_JACOBIAN_ORDER")) o.flow.jacobian_order = std::atoi(jo);
-  const identification::WindowOutcome out = identification::invert_windows(windows, box, o);
+  if (const char* to = std::getenv("FURUTA_TIME_ORDER")) o.flow.integrator.order = std::atoi(to);
+  // FURUTA_PASSES=N: the flows run again over each pass's contracted box (narrower models).
+  identification::WindowOutcome out = identification::invert_windows(windows, box, o);
+  const int passes = std::getenv("FURUTA_PASSES") ? std::atoi(std::getenv("FURUTA_PASSES")) : 1;
+  for (int pass = 1; pass < passes && out.verdict == identification::WindowVerdict::contracted;
+       ++pass) {
+    const double seconds = out.flow_seconds;
+    out = identification::invert_windows(windows, out.parameters, o);
+    out.flow_seconds += seconds;
+  }
   const char* verdicts[] = {"inconsistent", "contracted", "flow_failed"};
   std::printf(
       "+-%g %%, %d windows of %g s every %g s, dq +-%g, order %d: %s; %zu steps in "

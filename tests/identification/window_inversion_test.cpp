@@ -133,29 +133,44 @@ TEST(WindowInversion, ParametersFarFromTheDataAreProvenInconsistent) {
   EXPECT_EQ(out.verdict, WindowVerdict::inconsistent) << out.reason;
 }
 
+// Parameters and a start drawn for a soundness trial: trials 0 and 1 take two opposite corners of
+// the box (`first_corner` 0: the low one first), later trials points inside it; the start near
+// kSwinging, inside start_around's box.
+struct Drawn {
+  model::Parameters<double> p;
+  model::PendulumState start;
+};
+Drawn draw(const model::Parameters<Interval>& box, int trial, int first_corner, std::mt19937& rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto pick = [&](const Interval& x) {
+    const double u = trial < 2 ? double(trial == 0 ? first_corner : 1 - first_corner) : unit(rng);
+    return x.lo() + u * (x.hi() - x.lo());
+  };
+  const model::Parameters<double> p = box.map(pick);
+  return {p,
+          {kSwinging.q1 + 1e-4 * (unit(rng) - 0.5), kSwinging.dq1 + 0.01 * (unit(rng) - 0.5),
+           kSwinging.q2, kSwinging.dq2 + 0.01 * (unit(rng) - 0.5)}};
+}
+
+// The drawn parameters and start are kept by the inversion of their own readings.
+void expect_kept(const WindowOutcome& out, const Drawn& drawn, int trial) {
+  ASSERT_EQ(out.verdict, WindowVerdict::contracted) << "trial " << trial << ": " << out.reason;
+  EXPECT_TRUE(inside(drawn.p, out.parameters)) << "trial " << trial;
+  EXPECT_TRUE(out.start[1].contains(drawn.start.dq1) && out.start[3].contains(drawn.start.dq2))
+      << "trial " << trial;
+}
+
 // Soundness: parameters and starts drawn from the boxes (two corners, then inside) are each the
 // truth of their own readings; the contracted box must hold every one of them.
 TEST(WindowInversion, EveryParameterThatExplainsItsDataIsKept) {
   const model::Parameters<double> centre = scaled_truth();
   const model::Parameters<Interval> box = around(centre, 0.01);
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int trial = 0; trial < 4; ++trial) {
-    const auto pick = [&](const Interval& x) {
-      const double u = trial < 2 ? double(trial) : unit(rng);
-      return x.lo() + u * (x.hi() - x.lo());
-    };
-    const model::Parameters<double> p = box.map(pick);
-    const model::PendulumState start{kSwinging.q1 + 1e-4 * (unit(rng) - 0.5),
-                                     kSwinging.dq1 + 0.01 * (unit(rng) - 0.5), kSwinging.q2,
-                                     kSwinging.dq2 + 0.01 * (unit(rng) - 0.5)};
-    RecordingWindow w = window_from(p, start, -0.3, 0.03);
+    const Drawn drawn = draw(box, trial, 0, rng);
+    RecordingWindow w = window_from(drawn.p, drawn.start, -0.3, 0.03);
     w.start = start_around(kSwinging);
-    const WindowOutcome out = invert_window(w, box, options());
-    ASSERT_EQ(out.verdict, WindowVerdict::contracted) << "trial " << trial << ": " << out.reason;
-    EXPECT_TRUE(inside(p, out.parameters)) << "trial " << trial;
-    EXPECT_TRUE(out.start[1].contains(start.dq1) && out.start[3].contains(start.dq2))
-        << "trial " << trial;
+    expect_kept(invert_window(w, box, options()), drawn, trial);
   }
 }
 
@@ -165,24 +180,13 @@ TEST(WindowInversion, ThroughShrinkWrapsEveryParameterThatExplainsItsDataIsKept)
   const model::Parameters<double> centre = scaled_truth();
   const model::Parameters<Interval> box = around(centre, 0.01);
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int trial = 0; trial < 3; ++trial) {
-    const auto pick = [&](const Interval& x) {
-      const double u = trial < 2 ? double(1 - trial) : unit(rng);
-      return x.lo() + u * (x.hi() - x.lo());
-    };
-    const model::Parameters<double> p = box.map(pick);
-    const model::PendulumState start{kSwinging.q1 + 1e-4 * (unit(rng) - 0.5),
-                                     kSwinging.dq1 + 0.01 * (unit(rng) - 0.5), kSwinging.q2,
-                                     kSwinging.dq2 + 0.01 * (unit(rng) - 0.5)};
-    RecordingWindow w = window_from(p, start, 0.3, 0.04);
+    const Drawn drawn = draw(box, trial, 1, rng);
+    RecordingWindow w = window_from(drawn.p, drawn.start, 0.3, 0.04);
     w.start = start_around(kSwinging);
     const WindowOutcome out = invert_window(w, box, wrapping_options());
-    ASSERT_EQ(out.verdict, WindowVerdict::contracted) << "trial " << trial << ": " << out.reason;
     EXPECT_GT(out.shrink_wraps, 5u) << "trial " << trial;
-    EXPECT_TRUE(inside(p, out.parameters)) << "trial " << trial;
-    EXPECT_TRUE(out.start[1].contains(start.dq1) && out.start[3].contains(start.dq2))
-        << "trial " << trial;
+    expect_kept(out, drawn, trial);
   }
 }
 

@@ -113,13 +113,11 @@ double worst_excess(const std::vector<TaylorModel>& p, const std::vector<TaylorM
   return excess;
 }
 
-// worst_excess over 200 sampled z, each with a corner of e.
-double worst_over_samples(const std::vector<TaylorModel>& p,
-                          const std::vector<TaylorModel>& wrapped, const ShrinkWrap& wrap,
-                          std::uint64_t seed) {
+// 200 sampled z, each with a corner of e: f(z, e).
+template <class F>
+void for_each_sample(std::uint64_t seed, F&& f) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  double worst = -1.0;
   for (int sample = 0; sample < 200; ++sample) {
     std::vector<double> z(kVariables);
     for (double& v : z) v = u(rng);
@@ -127,8 +125,18 @@ double worst_over_samples(const std::vector<TaylorModel>& p,
     for (std::size_t i = 0; i < kSlots; ++i) {
       e[i] = (sample >> i) & 1 ? kError[i].hi() : kError[i].lo();
     }
-    worst = std::max(worst, worst_excess(p, wrapped, wrap, z, e));
+    f(z, e);
   }
+}
+
+// worst_excess over 200 sampled z, each with a corner of e.
+double worst_over_samples(const std::vector<TaylorModel>& p,
+                          const std::vector<TaylorModel>& wrapped, const ShrinkWrap& wrap,
+                          std::uint64_t seed) {
+  double worst = -1.0;
+  for_each_sample(seed, [&](const std::vector<double>& z, const std::vector<double>& e) {
+    worst = std::max(worst, worst_excess(p, wrapped, wrap, z, e));
+  });
   return worst;
 }
 
@@ -182,16 +190,8 @@ TEST(ShrinkWrap, TheWrapTiesEachPointsVariablesBeforeAndAfter) {
         EXPECT_GE(wrap.scale[j], 1.0 + wrap.delta[j]) << "slot " << j;
       }
     }
-    std::mt19937_64 rng(21);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
     double worst = -1.0;  // the largest |scale w - z| - delta, relative to delta
-    for (int sample = 0; sample < 200; ++sample) {
-      std::vector<double> z(kVariables);
-      for (double& v : z) v = u(rng);
-      std::vector<double> e(kSlots);
-      for (std::size_t i = 0; i < kSlots; ++i) {
-        e[i] = (sample >> i) & 1 ? kError[i].hi() : kError[i].lo();
-      }
+    for_each_sample(21, [&](const std::vector<double>& z, const std::vector<double>& e) {
       const Representation r = represent(k.p, wrapped, wrap, z, e);
       for (std::size_t j = 0; j < kSlots; ++j) {
         if (j == wrap.kept) {
@@ -201,7 +201,7 @@ TEST(ShrinkWrap, TheWrapTiesEachPointsVariablesBeforeAndAfter) {
         const double gap = std::abs(wrap.scale[j] * r.w[j] - z[j]);
         worst = std::max(worst, (gap - wrap.delta[j]) / wrap.delta[j]);
       }
-    }
+    });
     EXPECT_LE(worst, 1e-6) << "off " << off;
   }
 }
