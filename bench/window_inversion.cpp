@@ -125,20 +125,14 @@ int main(int argc, char** argv) {
   if (const char* jo = std::getenv("FURUTA_JACOBIAN_ORDER")) o.flow.jacobian_order = std::atoi(jo);
   if (const char* to = std::getenv("FURUTA_TIME_ORDER")) o.flow.integrator.order = std::atoi(to);
   // FURUTA_PASSES=N: the flows run again over each pass's contracted box (narrower models).
-  identification::WindowOutcome out = identification::invert_windows(windows, box, o);
-  const int passes = std::getenv("FURUTA_PASSES") ? std::atoi(std::getenv("FURUTA_PASSES")) : 1;
-  for (int pass = 1; pass < passes && out.verdict == identification::WindowVerdict::contracted;
-       ++pass) {
-    const double seconds = out.flow_seconds;
-    out = identification::invert_windows(windows, out.parameters, o);
-    out.flow_seconds += seconds;
-  }
+  if (const char* passes = std::getenv("FURUTA_PASSES")) o.max_passes = std::atoi(passes);
+  const identification::WindowOutcome out = identification::invert_windows(windows, box, o);
   const char* verdicts[] = {"inconsistent", "contracted", "flow_failed"};
   std::printf(
       "+-%g %%, %d windows of %g s every %g s, dq +-%g, order %d: %s; %zu steps in "
-      "%.2f s, %zu sweeps, widest prediction %.3g readings%s%s\n",
+      "%.2f s, %zu passes, %zu sweeps, widest prediction %.3g readings%s%s\n",
       percent, count, length_s, every_s, dq_width, order, verdicts[static_cast<int>(out.verdict)],
-      out.flow_steps, out.flow_seconds, out.sweeps, out.widest_prediction,
+      out.flow_steps, out.flow_seconds, out.passes, out.sweeps, out.widest_prediction,
       out.reason.empty() ? "" : "; ", out.reason.c_str());
   const char* names[] = {"mu1", "mu2", "mu3", "mu4", "mug", "b", "fv2"};
   const Interval got[] = {out.parameters.mu1, out.parameters.mu2, out.parameters.mu3,

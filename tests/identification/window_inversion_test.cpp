@@ -121,6 +121,18 @@ TEST(WindowInversion, TheTruthIsKeptAndTheDampingPinned) {
   // is left (0.58 with the least-squares preconditioners alone, before the linear programs).
   EXPECT_LT(out.parameters.fv1.width(), 0.4 * box.fv1.width());
   EXPECT_GT(out.sweeps, 0u);
+  EXPECT_EQ(out.passes, 1u);
+
+  // Passes: the flows again over the contracted box, whose models are sharper, narrow it further
+  // and keep the truth.
+  WindowOptions more = options();
+  more.max_passes = 3;
+  const WindowOutcome again = invert_window(w, box, more);
+  ASSERT_EQ(again.verdict, WindowVerdict::contracted) << again.reason;
+  EXPECT_GE(again.passes, 2u);
+  EXPECT_GT(again.flow_steps, out.flow_steps);
+  EXPECT_TRUE(inside(truth, again.parameters));
+  EXPECT_LT(again.parameters.fv1.width(), 0.9 * out.parameters.fv1.width());
 }
 
 TEST(WindowInversion, ParametersFarFromTheDataAreProvenInconsistent) {

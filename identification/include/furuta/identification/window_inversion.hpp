@@ -52,6 +52,10 @@ struct WindowOptions {
   validated::TaylorModelFlowOptions flow;  // t_start, t_end and keep_end_models are the window's
   int max_sweeps = 8;                      // contraction sweeps over all readings
   double min_sweep_gain = 0.01;            // stop once a sweep shrinks no width by this fraction
+  // Passes: the flows run again over the contracted box, whose models are sharper (their
+  // non-linear parts smaller), while a pass shrinks some parameter's width by min_pass_gain.
+  int max_passes = 1;
+  double min_pass_gain = 0.05;
 };
 
 enum class WindowVerdict {
@@ -67,7 +71,8 @@ struct WindowOutcome {
   std::string reason;                                // why the flow failed, or which reading
   std::size_t flow_steps = 0;
   std::size_t shrink_wraps = 0;  // the flows' wraps, each tying the start before and after it
-  std::size_t sweeps = 0;
+  std::size_t sweeps = 0;        // the last pass's
+  std::size_t passes = 0;
   // The widest prediction of a reading before contraction, in units of its reading's width: how
   // much of the data the flow's set resolves (below 1: every reading can cut).
   double widest_prediction = 0.0;
@@ -75,6 +80,7 @@ struct WindowOutcome {
 };
 
 // The parameters are the scaled ones (theta, b, fv2 / g), the state box the window's own start.
+// Steps, wraps and seconds are summed over the passes.
 // Throws std::invalid_argument for a window without duty pieces, with readings outside
 // (t0_s, t1_s] or a joint other than 0 or 1.
 WindowOutcome invert_window(const RecordingWindow& window,
