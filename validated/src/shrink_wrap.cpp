@@ -209,14 +209,13 @@ ShrinkWrap widened(std::vector<TaylorModel>& p, const std::vector<std::size_t>& 
                    const std::vector<double>& delta) {
   ShrinkWrap out;
   std::vector<double> widen(p.front().space()->variables(), 1.0);
-  for (std::size_t j = 0; j < slots.size(); ++j) {
-    if (j != kept) widen[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
-  }
-  out.scale = widen;
   out.delta.assign(widen.size(), 0.0);
   for (std::size_t j = 0; j < slots.size(); ++j) {
-    if (j != kept) out.delta[slots[j]] = delta[j];
+    if (j == kept) continue;
+    widen[slots[j]] = (Interval(1.0) + Interval(delta[j])).hi();
+    out.delta[slots[j]] = delta[j];
   }
+  out.scale = widen;
   out.rest.assign(p.size(), Interval(0.0));
   for (std::size_t v = 0; v < p.size(); ++v) {
     TaylorModel q = p[v].rescaled(widen);
