@@ -54,6 +54,17 @@ FurutaStateDynamics::FurutaStateDynamics(const model::Parameters<Interval>& p,
   }
 }
 
+FurutaRampedDynamics::FurutaRampedDynamics(std::vector<InputPiece> rate_pieces)
+    : pieces_(checked_pieces(std::move(rate_pieces))) {}
+
+Box FurutaRampedDynamics::initial_box(const Box& state, const model::Parameters<Interval>& p,
+                                      const Interval& u0) {
+  const Box x = FurutaDynamics::initial_box(state, p);
+  std::vector<Interval> components(x.begin(), x.end());
+  components.push_back(u0);
+  return Box(std::move(components));
+}
+
 Box FurutaDynamics::initial_box(const Box& state, const model::Parameters<Interval>& p) {
   if (state.size() != 4) throw std::invalid_argument("FurutaDynamics::initial_box: state size 4");
   return Box{state[0], state[1], state[2], state[3], p.mu1, p.mu2,

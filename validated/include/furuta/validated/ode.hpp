@@ -158,6 +158,45 @@ class FurutaDynamics {
   std::vector<InputPiece> pieces_;
 };
 
+// FurutaDynamics with its input as a state: x = [q1, dq1, q2, dq2, mu1, ..., fv2, u], and each
+// piece's `tau` the input's rate du/dt. A board that ramps its duty towards each command is then
+// described exactly (u piecewise linear in time, its start a point), where constant pieces would
+// need the ramp's spread over each piece as an interval input, which a flow can only carry in its
+// error part (and through the arm's stiff mode that part grows step by step).
+class FurutaRampedDynamics {
+ public:
+  static constexpr std::size_t dimension = 12;
+  static constexpr std::size_t input = 11;  // u's component
+
+  // Pieces of the input's rate, sorted by strictly increasing t_start, at least one.
+  explicit FurutaRampedDynamics(std::vector<InputPiece> rate_pieces);
+
+  const std::vector<InputPiece>& pieces() const { return pieces_; }
+  std::vector<double> switch_times() const { return piece_switch_times(pieces_); }
+
+  // FurutaDynamics::initial_box with the input's start u0 appended.
+  static Box initial_box(const Box& state, const model::Parameters<Interval>& p,
+                         const Interval& u0);
+
+  template <class S>
+  void operator()(std::size_t piece, std::span<const S> x, std::span<S> dx) const {
+    using F = FurutaDynamics;
+    dx[F::q1] = x[F::dq1];
+    dx[F::q2] = x[F::dq2];
+    const model::Parameters<S> p{x[F::mu1], x[F::mu2], x[F::mu3], x[F::mu4],
+                                 x[F::mug], x[F::fv1], x[F::fv2]};
+    const model::JointAccelerations<S> a =
+        model::accelerations(p, x[F::q2], x[F::dq1], x[F::dq2], x[input]);
+    dx[F::dq1] = a.ddq1;
+    dx[F::dq2] = a.ddq2;
+    for (std::size_t i = F::mu1; i <= F::fv2; ++i) dx[i] = S(0.0);
+    dx[input] = constant_as<S>(pieces_[std::min(piece, pieces_.size() - 1)].tau);
+  }
+
+ private:
+  std::vector<InputPiece> pieces_;
+};
+
 // The same model on the state alone, x = [q1, dq1, q2, dq2], the parameters (intervals) as
 // constants of the field: the Jacobian and second-order jets are 4-dimensional instead of 11
 // (about 7x cheaper per step). Sound for interval parameters too, but their correlation with the
