@@ -26,13 +26,20 @@ using validated::TaylorModel;
 constexpr std::size_t kStateVariables = 4;  // q1, dq1, q2, dq2: the start's variables
 constexpr std::size_t kVariables = FurutaDynamics::dimension;
 
-// The duty pieces with a switch at every reading's time (the same duty on both sides), so that
-// the flow ends a step exactly there.
+// The time of the state a reading shows, as the flow stops there: its host time minus the lag's
+// midpoint (the rest of the lag is the constraint's variable).
+double state_time(const RecordingWindow& window, const AngleReading& reading) {
+  return reading.t_s - window.lag_s.mid();
+}
+
+// The duty pieces with a switch at every reading's state time (the same duty on both sides), so
+// that the flow ends a step exactly there.
 std::vector<InputPiece> pieces_with_reading_times(const RecordingWindow& window) {
   std::vector<double> times;
   for (const InputPiece& piece : window.duty) times.push_back(piece.t_start);
   for (const AngleReading& reading : window.readings) {
-    if (reading.t_s < window.t1_s) times.push_back(reading.t_s);
+    const double s = state_time(window, reading);
+    if (s < window.t1_s) times.push_back(s);
   }
   std::sort(times.begin(), times.end());
   times.erase(std::unique(times.begin(), times.end()), times.end());
@@ -51,16 +58,27 @@ void check_window(const RecordingWindow& window) {
   if (window.start.size() != kStateVariables) {
     throw std::invalid_argument("window: the start box has 4 components (q1, dq1, q2, dq2)");
   }
+  if (window.lag_s.is_empty() || !window.lag_s.is_bounded() ||
+      window.pendulum_zero_rad.is_empty() || !window.pendulum_zero_rad.is_bounded()) {
+    throw std::invalid_argument(
+        "window: the lag and the pendulum's zero must be bounded intervals");
+  }
   for (const AngleReading& reading : window.readings) {
-    if (!(reading.t_s > window.t0_s && reading.t_s <= window.t1_s)) {
+    if (!(reading.t_s > window.t0_s + window.lag_s.hi() &&
+          reading.t_s <= window.t1_s + window.lag_s.lo())) {
       throw std::invalid_argument("window: a reading at t = " + std::to_string(reading.t_s) +
-                                  " s is outside (t0_s, t1_s]");
+                                  " s is outside (t0_s + lag_s.hi(), t1_s + lag_s.lo()]");
     }
     if (reading.joint != 0 && reading.joint != 1) {
       throw std::invalid_argument("window: a reading's joint must be 0 (arm) or 1 (pendulum)");
     }
   }
 }
+
+// The columns every reading shares beyond the flow's variables: the lag's and the pendulum's
+// zero's (each over [-1, 1] at first).
+constexpr std::size_t kGlobals = 2;
+using Globals = std::array<Interval, kGlobals>;
 
 // The variables of all windows as columns: the parameters' (flow variables 4..10) first, then
 // the start variables of each epoch (a window's steps between shrink wraps). A wrap that leaves a
@@ -69,8 +87,18 @@ void check_window(const RecordingWindow& window) {
 class Columns {
  public:
   static constexpr std::size_t kParameters = kVariables - kStateVariables;
+  // The globals' columns after the parameters': the lag = mid + rad * lambda, the pendulum's zero
+  // = mid + rad * zeta (lambda, zeta in [-1, 1]).
+  static constexpr std::size_t kLag = kParameters;
+  static constexpr std::size_t kZero = kParameters + 1;
 
-  Columns() : values_(kParameters, Interval(-1, 1)) {}
+  Columns() : values_(kParameters + 2, Interval(-1, 1)) {}
+
+  Globals globals() const { return {values_[kLag], values_[kZero]}; }
+  void set_globals(const Globals& g) {
+    values_[kLag] = g[0];
+    values_[kZero] = g[1];
+  }
 
   // A window's first epoch: start variables of its own.
   std::size_t open_window() {
@@ -143,16 +171,26 @@ class Columns {
   std::vector<Link> links_;
 };
 
-// A reading's constraint: the read joint's model at the reading's time, its epoch of start
-// variables.
+// A reading's constraint: the read joint's model q and its velocity's dq at the state time s the
+// flow stopped at, in the epoch of start variables there. The state the reading shows is at
+// s - delta, delta = rad * lambda + offset (lambda the lag's column, offset the rounding of s), so
+// the reading holds q(s) - delta dq(s) + delta^2 / 2 * acceleration (Taylor with the acceleration
+// bounded around s). A pendulum reading is the angle less its zero, zero_mid + zero_rad * zeta
+// (zeta the zero's column).
 struct Constraint {
   const TaylorModel* model;
+  const TaylorModel* velocity;
+  Interval acceleration;
+  double lag_rad;
+  Interval offset;
+  double zero_mid, zero_rad;
   Interval reading;
   std::size_t epoch;
   double t_s;
 };
 
-// The terms of degree 2 and above, and the remainder, over z.
+// The terms of degree 2 and above, and the remainder, over z (variables without a column, such
+// as a ramped input's, range over [-1, 1]).
 Interval nonlinear_part(const TaylorModel& m, const std::vector<Interval>& z) {
   Interval sum = m.remainder();
   if (!m.space()) return sum;
@@ -163,35 +201,83 @@ Interval nonlinear_part(const TaylorModel& m, const std::vector<Interval>& z) {
     Interval term(coefficients[k]);
     for (std::size_t v = 0; v < space.variables(); ++v) {
       const int e = space.exponent(k, v);
-      if (e > 0) term = term * pow(z[v], e);
+      if (e > 0) term = term * pow(v < z.size() ? z[v] : Interval(-1, 1), e);
     }
     sum = sum + term;
   }
   return sum;
 }
 
-// Narrows z with one constraint; false when it proves the constraint cannot hold.
-bool contract_with_reading(const Constraint& c, std::vector<Interval>& z) {
-  const TaylorModel& m = *c.model;
-  const Interval constant(m.coefficient(0));
-  const Interval rest = nonlinear_part(m, z);
-  std::vector<Interval> linear(kVariables, Interval(0.0));
-  for (std::size_t v = 0; v < kVariables; ++v) {
-    if (m.space()) linear[v] = Interval(m.coefficient(m.space()->variable(v))) * z[v];
+// A model's range over z, less its constant.
+Interval varying_part(const TaylorModel& m, const std::vector<Interval>& z) {
+  Interval sum = nonlinear_part(m, z);
+  if (!m.space()) return sum;
+  for (std::size_t v = 0; v < m.space()->variables(); ++v) {
+    const double a = m.coefficient(m.space()->variable(v));
+    if (a != 0.0) sum = sum + Interval(a) * (v < z.size() ? z[v] : Interval(-1, 1));
   }
-  Interval all = constant + rest;
+  return sum;
+}
+
+// A constraint as linear terms and the rest: the reading lies in c + sum_v a_v z_v + sum_g
+// a_global[g] globals[g] + rest, with rest bounded over the current z and globals.
+struct Linearised {
+  Interval constant;
+  std::array<double, kVariables> a{};
+  std::array<double, kGlobals> a_global{};
+  Interval rest;
+};
+
+Linearised linearise(const Constraint& c, const std::vector<Interval>& z, const Globals& g) {
+  const TaylorModel& m = *c.model;
+  Linearised l;
+  l.constant = Interval(m.coefficient(0)) - Interval(c.zero_mid);
+  l.a_global[1] = -c.zero_rad;
+  l.rest = nonlinear_part(m, z);
+  if (m.space()) {
+    for (std::size_t v = 0; v < kVariables; ++v) l.a[v] = m.coefficient(m.space()->variable(v));
+  }
+  if (c.lag_rad == 0.0 && c.offset.lo() == 0.0 && c.offset.hi() == 0.0) return l;
+  const Interval& lambda = g[0];
+  const TaylorModel& dq = *c.velocity;
+  const Interval dq_constant(dq.coefficient(0));
+  const Interval dq_varying = varying_part(dq, z);
+  const Interval delta = Interval(c.lag_rad) * lambda + c.offset;
+  // -delta dq = -rad lambda dq_constant (linear) - rad lambda dq_varying - offset dq.
+  l.a_global[0] = -(Interval(c.lag_rad) * dq_constant).mid();
+  l.rest = l.rest - (Interval(c.lag_rad) * dq_constant + Interval(l.a_global[0])) * lambda -
+           Interval(c.lag_rad) * lambda * dq_varying - c.offset * (dq_constant + dq_varying) +
+           Interval(0.5) * sqr(delta) * c.acceleration;
+  return l;
+}
+
+// Narrows z and the globals with one constraint; false when it proves the constraint cannot
+// hold.
+bool contract_with_reading(const Constraint& c, std::vector<Interval>& z, Globals& g) {
+  const Linearised l = linearise(c, z, g);
+  constexpr std::size_t kAll = kVariables + kGlobals;
+  const auto coefficient = [&](std::size_t v) {
+    return v < kVariables ? l.a[v] : l.a_global[v - kVariables];
+  };
+  const auto variable = [&](std::size_t v) -> Interval& {
+    return v < kVariables ? z[v] : g[v - kVariables];
+  };
+  std::array<Interval, kAll> linear{};
+  for (std::size_t v = 0; v < kAll; ++v) linear[v] = Interval(coefficient(v)) * variable(v);
+  Interval all = l.constant + l.rest;
   for (const Interval& term : linear) all = all + term;
   if (intersect(all, c.reading).is_empty()) return false;
-  for (std::size_t v = 0; v < kVariables; ++v) {
-    const double a = m.space() ? m.coefficient(m.space()->variable(v)) : 0.0;
+  for (std::size_t v = 0; v < kAll; ++v) {
+    const double a = coefficient(v);
     if (a == 0.0) continue;
-    Interval others = c.reading - constant - rest;
-    for (std::size_t w = 0; w < kVariables; ++w) {
+    Interval others = c.reading - l.constant - l.rest;
+    for (std::size_t w = 0; w < kAll; ++w) {
       if (w != v) others = others - linear[w];
     }
-    z[v] = intersect(z[v], others / Interval(a));
-    if (z[v].is_empty()) return false;
-    linear[v] = Interval(a) * z[v];
+    Interval& x = variable(v);
+    x = intersect(x, others / Interval(a));
+    if (x.is_empty()) return false;
+    linear[v] = Interval(a) * x;
   }
   return true;
 }
@@ -352,11 +438,13 @@ bool contract_together(const std::vector<Constraint>& constraints, Columns& colu
   for (const Constraint& c : constraints) {
     const TaylorModel& m = *c.model;
     if (!m.space()) return true;
+    const Linearised l = linearise(c, columns.variables(c.epoch), columns.globals());
     SparseRow row;
-    row.residual =
-        c.reading - Interval(m.coefficient(0)) - nonlinear_part(m, columns.variables(c.epoch));
+    row.residual = c.reading - l.constant - l.rest;
+    if (l.a_global[0] != 0.0) row.terms.push_back({reduced_of[Columns::kLag], l.a_global[0]});
+    if (l.a_global[1] != 0.0) row.terms.push_back({reduced_of[Columns::kZero], l.a_global[1]});
     for (std::size_t v = 0; v < kVariables; ++v) {
-      const double a = m.coefficient(m.space()->variable(v));
+      const double a = l.a[v];
       if (a == 0.0) continue;
       const std::size_t col = columns.column(c.epoch, v);
       const Interval through_root = Interval(a) * form.slack[col];
@@ -448,15 +536,54 @@ model::Parameters<Interval> parameters_of(const Box& x) {
 }
 
 // One pass: the flows over `parameters`, then the contraction.
+// The acceleration of `joint` (0: arm, 1: pendulum) over the steps that meet [t0, t1]: the model
+// over the hull of their boxes, the input over the hull of its values there. Unbounded when the
+// steps do not reach t1.
+Interval acceleration_around(const validated::TaylorModelFlowResult& flow,
+                             const RecordingWindow& window, int joint, double t0, double t1) {
+  if (flow.steps.empty() || flow.steps.back().t1 < t1) return Interval::entire();
+  Box hull;
+  for (const validated::TaylorModelFlowStep& step : flow.steps) {
+    if (step.t1 < t0 || step.t0 > t1) continue;
+    hull = hull.size() == 0 ? step.over : interval::hull(hull, step.over);
+  }
+  if (hull.size() == 0) return Interval::entire();
+  Interval input;
+  if (window.ramped) {
+    input = hull[validated::FurutaRampedDynamics::input];
+  } else {
+    input = window.duty.front().tau;
+    for (const InputPiece& piece : window.duty) input = interval::hull(input, piece.tau);
+  }
+  const model::Parameters<Interval> p{hull[FurutaDynamics::mu1], hull[FurutaDynamics::mu2],
+                                      hull[FurutaDynamics::mu3], hull[FurutaDynamics::mu4],
+                                      hull[FurutaDynamics::mug], hull[FurutaDynamics::fv1],
+                                      hull[FurutaDynamics::fv2]};
+  const model::JointAccelerations<Interval> a = model::accelerations(
+      p, hull[FurutaDynamics::q2], hull[FurutaDynamics::dq1], hull[FurutaDynamics::dq2], input);
+  return joint == 0 ? a.ddq1 : a.ddq2;
+}
+
+// One pass: the flows over `parameters` (every window's lag_s the same), then the contraction.
 WindowOutcome one_pass(const std::vector<RecordingWindow>& windows,
                        const model::Parameters<Interval>& parameters,
                        const WindowOptions& options) {
   WindowOutcome out;
   out.parameters = parameters;
   out.start = windows.front().start;
+  const Interval lag = windows.front().lag_s;
+  out.lag_s = lag;
+  const double lag_mid = lag.mid();
+  const double lag_rad = (lag - Interval(lag_mid)).mag();
+  const Interval zero = windows.front().pendulum_zero_rad;
+  out.pendulum_zero_rad = zero;
+  const double zero_mid = zero.mid();
+  const double zero_rad = (zero - Interval(zero_mid)).mag();
   std::vector<Box> x0s;
   for (const RecordingWindow& window : windows) {
-    x0s.push_back(FurutaDynamics::initial_box(window.start, parameters));
+    x0s.push_back(window.ramped ? validated::FurutaRampedDynamics::initial_box(
+                                      window.start, parameters, window.duty_start)
+                                : FurutaDynamics::initial_box(window.start, parameters));
   }
   // The windows' flows are independent: run side by side (a paver calling this from its own
   // threads shares TBB's workers with it).
@@ -466,8 +593,11 @@ WindowOutcome one_pass(const std::vector<RecordingWindow>& windows,
     flow.integrator.t_start = windows[w].t0_s;
     flow.integrator.t_end = windows[w].t1_s;
     flow.keep_end_models = true;
-    results[w] = validated::integrate_taylor_models(
-        FurutaDynamics(pieces_with_reading_times(windows[w])), x0s[w], flow);
+    const std::vector<InputPiece> pieces = pieces_with_reading_times(windows[w]);
+    results[w] = windows[w].ramped
+                     ? validated::integrate_taylor_models(validated::FurutaRampedDynamics(pieces),
+                                                          x0s[w], flow)
+                     : validated::integrate_taylor_models(FurutaDynamics(pieces), x0s[w], flow);
   });
   for (const validated::TaylorModelFlowResult& result : results) {
     out.flow_steps += result.steps.size();
@@ -476,27 +606,44 @@ WindowOutcome one_pass(const std::vector<RecordingWindow>& windows,
     if (!result.ok() && out.reason.empty()) out.reason = result.reason;
   }
 
-  // Each reading against the step that ends at its time (the flow ends a step at every switch);
-  // each window's start variables are its own, tied across its shrink wraps; the parameters' are
-  // shared by all.
+  // Each reading against the step that ends at its state time (the flow ends a step at every
+  // switch); each window's start variables are its own, tied across its shrink wraps; the
+  // parameters' and the lag's are shared by all.
   Columns columns;
   std::vector<Constraint> constraints;
+  std::vector<std::vector<std::size_t>> step_epochs(windows.size());
   for (std::size_t w = 0; w < windows.size(); ++w) {
     const RecordingWindow& window = windows[w];
     std::size_t epoch = columns.open_window();
     std::size_t next = 0;
     for (const validated::TaylorModelFlowStep& step : results[w].steps) {
-      for (; next < window.readings.size() && window.readings[next].t_s <= step.t1; ++next) {
+      for (; next < window.readings.size() && state_time(window, window.readings[next]) <= step.t1;
+           ++next) {
         const AngleReading& reading = window.readings[next];
-        if (std::abs(reading.t_s - step.t1) > 1e-12 * std::max(1.0, std::abs(step.t1))) continue;
+        const double s = state_time(window, reading);
+        if (std::abs(s - step.t1) > 1e-12 * std::max(1.0, std::abs(step.t1))) continue;
         const std::size_t joint = reading.joint == 0 ? FurutaDynamics::q1 : FurutaDynamics::q2;
-        constraints.push_back({&step.end_models[joint], reading.angle_rad, epoch, reading.t_s});
+        const std::size_t speed = reading.joint == 0 ? FurutaDynamics::dq1 : FurutaDynamics::dq2;
+        // The state is at t - lag = s - (lag - lag_mid) - (t - s - lag_mid).
+        const Interval offset = (Interval(reading.t_s) - Interval(step.t1)) - Interval(lag_mid);
+        Interval acceleration(0.0);
+        if (lag_rad > 0.0 || offset.lo() != 0.0 || offset.hi() != 0.0) {
+          const double reach = lag_rad + offset.mag();
+          acceleration =
+              acceleration_around(results[w], window, reading.joint, s - reach, s + reach);
+          if (!acceleration.is_bounded()) continue;  // the flow ended too soon to use it
+        }
+        const bool pendulum = reading.joint == 1;
+        constraints.push_back({&step.end_models[joint], &step.end_models[speed], acceleration,
+                               lag_rad, offset, pendulum ? zero_mid : 0.0,
+                               pendulum ? zero_rad : 0.0, reading.angle_rad, epoch, reading.t_s});
         const double width = reading.angle_rad.width();
         if (width > 0.0) {
           out.widest_prediction =
               std::max(out.widest_prediction, step.end_models[joint].bound().width() / width);
         }
       }
+      step_epochs[w].push_back(epoch);  // the epoch of this step's end models
       if (step.wrapped) epoch = columns.wrap(epoch, step.wrap_scale, step.wrap_delta);
     }
   }
@@ -511,7 +658,10 @@ WindowOutcome one_pass(const std::vector<RecordingWindow>& windows,
     const std::vector<Interval> before = columns.values();
     for (const Constraint& c : constraints) {
       std::vector<Interval> z = columns.variables(c.epoch);
-      if (!contract_with_reading(c, z)) {
+      Globals g = columns.globals();
+      const bool met = contract_with_reading(c, z, g);
+      columns.set_globals(g);
+      if (!met) {
         out.verdict = WindowVerdict::inconsistent;
         out.reason = "the reading at t = " + std::to_string(c.t_s) + " s cannot be met";
         return out;
@@ -545,7 +695,43 @@ WindowOutcome one_pass(const std::vector<RecordingWindow>& windows,
   }
   for (std::size_t v = 0; v < kStateVariables; ++v) out.start[v] = x[v];
   out.parameters = parameters_of(x);
+  out.lag_s =
+      intersect(lag, Interval(lag_mid) + Interval(lag_rad) * columns.values()[Columns::kLag]);
+  out.pendulum_zero_rad =
+      intersect(zero, Interval(zero_mid) + Interval(zero_rad) * columns.values()[Columns::kZero]);
   out.verdict = WindowVerdict::contracted;
+  // Each window's end: a step's models over their epoch's contracted variables; the last step's
+  // when the flow carried the window, else the step at restart_fraction of the way to where it
+  // stopped (a flow stops where its set has grown too wide to go on: not a box to start from).
+  for (std::size_t w = 0; w < windows.size(); ++w) {
+    const validated::TaylorModelFlowResult& result = results[w];
+    Box end;
+    double end_time = windows[w].t0_s;
+    std::size_t chosen = result.steps.size();
+    if (!result.steps.empty()) {
+      chosen = result.steps.size() - 1;
+      if (!result.ok()) {
+        const double at =
+            windows[w].t0_s + options.restart_fraction * (result.steps.back().t1 - windows[w].t0_s);
+        while (chosen > 0 && result.steps[chosen].t1 > at) --chosen;
+      }
+    }
+    if (chosen < result.steps.size() && result.steps[chosen].end_models.size() >= kStateVariables) {
+      const validated::TaylorModelFlowStep& step = result.steps[chosen];
+      end_time = step.t1;
+      std::vector<Interval> zw = columns.variables(step_epochs[w][chosen]);
+      const TaylorModel& first = step.end_models.front();
+      const std::size_t n = first.space() ? first.space()->variables() : kVariables;
+      zw.resize(n, Interval(-1, 1));  // a ramped input's variable has no column
+      end = Box(kStateVariables);
+      for (std::size_t v = 0; v < kStateVariables; ++v) {
+        end[v] = intersect(step.end[v], step.end_models[v].bounded_in(all, zw).bound());
+      }
+    }
+    out.ends.push_back(std::move(end));
+    out.end_times.push_back(end_time);
+    out.reached.push_back(result.steps.empty() ? windows[w].t0_s : result.steps.back().t1);
+  }
   return out;
 }
 
@@ -556,7 +742,19 @@ WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
                              const WindowOptions& options) {
   if (windows.empty()) throw std::invalid_argument("windows: none given");
   for (const RecordingWindow& window : windows) check_window(window);
-  WindowOutcome out = one_pass(windows, parameters, options);
+  // One lag for all: the hull of the windows' (each pass narrows it).
+  std::vector<RecordingWindow> common = windows;
+  Interval lag = windows.front().lag_s;
+  Interval zero = windows.front().pendulum_zero_rad;
+  for (const RecordingWindow& window : windows) {
+    lag = interval::hull(lag, window.lag_s);
+    zero = interval::hull(zero, window.pendulum_zero_rad);
+  }
+  for (RecordingWindow& window : common) {
+    window.lag_s = lag;
+    window.pendulum_zero_rad = zero;
+  }
+  WindowOutcome out = one_pass(common, parameters, options);
   out.passes = 1;
   while (out.verdict == WindowVerdict::contracted &&
          out.passes < static_cast<std::size_t>(options.max_passes)) {
@@ -566,7 +764,11 @@ WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
     const std::vector<Interval> before = widths(parameters);
     const std::vector<Interval> now = widths(out.parameters);
     if (out.passes == 1 && widest_relative_width(before, now) < options.min_pass_gain) break;
-    WindowOutcome next = one_pass(windows, out.parameters, options);
+    for (RecordingWindow& window : common) {
+      window.lag_s = out.lag_s;
+      window.pendulum_zero_rad = out.pendulum_zero_rad;
+    }
+    WindowOutcome next = one_pass(common, out.parameters, options);
     // A pass whose flows carry no reading concludes nothing: the last contraction stands.
     if (next.verdict == WindowVerdict::flow_failed) break;
     next.passes = out.passes + 1;

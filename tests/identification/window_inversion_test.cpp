@@ -216,6 +216,69 @@ TEST(WindowInversion, AWindowAcrossASwitchIsCarriedThroughShrinkWraps) {
   EXPECT_LT(out.parameters.fv1.width(), 0.2 * box.fv1.width());  // 0.14 of it is left
 }
 
+// A board that ramps its duty (62.5 a second from rest to 0.3) and a data path that delivers
+// every reading `lag_s` after its state: the readings at their host times, the window on the
+// commands' clock.
+RecordingWindow ramped_window_from(const model::Parameters<double>& p, double lag_s,
+                                   double length_s) {
+  constexpr double kRate = 62.5;
+  constexpr double kTop = 0.3;
+  const auto duty_at = [&](double t) { return std::min(kTop, kRate * t); };
+  RecordingWindow w;
+  w.t0_s = 0.0;
+  w.t1_s = length_s;
+  w.ramped = true;
+  w.duty_start = Interval(0.0);
+  w.duty = {{0.0, Interval(kRate)}, {kTop / kRate, Interval(0.0)}};
+  w.lag_s = Interval(0.0, 2e-3);
+  std::vector<std::pair<double, int>> times;  // the states' times
+  for (int k = 1; 0.008 * k + lag_s <= length_s; ++k) times.push_back({0.008 * k, 0});
+  for (int k = 0; 0.003 + 0.008 * k + lag_s <= length_s; ++k)
+    times.push_back({0.003 + 0.008 * k, 1});
+  std::sort(times.begin(), times.end());
+  model::PendulumState x{};
+  double t = 0.0;
+  constexpr double kStep_s = 1e-5;
+  for (const auto& [at, joint] : times) {
+    while (t < at - 1e-12) {
+      const double h = std::min(kStep_s, at - t);
+      const double duty = duty_at(t + h / 2);
+      x = model::rk4_step(p, x, h, [&](const model::PendulumState&) { return duty; });
+      t += h;
+    }
+    const double resolution = joint == 0 ? kArmResolution_rad : kPendulumResolution_rad;
+    const double count = std::floor((joint == 0 ? x.q1 : x.q2) / resolution);
+    if (at + lag_s <= w.lag_s.hi()) continue;  // before the window's first usable reading
+    w.readings.push_back(
+        {at + lag_s, joint, Interval(count * resolution, (count + 1) * resolution)});
+  }
+  w.start = Box{Interval(-2e-4, 2e-4), Interval(-0.01, 0.01), Interval(-2e-3, 2e-3),
+                Interval(-0.02, 0.02)};
+  return w;
+}
+
+// From rest through the board's ramp, with the lag unknown in [0, 2] ms: the truth and the true
+// lag are kept, and the readings pin the lag far inside its interval.
+TEST(WindowInversion, ThroughTheBoardsRampTheTruthAndTheLagAreKept) {
+  const model::Parameters<double> truth = scaled_truth();
+  constexpr double kLag_s = 1.3e-3;
+  const RecordingWindow w = ramped_window_from(truth, kLag_s, 0.1);
+  const model::Parameters<Interval> box = around(truth, 0.005);
+  const WindowOutcome out = invert_window(w, box, wrapping_options());
+  ASSERT_EQ(out.verdict, WindowVerdict::contracted) << out.reason;
+  EXPECT_TRUE(out.reason.empty()) << out.reason;
+  EXPECT_TRUE(inside(truth, out.parameters));
+  EXPECT_TRUE(out.lag_s.contains(kLag_s)) << out.lag_s.lo() << " " << out.lag_s.hi();
+  EXPECT_LT(out.lag_s.width(), 0.25 * w.lag_s.width());
+  ASSERT_EQ(out.ends.size(), 1u);
+  ASSERT_EQ(out.ends[0].size(), 4u);
+
+  // The same readings said to come with no lag at all are proven inconsistent with the box.
+  RecordingWindow no_lag = w;
+  no_lag.lag_s = Interval(0.0);
+  EXPECT_EQ(invert_window(no_lag, box, wrapping_options()).verdict, WindowVerdict::inconsistent);
+}
+
 TEST(WindowInversion, AReadingOutsideTheWindowIsRefused) {
   RecordingWindow w = window_from(scaled_truth(), kSwinging, 0.3, 0.05);
   w.start = start_around(kSwinging);

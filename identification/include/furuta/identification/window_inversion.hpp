@@ -39,13 +39,24 @@ struct AngleReading {
   interval::Interval angle_rad;
 };
 
+// A window's times are the input's (the commands' clock); a reading's t_s is when the host got it,
+// `lag_s` after the time of the state it shows (the data path's lag, one unknown shared by every
+// reading of every window inverted together).
 struct RecordingWindow {
   double t0_s = 0.0;
   double t1_s = 0.0;
   interval::Box start;  // [q1, dq1, q2, dq2] at t0_s
-  // The duty (the scaled model's input) as pieces; the first starts at t0_s.
+  // The duty (the scaled model's input) as pieces; the first starts at t0_s. With `ramped`, each
+  // piece's tau is the duty's rate [1/s] and duty_start the duty at t0_s: the duty is then exact
+  // between the pieces' times (validated::FurutaRampedDynamics, the board's ramp).
   std::vector<validated::InputPiece> duty;
-  std::vector<AngleReading> readings;  // t0_s < t_s <= t1_s, sorted by time
+  bool ramped = false;
+  interval::Interval duty_start{0.0};
+  interval::Interval lag_s{0.0};
+  // A pendulum reading's interval holds the angle less this unknown (the zero's offset from
+  // hanging, shared by every reading inverted together); the arm's angle is free of it.
+  interval::Interval pendulum_zero_rad{0.0};
+  std::vector<AngleReading> readings;  // t0_s + lag_s.hi() < t_s <= t1_s + lag_s.lo(), in order
 };
 
 struct WindowOptions {
@@ -56,6 +67,9 @@ struct WindowOptions {
   // non-linear parts smaller), while a pass shrinks some parameter's width by min_pass_gain.
   int max_passes = 1;
   double min_pass_gain = 0.05;
+  // A flow that stops before its window's end gives its end box (WindowOutcome::ends) at the step
+  // this fraction of the way from the window's start to where it stopped.
+  double restart_fraction = 0.8;
 };
 
 enum class WindowVerdict {
@@ -68,7 +82,16 @@ struct WindowOutcome {
   WindowVerdict verdict = WindowVerdict::flow_failed;
   model::Parameters<interval::Interval> parameters;  // contracted (as given when flow_failed)
   interval::Box start;                               // the start state, contracted
-  std::string reason;                                // why the flow failed, or which reading
+  interval::Interval lag_s;                          // the data path's lag, contracted
+  interval::Interval pendulum_zero_rad;              // the pendulum's zero, contracted
+  // Per window, in order: the state for every parameter and start the contraction kept (a step's
+  // models over the contracted variables) at its t1_s, or, when its flow stopped early, at the
+  // step WindowOptions::restart_fraction of the way there; an empty box when its flow took no
+  // step. What a next window chained to this one starts from.
+  std::vector<interval::Box> ends;
+  // Per window: the time of `ends`, and how far its flow went.
+  std::vector<double> end_times, reached;
+  std::string reason;  // why the flow failed, or which reading
   std::size_t flow_steps = 0;
   std::size_t shrink_wraps = 0;  // the flows' wraps, each tying the start before and after it
   std::size_t sweeps = 0;        // the last pass's
@@ -82,7 +105,7 @@ struct WindowOutcome {
 // The parameters are the scaled ones (theta, b, fv2 / g), the state box the window's own start.
 // Steps, wraps and seconds are summed over the passes.
 // Throws std::invalid_argument for a window without duty pieces, with readings outside
-// (t0_s, t1_s] or a joint other than 0 or 1.
+// (t0_s + lag_s.hi(), t1_s + lag_s.lo()] or a joint other than 0 or 1.
 WindowOutcome invert_window(const RecordingWindow& window,
                             const model::Parameters<interval::Interval>& parameters,
                             const WindowOptions& options);
