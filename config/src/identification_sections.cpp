@@ -109,6 +109,16 @@ GuaranteedConfig read_guaranteed(Section s) {
   gc.motor_tolerance_pct = s.numbers(
       "motor_tolerance_pct", gc.motor_tolerance_pct, [](double v) { return v >= 0 && v < 50; },
       "in [0, 50)");
+  gc.search_sd = s.number(
+      "search_sd", gc.search_sd, [](double v) { return v > 0 && v <= 1000; }, "in (0, 1000]");
+  gc.window_s = s.number(
+      "window_s", gc.window_s, [](double v) { return v >= 0.01 && v <= 1.0; },
+      "in [0.01, 1] s (the flow carries a box a fraction of a second)");
+  gc.windows = static_cast<int>(s.integer(
+      "windows", gc.windows, [](std::int64_t v) { return v >= 1 && v <= 1000; }, "in [1, 1000]"));
+  gc.arm_rest_speed_rad_s = s.number(
+      "arm_rest_speed_rad_s", gc.arm_rest_speed_rad_s, [](double v) { return v >= 0 && v <= 10; },
+      "in [0, 10] rad/s");
   s.reject_unknown_keys();
   return gc;
 }
@@ -130,6 +140,7 @@ AutomationConfig read_automation(Section s) {
            "'" + ac.validation_label + "' is also one of fit_labels");
   }
   ac.sivia = s.boolean("sivia", ac.sivia);
+  ac.guaranteed = s.boolean("guaranteed", ac.guaranteed);
   ac.simulate = s.boolean("simulate", ac.simulate);
   ac.simulate_seconds = s.number(
       "simulate_seconds", ac.simulate_seconds, [](double v) { return v >= 0.01 && v <= 60; },

@@ -495,6 +495,7 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
   // change resolve it to one step only.
   std::vector<double> supply_v;
   for (const auto& r : arm_positions) supply_v.push_back(r.supply_v);
+  e.supply_readings_v = supply_v;
   std::sort(supply_v.begin(), supply_v.end());
   const std::size_t cut = supply_v.size() / 10;
   const std::span<const double> kept(supply_v.data() + cut, supply_v.size() - 2 * cut);

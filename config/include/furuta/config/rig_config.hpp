@@ -138,6 +138,14 @@ struct GuaranteedConfig {
   // Relative tolerances [%] of [motor]'s eq. 4 figures: no_load_speed_rpm,
   // speed_torque_gradient_rpm_per_nm, motor_efficiency, gear_efficiency.
   std::array<double, 4> motor_tolerance_pct = {1.0, 1.0, 1.0, 1.0};
+  // The windowed set inversion (identify --guaranteed): the search box is the output-error
+  // estimate +- search_sd of its standard deviations; each recording is inverted over `windows`
+  // chained windows of window_s from its first command, which starts from rest with the arm's
+  // speed within arm_rest_speed_rad_s (the daemon's rest check watches the pendulum only).
+  double search_sd = 5.0;
+  double window_s = 0.25;
+  int windows = 8;
+  double arm_rest_speed_rad_s = 0.01;
 };
 
 // [automation]: what the identification trigger (`furuta process-logs`, furuta-identify.path) does
@@ -148,8 +156,9 @@ struct AutomationConfig {
   int fit_sessions = 2;  // how many (the oldest pending first) form one identification
   // Plus the oldest pending session with this label, held out; empty: identify without one.
   std::string validation_label = "validation";
-  bool sivia = true;     // guaranteed identification after the LSMI, with [sivia]'s settings
-  bool simulate = true;  // the paper's scenarios by guaranteed simulation (Table III)
+  bool sivia = true;        // guaranteed identification after the LSMI, with [sivia]'s settings
+  bool guaranteed = false;  // the windowed set inversion ([guaranteed]; minutes per batch)
+  bool simulate = true;     // the paper's scenarios by guaranteed simulation (Table III)
   double simulate_seconds = 4.0;  // each scenario's duration
   std::string identifications_dir = "/var/lib/furuta/identifications";
 };

@@ -48,6 +48,9 @@ struct OeExperiment {
   // encoder.
   std::array<double, 2> angle_sigma_rad = {0, 0};
   std::vector<std::string> warnings;
+  // Session logs: every supply reading of the 1065's reports [V] (the guaranteed identification's
+  // drive, physical_inputs.hpp); empty for other recordings.
+  std::vector<double> supply_readings_v;
 };
 
 // From a session log: the angles of every report of both boards at its host time; the input rebuilt
