@@ -123,6 +123,8 @@ struct IdentifyCommandOptions {
   std::optional<double> input_lag_ms;
   bool estimate_input_lag = false;  // estimate it even when the configuration gives it
   bool sivia = false;               // guaranteed identification after the LSMI ([sivia])
+  // The windowed set inversion around the output-error estimate ([guaranteed]).
+  bool guaranteed = false;
   // Skip the output-error refinement the configuration's [output_error] enables.
   bool no_output_error = false;
   std::optional<int> threads;  // SIVIA threads (default: the configuration's)

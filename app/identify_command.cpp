@@ -266,6 +266,12 @@ class IdentifyProgress : public pipeline::Progress {
   void sivia_done() override {
     if (terminal_ != nullptr) terminal_->sivia_done();
   }
+  void windows(std::size_t done, std::size_t total) override {
+    if (terminal_ != nullptr) terminal_->windows(done, total);
+  }
+  void windows_done() override {
+    if (terminal_ != nullptr) terminal_->windows_done();
+  }
   void scenario(const validated::Scenario& scenario, const std::string& set) override {
     if (terminal_ != nullptr) terminal_->scenario(scenario, set);
   }
@@ -299,6 +305,7 @@ pipeline::Settings identify_settings(const config::RigConfig& rig,
   settings.identify = identify_options_for(rig, options);
   if (options.no_output_error) settings.output_error.run = false;
   settings.sivia.run = options.sivia;
+  settings.windowed.run = options.guaranteed;
   settings.sivia.threads = options.threads.value_or(rig.sivia.threads);
   settings.simulation.run = options.simulate;
   if (options.simulate_seconds) {

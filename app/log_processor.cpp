@@ -346,6 +346,7 @@ class Processor {
     for (const auto& log : batch.fit) options.logs.push_back(log.path);
     if (batch.validation) options.validate = batch.validation->path;
     options.sivia = o_.automation.sivia;
+    options.guaranteed = o_.automation.guaranteed;
     options.simulate = o_.automation.simulate;
     options.simulate_seconds = o_.automation.simulate_seconds;
     std::ostringstream problems;

@@ -159,6 +159,10 @@ int main(int argc, char** argv) {
                          "Skip the output-error refinement after the LSMI ([output_error])");
   identify_cmd->add_flag("--sivia", identify.sivia,
                          "Guaranteed identification by SIVIA after the LSMI ([sivia] settings)");
+  identify_cmd->add_flag(
+      "--guaranteed", identify.guaranteed,
+      "Guaranteed set by windowed set inversion around the output-error estimate ([guaranteed]; "
+      "minutes)");
   identify_cmd->add_option("--threads", identify.threads, "SIVIA threads (0: all cores)")
       ->check(CLI::Range(0, 1024));
 

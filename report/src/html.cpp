@@ -96,6 +96,7 @@ void contents(Html& h) {
       {"data", "Data and uncertainty bands (Fig. 2/3)"},
       {"validation", "Held-out torque (Fig. 5)"},
       {"sivia", "Guaranteed identification (Table II, Fig. 4)"},
+      {"guaranteed", "Guaranteed set from the angles"},
       {"simulation", "Validated simulation (Table III, Fig. 6)"}};
   for (const auto& [id, name] : contents) {
     h.raw("<li><a href=\"#" + id + "\">");
@@ -371,6 +372,42 @@ void section_sivia(Html& h, const ReportInput& in) {
   h.raw("</section>\n");
 }
 
+// The windowed set inversion's set, scaled and at the rig's scale, and its windows.
+void section_guaranteed(Html& h, const ReportInput& in) {
+  h.raw("<section id=\"guaranteed\">\n");
+  h.element("h2", "Guaranteed set from the angles (windowed set inversion)");
+  if (!in.guaranteed) {
+    h.paragraph(
+        "The windowed set inversion was not run (furuta identify --guaranteed, or [automation] "
+        "guaranteed).",
+        "absent");
+    h.raw("</section>\n");
+    return;
+  }
+  const GuaranteedSummary& g = *in.guaranteed;
+  h.paragraph(g.headline);
+  for (const std::string& note : g.notes) h.paragraph(note);
+  if (!g.scaled_rows.empty()) {
+    h.table("guaranteed-scaled",
+            "The set in the scaled parameters (per unit of the drive's gain g; b = (fv1 + k_w) / "
+            "g), which the angles determine",
+            {"parameter", "searched", "set", "half-width", "truth (simulated rig)"}, g.scaled_rows);
+  }
+  if (!g.rig_rows.empty()) {
+    h.table("guaranteed-rig",
+            "The set at the rig's scale: the scaled set times the drive's interval ([motor] and "
+            "[guaranteed] motor_tolerance_pct)",
+            {"parameter", "unit", "set", "share of the width the drive's tolerance causes"},
+            g.rig_rows);
+  }
+  if (!g.window_rows.empty()) {
+    h.table("guaranteed-windows", "The windows (times on the commands' clock)",
+            {"recording", "window", "planned [s]", "reached [s]", "readings", "verdict"},
+            g.window_rows);
+  }
+  h.raw("</section>\n");
+}
+
 // Table III's rows as the page shows them.
 void table_three(Html& h, const std::vector<validated::ScenarioResult>& results) {
   std::vector<std::vector<std::string>> rows;
@@ -457,6 +494,7 @@ std::string render_html(const ReportInput& in) {
   section_data(h, in);
   section_validation(h, in);
   section_sivia(h, in);
+  section_guaranteed(h, in);
   section_simulation(h, in);
   h.raw("</body>\n</html>\n");
   return h.str();

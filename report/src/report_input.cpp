@@ -64,6 +64,74 @@ ReportInput report_input(const identification::Identification& id) {
   return r;
 }
 
+namespace {
+
+std::string interval_cell(const interval::Interval& x) {
+  return "[" + sci(x.lo(), 5) + ", " + sci(x.hi(), 5) + "]";
+}
+
+std::string half_width_percent(const interval::Interval& x, double centre) {
+  return centre != 0.0 ? "+-" + short_number(100.0 * x.rad() / std::abs(centre), 3) + " %" : "-";
+}
+
+}  // namespace
+
+GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
+                                     const std::vector<pipeline::EstimateOutsideSet>& excluded) {
+  static constexpr const char* kScaled[model::kParameterCount] = {
+      "mu1/g", "mu2/g", "mu3/g", "mu4/g", "mug/g", "b", "fv2/g"};
+  const identification::WindowedSet& r = w.result;
+  GuaranteedSummary g;
+  std::size_t carried = 0;
+  for (const identification::WindowRecord& record : r.windows) {
+    carried += record.verdict == identification::WindowVerdict::contracted;
+  }
+  g.headline = std::to_string(r.windows.size()) + " windows (" + std::to_string(carried) +
+               " carried whole) in " + short_number(r.seconds, 3) +
+               " s; the search box is the output-error estimate +- " +
+               short_number(w.search_sd, 3) +
+               " sd: every parameter in it that explains every reading of the windows is in the "
+               "set, and parameters outside it are neither kept nor excluded.";
+  if (r.verdict == identification::WindowedSetVerdict::empty) {
+    g.notes.push_back("The set is empty: " + readable_numbers(r.finding));
+  } else if (r.verdict == identification::WindowedSetVerdict::unresolved) {
+    g.notes.push_back("Nothing was concluded: " + readable_numbers(r.finding));
+  }
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const double centre = w.estimate_scaled[k];
+    std::string truth = "-";
+    if (w.truth_scaled) truth = r.set[k].contains((*w.truth_scaled)[k]) ? "inside" : "OUTSIDE";
+    g.scaled_rows.push_back({kScaled[k], interval_cell(r.search[k]), interval_cell(r.set[k]),
+                             half_width_percent(r.set[k], centre), truth});
+  }
+  if (r.verdict != identification::WindowedSetVerdict::empty) {
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      g.rig_rows.push_back({model::kParameterNames[k], model::kParameterUnits[k],
+                            interval_cell(w.rig_set[k]),
+                            short_number(100.0 * w.drive_share[k], 3) + " %"});
+    }
+  }
+  for (const identification::WindowRecord& record : r.windows) {
+    const bool whole = record.verdict == identification::WindowVerdict::contracted;
+    g.window_rows.push_back({std::to_string(record.recording), std::to_string(record.index),
+                             short_number(record.t0_s, 4) + " - " + short_number(record.t1_s, 4),
+                             short_number(record.reached_s, 4), std::to_string(record.readings),
+                             whole ? "carried"
+                                   : (record.verdict == identification::WindowVerdict::inconsistent
+                                          ? "inconsistent: "
+                                          : "flow stopped: ") +
+                                         readable_numbers(record.reason)});
+  }
+  g.notes.push_back("The data path's lag is in [" + short_number(r.lag_s.lo() * 1e3, 4) + ", " +
+                    short_number(r.lag_s.hi() * 1e3, 4) + "] ms; the pendulum's zero in [" +
+                    short_number(r.pendulum_zero_rad.lo(), 3) + ", " +
+                    short_number(r.pendulum_zero_rad.hi(), 3) + "] rad.");
+  for (const pipeline::EstimateOutsideSet& e : excluded) {
+    g.notes.push_back("Warning: " + windowed_excluded_text(e) + ".");
+  }
+  return g;
+}
+
 ReportInput report_page(const pipeline::Run& run, const std::string& software_version,
                         const std::vector<std::string>& signals_svg,
                         const std::string& paving_svg) {
@@ -125,6 +193,16 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
     for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {
       page.sivia->excludes_output_error.push_back(excluded_estimate_text(e));
     }
+  }
+  if (run.windowed) {
+    page.guaranteed = guaranteed_summary(*run.windowed, run.windowed_excludes_output_error);
+  } else if (run.settings.windowed.run) {
+    GuaranteedSummary skipped;
+    skipped.headline = "The windowed set inversion did not run.";
+    for (const pipeline::Warning& w : run.warnings) {
+      if (w.stage == pipeline::Warning::Stage::guaranteed) skipped.notes.push_back(w.text);
+    }
+    page.guaranteed = std::move(skipped);
   }
   if (run.simulation) {
     page.simulation =

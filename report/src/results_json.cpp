@@ -228,6 +228,142 @@ Json output_error_json(const pipeline::OutputError& oe) {
   return j;
 }
 
+namespace {
+
+constexpr const char* kScaledParameterNames[model::kParameterCount] = {
+    "mu1/g", "mu2/g", "mu3/g", "mu4/g", "mug/g", "b", "fv2/g"};
+
+Json intervals_json(const model::Parameters<interval::Interval>& p, bool scaled) {
+  Json j = Json::object();
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    j[scaled ? kScaledParameterNames[k] : model::kParameterNames[k]] = interval_json(p[k]);
+  }
+  return j;
+}
+
+const char* input_source_name(identification::InputSource s) {
+  switch (s) {
+    case identification::InputSource::encoder_counts:
+      return "encoder_counts";
+    case identification::InputSource::rest_check:
+      return "rest_check";
+    case identification::InputSource::duty_steps:
+      return "duty_steps";
+    case identification::InputSource::supply_readings:
+      return "supply_readings";
+    case identification::InputSource::data_sheet:
+      return "data_sheet";
+    case identification::InputSource::configured:
+      return "configured";
+    case identification::InputSource::cad:
+      return "cad";
+  }
+  return "configured";
+}
+
+const char* windowed_verdict_name(identification::WindowedSetVerdict v) {
+  switch (v) {
+    case identification::WindowedSetVerdict::contracted:
+      return "contracted";
+    case identification::WindowedSetVerdict::empty:
+      return "empty";
+    case identification::WindowedSetVerdict::unresolved:
+      return "unresolved";
+  }
+  return "unresolved";
+}
+
+const char* window_verdict_name(identification::WindowVerdict v) {
+  switch (v) {
+    case identification::WindowVerdict::inconsistent:
+      return "inconsistent";
+    case identification::WindowVerdict::contracted:
+      return "carried";
+    case identification::WindowVerdict::flow_failed:
+      return "flow_stopped";
+  }
+  return "flow_stopped";
+}
+
+}  // namespace
+
+Json windowed_json(const pipeline::WindowedGuaranteed& w,
+                   const std::vector<pipeline::EstimateOutsideSet>& excludes_output_error) {
+  const identification::WindowedSet& r = w.result;
+  Json j;
+  j["method"] = "windowed set inversion through the Taylor-model flow";
+  j["verdict"] = windowed_verdict_name(r.verdict);
+  j["finding"] = r.finding;
+  j["scaled_parameters"] = Json{
+      {"names", kScaledParameterNames},
+      {"definition",
+       "mu_k / g, b = (fv1 + k_w) / g, fv2 / g: g the drive's gain [N m per unit duty], k_w its "
+       "back-EMF damping [N m s]; the model with the applied duty as its input"}};
+  j["search"] =
+      Json{{"centre", "output-error estimate"}, {"sd", w.search_sd},
+           {"estimate_gain_nm", w.gain_nm},     {"estimate_back_emf_nm_s", w.back_emf_nm_s},
+           {"estimate_scaled", Json::object()}, {"box_scaled", intervals_json(r.search, true)}};
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    j["search"]["estimate_scaled"][kScaledParameterNames[k]] = w.estimate_scaled[k];
+  }
+  j["set_scaled"] = intervals_json(r.set, true);
+  if (r.verdict != identification::WindowedSetVerdict::empty) {
+    j["set_rig"] = intervals_json(w.rig_set, false);
+    Json share = Json::object();
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      share[model::kParameterNames[k]] = w.drive_share[k];
+    }
+    j["drive_share_of_rig_width"] = share;
+  }
+  if (w.truth_scaled) {
+    Json truth = Json::object();
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      truth[kScaledParameterNames[k]] = (*w.truth_scaled)[k];
+    }
+    j["truth_scaled"] = truth;
+  }
+  j["drive"] =
+      Json{{"gain_nm", interval_json(w.inputs.drive.gain_nm())},
+           {"back_emf_damping_nm_s", interval_json(w.inputs.drive.back_emf_damping_nm_s())}};
+  j["lag_s"] = interval_json(r.lag_s);
+  j["pendulum_zero_rad"] = interval_json(r.pendulum_zero_rad);
+  j["windows"] = Json::array();
+  for (const identification::WindowRecord& record : r.windows) {
+    j["windows"].push_back(Json{{"recording", record.recording},
+                                {"index", record.index},
+                                {"t0_s", record.t0_s},
+                                {"t1_s", record.t1_s},
+                                {"reached_s", record.reached_s},
+                                {"readings", record.readings},
+                                {"verdict", window_verdict_name(record.verdict)},
+                                {"reason", record.reason}});
+  }
+  j["set_after_step"] = Json::array();
+  for (const auto& p : r.set_after_step) j["set_after_step"].push_back(intervals_json(p, true));
+  j["seconds"] = r.seconds;
+  j["flow_seconds"] = r.flow_seconds;
+  j["flow_steps"] = r.flow_steps;
+  j["shrink_wraps"] = r.shrink_wraps;
+  j["physical_inputs"] = Json::array();
+  for (const identification::PhysicalInput& in : w.inputs.provenance) {
+    j["physical_inputs"].push_back(Json{{"quantity", in.quantity},
+                                        {"value", interval_json(in.value)},
+                                        {"unit", in.unit},
+                                        {"source", input_source_name(in.source)},
+                                        {"setting", in.setting}});
+  }
+  Json excluded = Json::array();
+  for (const pipeline::EstimateOutsideSet& e : excludes_output_error) {
+    excluded.push_back(Json{{"parameter", kScaledParameterNames[e.parameter]},
+                            {"output_error_estimate", e.estimate},
+                            {"set", interval_json(e.set)},
+                            {"sd_away", std::isinf(e.sd_away) ? Json(nullptr) : Json(e.sd_away)},
+                            {"text", windowed_excluded_text(e)}});
+  }
+  j["excludes_output_error"] = excluded;
+  return j;
+}
+
 Json results_json(const pipeline::Run& run, const std::string& software_version) {
   Json more = Json::object();
   if (run.output_error) more["output_error"] = output_error_json(*run.output_error);
@@ -247,6 +383,15 @@ Json results_json(const pipeline::Run& run, const std::string& software_version)
       }
       more["sivia"]["excludes_output_error"] = excluded;
     }
+  }
+  if (run.windowed) {
+    more["guaranteed"] = windowed_json(*run.windowed, run.windowed_excludes_output_error);
+  } else if (run.settings.windowed.run) {
+    std::string why;
+    for (const pipeline::Warning& w : run.warnings) {
+      if (w.stage == pipeline::Warning::Stage::guaranteed) why = w.text;
+    }
+    more["guaranteed"] = Json{{"verdict", "skipped"}, {"finding", why}};
   }
   if (run.simulation) more["simulation"] = simulation_json(*run.simulation);
   // Only when there is something to say: a consistent fit's results.json stays as it was.

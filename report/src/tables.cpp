@@ -122,6 +122,95 @@ std::string excluded_estimate_text(const pipeline::EstimateOutsideSet& e) {
   return s.str();
 }
 
+namespace {
+
+// The scaled parameters' names: mu's and friction per unit of the drive's gain.
+constexpr const char* kScaledNames[model::kParameterCount] = {"mu1/g", "mu2/g", "mu3/g", "mu4/g",
+                                                              "mug/g", "b",     "fv2/g"};
+
+const char* window_verdict_text(identification::WindowVerdict v) {
+  switch (v) {
+    case identification::WindowVerdict::inconsistent:
+      return "inconsistent";
+    case identification::WindowVerdict::contracted:
+      return "contracted";
+    case identification::WindowVerdict::flow_failed:
+      return "flow failed";
+  }
+  return "flow failed";
+}
+
+std::string percent_of(const interval::Interval& x, double centre) {
+  return centre != 0.0 ? "+-" + short_number(100.0 * x.rad() / std::abs(centre), 3) + " %" : "-";
+}
+
+}  // namespace
+
+std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
+  const identification::WindowedSet& r = w.result;
+  std::ostringstream s;
+  std::size_t contracted = 0;
+  for (const identification::WindowRecord& record : r.windows) {
+    contracted += record.verdict == identification::WindowVerdict::contracted;
+  }
+  s << "\nguaranteed set (windowed set inversion, " << r.windows.size() << " windows, "
+    << contracted << " carried through; " << short_number(r.seconds, 3) << " s):\n"
+    << "  searched: the output-error estimate +- " << short_number(w.search_sd, 3)
+    << " sd; parameters outside the search box are neither kept nor excluded\n";
+  if (r.verdict == identification::WindowedSetVerdict::empty) {
+    s << "  EMPTY: " << readable_numbers(r.finding) << "\n";
+    return s.str();
+  }
+  if (r.verdict == identification::WindowedSetVerdict::unresolved) {
+    s << "  nothing concluded: " << readable_numbers(r.finding) << "\n";
+    return s.str();
+  }
+  s << "  scaled (per unit of the drive's gain g; b = (fv1 + k_w) / g), half-widths against the "
+       "estimate:\n";
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const double centre = w.estimate_scaled[k];
+    s << "  " << kScaledNames[k] << " in " << interval_text(r.set[k].lo(), r.set[k].hi()) << "  "
+      << percent_of(r.set[k], centre) << " (searched " << percent_of(r.search[k], centre) << ")";
+    if (w.truth_scaled) {
+      s << (r.set[k].contains((*w.truth_scaled)[k]) ? "  contains the truth"
+                                                    : "  misses the truth");
+    }
+    s << "\n";
+  }
+  s << "  rig scale (times the drive's interval from [motor] and [guaranteed] "
+       "motor_tolerance_pct):\n";
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const interval::Interval& x = w.rig_set[k];
+    s << "  " << model::kParameterNames[k] << " in " << interval_text(x.lo(), x.hi()) << " "
+      << model::kParameterUnits[k] << "  (" << short_number(100.0 * w.drive_share[k], 3)
+      << " % of the width is the drive's)\n";
+  }
+  s << "  lag in [" << short_number(r.lag_s.lo() * 1e3, 4) << ", "
+    << short_number(r.lag_s.hi() * 1e3, 4) << "] ms, the pendulum's zero in ["
+    << short_number(r.pendulum_zero_rad.lo(), 3) << ", "
+    << short_number(r.pendulum_zero_rad.hi(), 3) << "] rad\n";
+  for (const identification::WindowRecord& record : r.windows) {
+    if (record.verdict == identification::WindowVerdict::contracted) continue;
+    s << "  window " << record.index << " of recording " << record.recording << " ("
+      << short_number(record.t0_s, 4) << "-" << short_number(record.t1_s, 4)
+      << " s): " << window_verdict_text(record.verdict) << " at "
+      << short_number(record.reached_s, 4) << " s: " << readable_numbers(record.reason) << "\n";
+  }
+  if (!r.finding.empty()) s << "  " << readable_numbers(r.finding) << "\n";
+  return s.str();
+}
+
+std::string windowed_excluded_text(const pipeline::EstimateOutsideSet& e) {
+  std::ostringstream s;
+  s << "the guaranteed set excludes the output-error estimate of " << kScaledNames[e.parameter]
+    << ": " << short_number(e.estimate, 4) << " lies "
+    << (std::isinf(e.sd_away) ? std::string("(its sd is 0)") : short_number(e.sd_away, 3) + " sd")
+    << " " << (e.estimate < e.set.lo() ? "below" : "above") << " "
+    << interval_text(e.set.lo(), e.set.hi())
+    << " (a physical input's bound is broken, or the model does not fit)";
+  return s.str();
+}
+
 std::string format_table_three(const std::vector<validated::ScenarioResult>& results) {
   std::ostringstream out;
   out << "Table III: coverage of the measurements by the tubes, over all samples (and over the "
@@ -200,6 +289,16 @@ std::string terminal_text_after_lsmi(const pipeline::Run& run) {
   if (run.sivia) text += sivia_summary_text(run.sivia->result, run.identification.truth);
   for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {
     text += "warning: " + excluded_estimate_text(e) + "\n";
+  }
+  if (run.windowed) {
+    text += windowed_summary_text(*run.windowed);
+  } else {
+    for (const pipeline::Warning& w : run.warnings) {
+      if (w.stage == pipeline::Warning::Stage::guaranteed) text += "warning: " + w.text + "\n";
+    }
+  }
+  for (const pipeline::EstimateOutsideSet& e : run.windowed_excludes_output_error) {
+    text += "warning: " + windowed_excluded_text(e) + "\n";
   }
   if (run.simulation) {
     text += simulation_summary_text(measurement_source_text(run.simulation->source),

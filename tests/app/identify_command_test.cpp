@@ -241,5 +241,68 @@ TEST_F(SimulatedTruth, SiviaAfterLsmiWritesThePavingAndContainsTheTruth) {
   EXPECT_NE(svg_text.str().find("fv1 [N m s]"), std::string::npos);
 }
 
+std::string file_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// --guaranteed searches around the refinement's estimate: without the refinement it says why it
+// did not run, in the terminal and in results.json, and the run still succeeds.
+TEST_F(SimulatedTruth, GuaranteedWithoutTheRefinementSaysWhyItDidNotRun) {
+  TempDir out_dir;
+  IdentifyCommandOptions options;
+  options.logs = {sessions_[0], sessions_[1]};
+  options.output_dir = out_dir.path();
+  options.guaranteed = true;
+  options.no_output_error = true;
+  std::ostringstream out, err;
+  ASSERT_EQ(run_identify_command(options, out, err), 0) << err.str();
+  EXPECT_NE(out.str().find("warning: guaranteed: skipped: the windows search around the "
+                           "output-error estimate"),
+            std::string::npos)
+      << out.str();
+  const std::string json = file_text(out_dir.path() / "results.json");
+  EXPECT_NE(json.find("\"verdict\": \"skipped\""), std::string::npos) << json;
+  EXPECT_NE(file_text(out_dir.path() / "report.html").find("did not run"), std::string::npos);
+}
+
+// The whole path as a user runs it, one window per session ([guaranteed] windows = 1): the set
+// around the fit keeps the truth, results.json holds it with its windows and physical inputs, the
+// report shows it.
+TEST_F(SimulatedTruth, GuaranteedWritesTheSetAroundTheFitWithTheTruthInside) {
+  TempDir out_dir;
+  std::string toml = file_text(FURUTA_SOURCE_DIR "/config/rig.toml");
+  const std::string windows = "\nwindows = 8 ";
+  const auto at = toml.find(windows);
+  ASSERT_NE(at, std::string::npos) << "config/rig.toml: no `windows = 8` in [guaranteed]";
+  toml.replace(at, windows.size(), "\nwindows = 1 ");
+  const fs::path config = out_dir.path() / "one-window.toml";
+  std::ofstream(config) << toml;
+  IdentifyCommandOptions options;
+  options.logs = {sessions_[0], sessions_[1]};
+  options.output_dir = out_dir.path() / "out";
+  options.config_path = config;
+  options.guaranteed = true;
+  std::ostringstream out, err;
+  ASSERT_EQ(run_identify_command(options, out, err), 0) << err.str();
+  const std::string text = out.str();
+  const auto section = text.find("guaranteed set (windowed set inversion, 2 windows");
+  ASSERT_NE(section, std::string::npos) << text;
+  const std::string guaranteed = text.substr(section);
+  std::printf("[ measured ] %s", guaranteed.c_str());
+  EXPECT_NE(guaranteed.find("b in ["), std::string::npos);
+  EXPECT_EQ(guaranteed.find("misses the truth"), std::string::npos) << guaranteed;
+  EXPECT_NE(guaranteed.find("lag in ["), std::string::npos);
+  const std::string json = file_text(options.output_dir / "results.json");
+  for (const char* key : {"\"guaranteed\"", "\"set_scaled\"", "\"set_rig\"", "\"windows\"",
+                          "\"physical_inputs\"", "\"verdict\": \"contracted\""}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  }
+  EXPECT_NE(file_text(options.output_dir / "report.html").find("id=\"guaranteed-scaled\""),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace furuta::app

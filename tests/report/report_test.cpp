@@ -513,7 +513,7 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
   EXPECT_EQ(tables["table-3"].first, static_cast<int>(scenario_rows));
   EXPECT_EQ(tables["sessions"].first, 3) << "two fitted, one held out";
   EXPECT_EQ(tables["lsmi-diagnostics"].first, 3);
-  EXPECT_EQ(check["sections"].get<int>(), 7);
+  EXPECT_EQ(check["sections"].get<int>(), 8);
   // Every tube that stopped short of its 0.3 s is a warning, and no other.
   std::size_t short_tubes = 0;
   for (const auto& r : results["simulation"]["results"]) {

@@ -24,6 +24,7 @@
 #include "furuta/identification/identify.hpp"
 #include "furuta/identification/output_error.hpp"
 #include "furuta/identification/physical.hpp"
+#include "furuta/identification/windowed_set.hpp"
 #include "furuta/interval/box.hpp"
 #include "furuta/model/model.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -124,15 +125,24 @@ struct OutputErrorSettings {
   identification::OutputErrorOptions options;
 };
 
+// The windowed set inversion (identification/windowed_set.hpp) over the output-error estimate +-
+// search_sd standard deviations: it runs after the refinement, and only when that converged.
+struct WindowedSettings {
+  bool run = false;
+  double search_sd = 5.0;
+  identification::WindowedSetOptions options;
+};
+
 struct Settings {
   identification::IdentifyOptions identify;  // preprocessing, LSMI, the input lag
   OutputErrorSettings output_error;
   SiviaSettings sivia;
+  WindowedSettings windowed;
   SimulationSettings simulation;
 };
 
 // The configuration's settings: [identification] as IdentifyOptions, [output_error] (run as
-// its `enabled` says), [sivia]; SIVIA and the scenarios off.
+// its `enabled` says), [sivia], [guaranteed]'s windows; SIVIA, the windows and the scenarios off.
 Settings settings_for(const config::RigConfig& rig);
 // [sivia]'s bounds on the preprocessed data (SIVIA's data boxes, the figures' bands), and
 // whether the configuration gives any (a configuration without them leaves them all 0).
@@ -153,6 +163,9 @@ class Progress {
                         const identification::OutputErrorResult* /*refined*/) {}
   virtual void sivia(std::size_t /*tested*/, std::size_t /*pending*/) {}  // per generation
   virtual void sivia_done() {}
+  // The windowed set inversion: after each of its steps (the k-th windows of every recording).
+  virtual void windows(std::size_t /*done*/, std::size_t /*total*/) {}
+  virtual void windows_done() {}
   virtual void scenario(const validated::Scenario& /*scenario*/,
                         const std::string& /*parameter_set*/) {}  // before each tube
   virtual void scenarios_done() {}
@@ -165,6 +178,26 @@ struct Guaranteed {
   identification::GuaranteedResult result;
   std::vector<identification::IntervalSample> samples;  // the data boxes, in constraint order
   identification::DataErrorBounds bounds;
+};
+
+// The windowed set inversion's result with what it started from. Its set is in the scaled
+// parameters (physical_inputs.hpp), which the data determine; the rig's follow with the drive's
+// tolerance.
+struct WindowedGuaranteed {
+  identification::PhysicalInputs inputs;
+  double search_sd = 0;
+  // The estimate's own drive: what its scaled parameters are computed with.
+  double gain_nm = 0, back_emf_nm_s = 0;
+  model::Parameters<double> estimate_scaled, std_dev_scaled;
+  // Simulated sessions: their truth scaled with the estimate's drive (the rig's, up to the
+  // refinement's input gains).
+  std::optional<model::Parameters<double>> truth_scaled;
+  identification::WindowedSet result;
+  // rig_parameters(result.set, inputs.drive): every rig parameter the set allows for every drive.
+  model::Parameters<interval::Interval> rig_set;
+  // The part of rig_set's widths a point scaled set would still have (the drive's alone), per
+  // parameter, as a fraction of rig_set's width.
+  model::Parameters<double> drive_share{};
 };
 
 // Where the scenarios' "measurements" came from (the simulated rig with these parameters).
@@ -243,7 +276,7 @@ struct OutputError {
 struct Warning {
   // physical: the LSMI estimate is outside the physical region (docs/model.md), or its
   // magnitudes are no rig's; the text names the likely recording mistake.
-  enum class Stage { data, lsmi, physical, output_error, sivia, simulation };
+  enum class Stage { data, lsmi, physical, output_error, sivia, guaranteed, simulation };
   Stage stage = Stage::data;
   std::string text;
 };
@@ -283,6 +316,10 @@ struct Run {
   // SIVIA's set against the output-error estimate (when both ran and the fit converged): the
   // report and the terminal say each.
   std::vector<EstimateOutsideSet> sivia_excludes_output_error;
+  // settings.windowed.run, when the refinement converged; and its set against the refinement's
+  // estimate (scaled, in its scaled sd).
+  std::optional<WindowedGuaranteed> windowed;
+  std::vector<EstimateOutsideSet> windowed_excludes_output_error;
   std::optional<Simulation> simulation;  // settings.simulation.run
   std::vector<Warning> warnings;
 };

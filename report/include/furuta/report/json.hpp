@@ -77,6 +77,11 @@ Json paving_json(const pipeline::Guaranteed& guaranteed);
 // pendulum's zero offset, the input gains, the angle residuals per joint, segments, iterations,
 // convergence and, with a held-out recording, both parameter sets' free-run RMSE on it.
 Json output_error_json(const pipeline::OutputError& output_error);
+// The windowed set inversion (identify --guaranteed): the search box and the set, scaled and at
+// the rig's scale, the lag, every window with how far its flow carried it, the physical inputs
+// with their sources (docs/outputs.md says what each field promises).
+Json windowed_json(const pipeline::WindowedGuaranteed& windowed,
+                   const std::vector<pipeline::EstimateOutsideSet>& excludes_output_error);
 
 // results.json of a run: results_json above with "sivia" (naming paving.json in "paving_file")
 // and "simulation" and "output_error" when they ran.

@@ -87,6 +87,15 @@ struct SimulationSummary {
 
 // Everything the page shows, as plain data. Absent parts are said to be absent (not run, no
 // held-out session), never left out silently.
+// The windowed set inversion (identify --guaranteed) as the page shows it: rows of text.
+struct GuaranteedSummary {
+  std::string headline;                               // windows, verdict, time, the search box
+  std::vector<std::vector<std::string>> scaled_rows;  // parameter, searched, set, +-%, truth
+  std::vector<std::vector<std::string>> rig_rows;     // parameter, unit, set, drive's share
+  std::vector<std::vector<std::string>> window_rows;  // recording, window, times, verdict
+  std::vector<std::string> notes;                     // the lag, exclusions, why it stopped
+};
+
 struct ReportInput {
   std::string title = "Identification report";
   std::string software_version;
@@ -110,7 +119,8 @@ struct ReportInput {
   std::optional<ValidationSummary> validation;  // Fig. 5
 
   std::vector<IntervalRow> table_two;
-  std::optional<SiviaSummary> sivia;  // Fig. 4; absent: --sivia not given
+  std::optional<SiviaSummary> sivia;            // Fig. 4; absent: --sivia not given
+  std::optional<GuaranteedSummary> guaranteed;  // absent: --guaranteed not given
 
   std::optional<SimulationSummary> simulation;  // Table III, Fig. 6; absent: --simulate not given
 
@@ -140,6 +150,10 @@ std::vector<IntervalRow> table_two(const model::Parameters<double>& lsmi,
                                    const config::SiviaConfig& sivia,
                                    const identification::GuaranteedResult* result);
 SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::string svg);
+// The windowed set inversion's section: its set against the search box (and the truth when the
+// sessions are simulated), at the rig's scale, its windows, the lag and the exclusions.
+GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& windowed,
+                                     const std::vector<pipeline::EstimateOutsideSet>& excluded);
 
 // What the struct itself shows to be wary of: damaged or cut-short logs and fatal faults, an
 // empty or truncated SIVIA set, samples SIVIA tolerated, tubes that ended early.

@@ -43,6 +43,11 @@ std::string sivia_summary_text(const identification::GuaranteedResult& result,
 // "the set excludes the output-error estimate of fv2: 6.42e-04 lies 3.2 sd above [a, b] (the set
 // rests on [sivia]'s assumed bounds)": one line, no newline.
 std::string excluded_estimate_text(const pipeline::EstimateOutsideSet& excluded);
+// The windowed set inversion's result: the windows, the scaled set against its search box (and
+// the truth, simulated sessions), the rig-scale set with the drive's share of each width.
+std::string windowed_summary_text(const pipeline::WindowedGuaranteed& windowed);
+// A parameter of the output-error estimate outside the windowed set (scaled, in scaled sd).
+std::string windowed_excluded_text(const pipeline::EstimateOutsideSet& excluded);
 
 // Table III: per scenario and parameter set, time reached, steps, coverage of q2 (both modes,
 // over all samples and over those reached) and q1, the q2 tube's mean width, the status; with
