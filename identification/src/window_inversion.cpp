@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <stdexcept>
 
 #include "furuta/validated/taylor_model.hpp"
@@ -785,6 +786,20 @@ WindowOutcome invert_windows(const std::vector<RecordingWindow>& windows,
 }  // namespace furuta::identification
 
 namespace furuta::identification {
+
+WindowOptions default_window_options() {
+  WindowOptions o;
+  o.flow.integrator.order = 8;
+  o.flow.integrator.tolerance = 1e-8;
+  o.flow.integrator.max_inflation = 1.0;
+  o.flow.integrator.max_width = 2 * std::numbers::pi;
+  o.flow.space_order = 3;
+  o.flow.wrap_without_collapsed = true;
+  o.flow.wrap_at_base_point = true;
+  o.flow.shrink_wrap_max_delta = 1.0;
+  o.max_passes = 3;
+  return o;
+}
 
 WindowOutcome invert_window(const RecordingWindow& window,
                             const model::Parameters<Interval>& parameters,

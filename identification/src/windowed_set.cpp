@@ -79,20 +79,6 @@ Interval symmetric(double r) {
 
 }  // namespace
 
-WindowOptions default_window_options() {
-  WindowOptions o;
-  o.flow.integrator.order = 8;
-  o.flow.integrator.tolerance = 1e-8;
-  o.flow.integrator.max_inflation = 1.0;
-  o.flow.integrator.max_width = 2 * std::numbers::pi;
-  o.flow.space_order = 3;
-  o.flow.wrap_without_collapsed = true;
-  o.flow.wrap_at_base_point = true;
-  o.flow.shrink_wrap_max_delta = 1.0;
-  o.max_passes = 3;
-  return o;
-}
-
 ChainStart chain_start(const OeExperiment& e, const PhysicalInputs& in,
                        const model::Parameters<Interval>& search,
                        const WindowedSetOptions& options) {

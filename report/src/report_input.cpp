@@ -78,8 +78,6 @@ std::string half_width_percent(const interval::Interval& x, double centre) {
 
 GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
                                      const std::vector<pipeline::EstimateOutsideSet>& excluded) {
-  static constexpr const char* kScaled[model::kParameterCount] = {
-      "mu1/g", "mu2/g", "mu3/g", "mu4/g", "mug/g", "b", "fv2/g"};
   const identification::WindowedSet& r = w.result;
   GuaranteedSummary g;
   std::size_t carried = 0;
@@ -101,8 +99,8 @@ GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
     const double centre = w.estimate_scaled[k];
     std::string truth = "-";
     if (w.truth_scaled) truth = r.set[k].contains((*w.truth_scaled)[k]) ? "inside" : "OUTSIDE";
-    g.scaled_rows.push_back({kScaled[k], interval_cell(r.search[k]), interval_cell(r.set[k]),
-                             half_width_percent(r.set[k], centre), truth});
+    g.scaled_rows.push_back({identification::kScaledParameterNames[k], interval_cell(r.search[k]),
+                             interval_cell(r.set[k]), half_width_percent(r.set[k], centre), truth});
   }
   if (r.verdict != identification::WindowedSetVerdict::empty) {
     for (std::size_t k = 0; k < model::kParameterCount; ++k) {

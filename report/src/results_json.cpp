@@ -230,8 +230,7 @@ Json output_error_json(const pipeline::OutputError& oe) {
 
 namespace {
 
-constexpr const char* kScaledParameterNames[model::kParameterCount] = {
-    "mu1/g", "mu2/g", "mu3/g", "mu4/g", "mug/g", "b", "fv2/g"};
+using identification::kScaledParameterNames;
 
 Json intervals_json(const model::Parameters<interval::Interval>& p, bool scaled) {
   Json j = Json::object();

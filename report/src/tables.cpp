@@ -124,9 +124,7 @@ std::string excluded_estimate_text(const pipeline::EstimateOutsideSet& e) {
 
 namespace {
 
-// The scaled parameters' names: mu's and friction per unit of the drive's gain.
-constexpr const char* kScaledNames[model::kParameterCount] = {"mu1/g", "mu2/g", "mu3/g", "mu4/g",
-                                                              "mug/g", "b",     "fv2/g"};
+using identification::kScaledParameterNames;
 
 const char* window_verdict_text(identification::WindowVerdict v) {
   switch (v) {
@@ -169,8 +167,9 @@ std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
        "estimate:\n";
   for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     const double centre = w.estimate_scaled[k];
-    s << "  " << kScaledNames[k] << " in " << interval_text(r.set[k].lo(), r.set[k].hi()) << "  "
-      << percent_of(r.set[k], centre) << " (searched " << percent_of(r.search[k], centre) << ")";
+    s << "  " << kScaledParameterNames[k] << " in " << interval_text(r.set[k].lo(), r.set[k].hi())
+      << "  " << percent_of(r.set[k], centre) << " (searched " << percent_of(r.search[k], centre)
+      << ")";
     if (w.truth_scaled) {
       s << (r.set[k].contains((*w.truth_scaled)[k]) ? "  contains the truth"
                                                     : "  misses the truth");
@@ -202,8 +201,8 @@ std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
 
 std::string windowed_excluded_text(const pipeline::EstimateOutsideSet& e) {
   std::ostringstream s;
-  s << "the guaranteed set excludes the output-error estimate of " << kScaledNames[e.parameter]
-    << ": " << short_number(e.estimate, 4) << " lies "
+  s << "the guaranteed set excludes the output-error estimate of "
+    << kScaledParameterNames[e.parameter] << ": " << short_number(e.estimate, 4) << " lies "
     << (std::isinf(e.sd_away) ? std::string("(its sd is 0)") : short_number(e.sd_away, 3) + " sd")
     << " " << (e.estimate < e.set.lo() ? "below" : "above") << " "
     << interval_text(e.set.lo(), e.set.hi())

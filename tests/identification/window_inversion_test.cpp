@@ -80,17 +80,11 @@ Box start_around(const model::PendulumState& s) {
 }
 
 WindowOptions options() {
-  WindowOptions o;
-  o.flow.integrator.order = 8;
-  o.flow.integrator.tolerance = 1e-8;
-  o.flow.integrator.max_inflation = 1.0;
-  o.flow.integrator.max_width = 2 * std::numbers::pi;
-  o.flow.space_order = 3;
-  o.flow.wrap_without_collapsed = true;
-  o.flow.wrap_at_base_point = true;
+  WindowOptions o = default_window_options();
   // No shrink wrap: the start variables keep their meaning through the window, so that every
   // reading constrains the same start.
   o.flow.shrink_wrap_max_delta = 0.0;
+  o.max_passes = 1;
   return o;
 }
 

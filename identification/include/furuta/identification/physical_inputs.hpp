@@ -72,6 +72,11 @@ struct PhysicalInputs {
 PhysicalInputs physical_inputs(const config::RigConfig& rig,
                                std::span<const double> supply_readings_v);
 
+// The scaled parameters' names, in model::kParameterNames' order: mu_k / g, b = (fv1 + k_w) / g,
+// fv2 / g.
+inline constexpr const char* kScaledParameterNames[model::kParameterCount] = {
+    "mu1/g", "mu2/g", "mu3/g", "mu4/g", "mug/g", "b", "fv2/g"};
+
 // The scaled parameters of p (see above) for the drive: every rig parameter in `p` maps into the
 // result, for every drive in `drive`.
 model::Parameters<Interval> scaled_parameters(const model::Parameters<Interval>& p,

@@ -72,6 +72,10 @@ struct WindowOptions {
   double restart_fraction = 0.8;
 };
 
+// The settings recordings are inverted with: Taylor order 8 in time, models of order 3 in the
+// variables, shrink wraps tying the start variables, three passes.
+WindowOptions default_window_options();
+
 enum class WindowVerdict {
   inconsistent,  // no parameter in the box explains the window from any start in the box
   contracted,    // the box, shrunk (possibly not at all) to what the window allows

@@ -29,10 +29,6 @@
 
 namespace furuta::identification {
 
-// The flow and contraction settings the windows are inverted with: Taylor order 8 in time,
-// models of order 3 in the variables, shrink wraps tying the start variables, three passes.
-WindowOptions default_window_options();
-
 struct WindowedSetOptions {
   double window_s = 0.25;             // each window's longest length
   std::size_t windows = 8;            // per recording, chained from its first command
