@@ -61,11 +61,11 @@ const Sessions& sessions() {
   return s;
 }
 
-model::Parameters<Interval> around(const model::Parameters<double>& p, double relative) {
+model::Parameters<Interval> relative_box(const model::Parameters<double>& p, double relative) {
   return p.map([&](double v) { return Interval(v) * Interval(1 - relative, 1 + relative); });
 }
 
-bool inside(const model::Parameters<double>& p, const model::Parameters<Interval>& box) {
+bool inside_box(const model::Parameters<double>& p, const model::Parameters<Interval>& box) {
   for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (!box[k].contains(p[k])) return false;
   }
@@ -84,10 +84,10 @@ WindowedSetOptions options(std::size_t windows) {
 // the set, the damping b is narrowed, and the lag is pinned inside [guaranteed] lag_ms.
 TEST(WindowedSet, OnSimulatedSessionsTheTruthAndTheLagAreKept) {
   const Sessions& s = sessions();
-  const model::Parameters<Interval> search = around(s.truth_scaled, 0.003);
+  const model::Parameters<Interval> search = relative_box(s.truth_scaled, 0.003);
   const WindowedSet out = invert_recordings(s.experiments, s.inputs, search, options(1));
   ASSERT_EQ(out.verdict, WindowedSetVerdict::contracted) << out.finding;
-  EXPECT_TRUE(inside(s.truth_scaled, out.set));
+  EXPECT_TRUE(inside_box(s.truth_scaled, out.set));
   EXPECT_LT(out.set.fv1.width(), 0.8 * search.fv1.width());
   EXPECT_LT(out.lag_s.width(), 0.5 * s.inputs.lag_s.width());
   EXPECT_EQ(out.windows.size(), 2u);
@@ -107,14 +107,14 @@ TEST(WindowedSet, ASearchBoxTheDataExcludeIsProvenEmpty) {
   model::Parameters<double> wrong = s.truth_scaled;
   wrong.fv1 *= 1.02;
   const WindowedSet out =
-      invert_recordings(s.experiments, s.inputs, around(wrong, 0.003), options(1));
+      invert_recordings(s.experiments, s.inputs, relative_box(wrong, 0.003), options(1));
   EXPECT_EQ(out.verdict, WindowedSetVerdict::empty) << out.finding;
   EXPECT_NE(out.finding.find("no parameter of the search box"), std::string::npos) << out.finding;
 }
 
 TEST(WindowedSet, RecordingsTheWindowsCannotStartFromAreRefused) {
   const Sessions& s = sessions();
-  const model::Parameters<Interval> search = around(s.truth_scaled, 0.003);
+  const model::Parameters<Interval> search = relative_box(s.truth_scaled, 0.003);
   const auto refused = [&](OeExperiment e, const std::string& why) {
     try {
       (void)chain_start(e, s.inputs, search, options(1));
