@@ -118,4 +118,9 @@ inline std::string dash_fixed(double v, int digits) {
   return or_dash(v, fixed(v, digits));
 }
 
+// An interval's half-width as a percentage of `centre` ("+-0.12 %"), "-" for a centre of 0.
+inline std::string half_width_percent(double rad, double centre) {
+  return centre != 0.0 ? "+-" + short_number(100.0 * rad / std::abs(centre), 3) + " %" : "-";
+}
+
 }  // namespace furuta::report

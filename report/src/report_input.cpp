@@ -70,10 +70,6 @@ std::string interval_cell(const interval::Interval& x) {
   return "[" + sci(x.lo(), 5) + ", " + sci(x.hi(), 5) + "]";
 }
 
-std::string half_width_percent(const interval::Interval& x, double centre) {
-  return centre != 0.0 ? "+-" + short_number(100.0 * x.rad() / std::abs(centre), 3) + " %" : "-";
-}
-
 }  // namespace
 
 GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
@@ -100,7 +96,8 @@ GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
     std::string truth = "-";
     if (w.truth_scaled) truth = r.set[k].contains((*w.truth_scaled)[k]) ? "inside" : "OUTSIDE";
     g.scaled_rows.push_back({identification::kScaledParameterNames[k], interval_cell(r.search[k]),
-                             interval_cell(r.set[k]), half_width_percent(r.set[k], centre), truth});
+                             interval_cell(r.set[k]), half_width_percent(r.set[k].rad(), centre),
+                             truth});
   }
   if (r.verdict != identification::WindowedSetVerdict::empty) {
     for (std::size_t k = 0; k < model::kParameterCount; ++k) {
@@ -110,15 +107,12 @@ GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
     }
   }
   for (const identification::WindowRecord& record : r.windows) {
-    const bool whole = record.verdict == identification::WindowVerdict::contracted;
+    const bool carried_whole = record.verdict == identification::WindowVerdict::contracted;
     g.window_rows.push_back({std::to_string(record.recording), std::to_string(record.index),
                              short_number(record.t0_s, 4) + " - " + short_number(record.t1_s, 4),
                              short_number(record.reached_s, 4), std::to_string(record.readings),
-                             whole ? "carried"
-                                   : (record.verdict == identification::WindowVerdict::inconsistent
-                                          ? "inconsistent: "
-                                          : "flow stopped: ") +
-                                         readable_numbers(record.reason)});
+                             std::string(window_verdict_name(record.verdict)) +
+                                 (carried_whole ? "" : ": " + readable_numbers(record.reason))});
   }
   g.notes.push_back("The data path's lag is in [" + short_number(r.lag_s.lo() * 1e3, 4) + ", " +
                     short_number(r.lag_s.hi() * 1e3, 4) + "] ms; the pendulum's zero in [" +

@@ -272,18 +272,6 @@ const char* windowed_verdict_name(identification::WindowedSetVerdict v) {
   return "unresolved";
 }
 
-const char* window_verdict_name(identification::WindowVerdict v) {
-  switch (v) {
-    case identification::WindowVerdict::inconsistent:
-      return "inconsistent";
-    case identification::WindowVerdict::contracted:
-      return "carried";
-    case identification::WindowVerdict::flow_failed:
-      return "flow_stopped";
-  }
-  return "flow_stopped";
-}
-
 }  // namespace
 
 Json windowed_json(const pipeline::WindowedGuaranteed& w,

@@ -126,22 +126,6 @@ namespace {
 
 using identification::kScaledParameterNames;
 
-const char* window_verdict_text(identification::WindowVerdict v) {
-  switch (v) {
-    case identification::WindowVerdict::inconsistent:
-      return "inconsistent";
-    case identification::WindowVerdict::contracted:
-      return "contracted";
-    case identification::WindowVerdict::flow_failed:
-      return "flow failed";
-  }
-  return "flow failed";
-}
-
-std::string percent_of(const interval::Interval& x, double centre) {
-  return centre != 0.0 ? "+-" + short_number(100.0 * x.rad() / std::abs(centre), 3) + " %" : "-";
-}
-
 }  // namespace
 
 std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
@@ -168,8 +152,8 @@ std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
   for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     const double centre = w.estimate_scaled[k];
     s << "  " << kScaledParameterNames[k] << " in " << interval_text(r.set[k].lo(), r.set[k].hi())
-      << "  " << percent_of(r.set[k], centre) << " (searched " << percent_of(r.search[k], centre)
-      << ")";
+      << "  " << half_width_percent(r.set[k].rad(), centre) << " (searched "
+      << half_width_percent(r.search[k].rad(), centre) << ")";
     if (w.truth_scaled) {
       s << (r.set[k].contains((*w.truth_scaled)[k]) ? "  contains the truth"
                                                     : "  misses the truth");
@@ -192,11 +176,23 @@ std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
     if (record.verdict == identification::WindowVerdict::contracted) continue;
     s << "  window " << record.index << " of recording " << record.recording << " ("
       << short_number(record.t0_s, 4) << "-" << short_number(record.t1_s, 4)
-      << " s): " << window_verdict_text(record.verdict) << " at "
+      << " s): " << window_verdict_name(record.verdict) << " at "
       << short_number(record.reached_s, 4) << " s: " << readable_numbers(record.reason) << "\n";
   }
   if (!r.finding.empty()) s << "  " << readable_numbers(r.finding) << "\n";
   return s.str();
+}
+
+const char* window_verdict_name(identification::WindowVerdict v) {
+  switch (v) {
+    case identification::WindowVerdict::inconsistent:
+      return "inconsistent";
+    case identification::WindowVerdict::contracted:
+      return "carried";
+    case identification::WindowVerdict::flow_failed:
+      return "flow_stopped";
+  }
+  return "flow_stopped";
 }
 
 std::string windowed_excluded_text(const pipeline::EstimateOutsideSet& e) {

@@ -46,6 +46,9 @@ std::string excluded_estimate_text(const pipeline::EstimateOutsideSet& excluded)
 // The windowed set inversion's result: the windows, the scaled set against its search box (and
 // the truth, simulated sessions), the rig-scale set with the drive's share of each width.
 std::string windowed_summary_text(const pipeline::WindowedGuaranteed& windowed);
+// A window's verdict as results.json and the outputs name it: carried (its flow reached its
+// end), flow_stopped, inconsistent.
+const char* window_verdict_name(identification::WindowVerdict verdict);
 // A parameter of the output-error estimate outside the windowed set (scaled, in scaled sd).
 std::string windowed_excluded_text(const pipeline::EstimateOutsideSet& excluded);
 
