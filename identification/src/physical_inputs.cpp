@@ -132,11 +132,19 @@ Interval DriveData::back_emf_damping_nm_s() const {
   return factor_nm_per_rpm * Interval(ratio) * Interval(ratio) * rpm_per_rad_s();
 }
 
+namespace {
+
+// k_w / g = N (60 / 2 pi) / omega0_s: F cancels in the back-EMF's part of b = (fv1 + k_w) / g.
+Interval back_emf_per_gain(const DriveData& drive) {
+  return Interval(drive.ratio) * rpm_per_rad_s() / drive.no_load_rpm;
+}
+
+}  // namespace
+
 model::Parameters<Interval> scaled_parameters(const model::Parameters<Interval>& p,
                                               const DriveData& drive) {
   const Interval g = drive.gain_nm();
-  // b = (fv1 + k_w) / g = fv1 / g + N (60 / 2 pi) / omega0_s: F cancels in the back-EMF's part.
-  const Interval back_emf = Interval(drive.ratio) * rpm_per_rad_s() / drive.no_load_rpm;
+  const Interval back_emf = back_emf_per_gain(drive);
   return {p.mu1 / g, p.mu2 / g, p.mu3 / g, p.mu4 / g, p.mug / g, p.fv1 / g + back_emf, p.fv2 / g};
 }
 
@@ -148,6 +156,13 @@ model::Parameters<Interval> rig_parameters(const model::Parameters<Interval>& th
       drive.factor_nm_per_rpm * n * (theta.fv1 * drive.no_load_rpm - n * rpm_per_rad_s());
   return {theta.mu1 * g, theta.mu2 * g, theta.mu3 * g, theta.mu4 * g,
           theta.mug * g, fv1,           theta.fv2 * g};
+}
+
+model::Parameters<Interval> rig_parameters_per_gain(const model::Parameters<Interval>& theta,
+                                                    const DriveData& drive) {
+  model::Parameters<Interval> out = theta;
+  out.fv1 = theta.fv1 - back_emf_per_gain(drive);
+  return out;
 }
 
 }  // namespace furuta::identification

@@ -87,6 +87,17 @@ Simulation run_simulation(const SimulationSettings& settings, const Run& run, co
     sets.push_back(
         validated::point_parameters(kOutputErrorSetName, run.output_error->result.estimate));
   }
+  if (run.windowed && run.windowed->result.verdict != identification::WindowedSetVerdict::empty) {
+    // The scaled set as the rig's parameters per unit of gain under the torque per unit of gain:
+    // the drive's tolerance then stays in one variable instead of widening all seven.
+    const identification::DriveData& drive = run.windowed->inputs.drive;
+    validated::ParameterSet set;
+    set.name = kWindowedSetName;
+    set.parameters = identification::rig_parameters_per_gain(run.windowed->result.set, drive);
+    set.torque_scale = interval::Interval(1.0) / drive.gain_nm();
+    set.taylor_models = true;
+    sets.push_back(std::move(set));
+  }
   MeasurementSource source;
   source.kind = batch.truth ? MeasurementSource::Kind::sessions_truth
                             : MeasurementSource::Kind::configured_rig;

@@ -81,7 +81,7 @@ Simulation simulate(const std::vector<validated::Scenario>& scenarios,
     for (const validated::ParameterSet& set : sets) {
       if (progress != nullptr) progress->scenario(scenario, set.name);
       const validated::ScenarioTubes tubes = validated::run_scenario_tubes(
-          scenario, set.parameters, out.uncertainty, out.integrator,
+          scenario, set, out.uncertainty, out.integrator,
           validated::scenario_split_options(pieces, scenario.duration_s));
       out.results.push_back(
           validated::evaluate_tubes(scenario, set, out.uncertainty, measurement, tubes));

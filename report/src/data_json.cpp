@@ -7,11 +7,15 @@ namespace furuta::report {
 
 namespace {
 
-// The tubes' components: the state, then the parameters when they are carried as state.
+// The tubes' components: the state, then the parameters when they are carried as state, then the
+// torque when it is carried too (validated::run_scenario_taylor_models).
 constexpr const char* kComponents[] = {"q1",  "dq1", "q2",  "dq2", "mu1", "mu2",
-                                       "mu3", "mu4", "mug", "fv1", "fv2"};
+                                       "mu3", "mu4", "mug", "fv1", "fv2", "tau"};
 constexpr const char* kUnits[] = {"rad",    "rad/s",  "rad",         "rad/s", "kg m^2", "kg m^2",
-                                  "kg m^2", "kg m^2", "kg m^2 s^-2", "N m s", "N m s"};
+                                  "kg m^2", "kg m^2", "kg m^2 s^-2", "N m s", "N m s",  "N m"};
+// The same per unit of a drive gain in N m (a set whose torque_scale is not 1).
+constexpr const char* kUnitsPerGain[] = {"rad", "rad/s", "rad", "rad/s", "s^2", "s^2",
+                                         "s^2", "s^2",   "1",   "s",     "s",   "1"};
 
 Json tube_json(const validated::ScenarioResult& r, const pipeline::TubeSet& tubes) {
   Json run;
@@ -29,11 +33,13 @@ Json tube_json(const validated::ScenarioResult& r, const pipeline::TubeSet& tube
   run["status"] = validated::to_string(r.status);
   run["t_reached_s"] = r.t_reached_s;
   run["steps"] = r.steps;
+  const bool per_gain = r.parameters.torque_scale != interval::Interval(1.0);
+  if (per_gain) run["torque_scale"] = interval_json(r.parameters.torque_scale);
   run["components"] = Json::array();
   run["units"] = Json::array();
   for (std::size_t i = 0; i < tubes.dimension && i < std::size(kComponents); ++i) {
     run["components"].push_back(kComponents[i]);
-    run["units"].push_back(kUnits[i]);
+    run["units"].push_back(per_gain ? kUnitsPerGain[i] : kUnits[i]);
   }
   // What the integrator was given: the start box (at the pieces' t_start_s) and the torque.
   run["initial_box"] = box_json(tubes.initial);

@@ -453,6 +453,9 @@ void section_simulation(Html& h, const ReportInput& in) {
                 "and (in parentheses) over those the tube reached; \"step\" is the paper's test, "
                 "\"interp.\" the enclosure at the sample's instant. The paper, q2 step: "
                 "46/61/38/25 % with interval parameters, 41/34/20/21 % with LSMI.");
+    for (const std::string& note : per_gain_set_notes(in.simulation->results)) {
+      h.paragraph(note + ".");
+    }
     table_three(h, in.simulation->results);
     figures_six(h, in.simulation->results);
   } else {

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "commands.hpp"
@@ -270,7 +271,8 @@ TEST_F(SimulatedTruth, GuaranteedWithoutTheRefinementSaysWhyItDidNotRun) {
 
 // The whole path as a user runs it, one window per session ([guaranteed] windows = 1): the set
 // around the fit keeps the truth, results.json holds it with its windows and physical inputs, the
-// report shows it.
+// report shows it; with --simulate (short scenarios) Table III has its rows, per unit of the
+// drive's gain, and every measurement they reach is inside them.
 TEST_F(SimulatedTruth, GuaranteedWritesTheSetAroundTheFitWithTheTruthInside) {
   TempDir out_dir;
   std::string toml = file_text(FURUTA_SOURCE_DIR "/config/rig.toml");
@@ -285,9 +287,35 @@ TEST_F(SimulatedTruth, GuaranteedWritesTheSetAroundTheFitWithTheTruthInside) {
   options.output_dir = out_dir.path() / "out";
   options.config_path = config;
   options.guaranteed = true;
+  options.simulate = true;
+  options.simulate_seconds = 0.1;
   std::ostringstream out, err;
   ASSERT_EQ(run_identify_command(options, out, err), 0) << err.str();
   const std::string text = out.str();
+  EXPECT_NE(text.find("guaranteed: every rig the set allows, as its parameters per unit of the "
+                      "drive's gain"),
+            std::string::npos)
+      << text;
+  const nlohmann::json tubes = nlohmann::json::parse(file_text(options.output_dir / "tubes.json"));
+  std::size_t guaranteed_runs = 0;
+  for (const nlohmann::json& run : tubes["runs"]) {
+    if (run["parameter_set"] != "guaranteed") continue;
+    ++guaranteed_runs;
+    EXPECT_EQ(run["components"].size(), 12U);
+    EXPECT_EQ(run["components"][11], "tau");
+    EXPECT_EQ(run["units"][4], "s^2");
+    ASSERT_TRUE(run.contains("torque_scale"));
+    EXPECT_LT(run["torque_scale"][0].get<double>(), run["torque_scale"][1].get<double>());
+  }
+  EXPECT_EQ(guaranteed_runs, 4U);
+  const nlohmann::json results =
+      nlohmann::json::parse(file_text(options.output_dir / "results.json"));
+  for (const nlohmann::json& r : results["simulation"]["results"]) {
+    if (r["parameter_set"] != "guaranteed") continue;
+    const nlohmann::json& c = r["coverage"]["q2_step"];
+    EXPECT_GT(c["in_time"].get<int>(), 0) << r["label"];
+    EXPECT_EQ(c["covered"], c["in_time"]) << r["label"];
+  }
   const auto section = text.find("guaranteed set (windowed set inversion, 2 windows");
   ASSERT_NE(section, std::string::npos) << text;
   const std::string guaranteed = text.substr(section);

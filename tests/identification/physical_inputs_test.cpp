@@ -115,6 +115,34 @@ TEST(PhysicalInputs, ScaledParametersMapBothWaysAndTheGainSetsTheFloor) {
   }
 }
 
+// Per unit of the gain: the rig's parameters over its gain, p / g, are inside what the scaled
+// truth gives for every drive (the simulated rig's own drive among them), far narrower than the
+// rig parameters themselves; a b with the back-EMF's part left in would not hold fv1 / g.
+TEST(PhysicalInputs, PerUnitOfGainTheScaledSetHoldsTheRigOverItsGain) {
+  const config::RigConfig rig = shipped_rig();
+  const PhysicalInputs in = physical_inputs(rig, supply_readings(rig, 200));
+  const model::Parameters<double> truth = rig.simulation.parameters;
+  const model::MotorData& m = rig.motor;
+  const double g = m.arm_torque_nm(rig.simulation.supply_voltage_v / m.nominal_voltage_v, 0.0);
+  const double k_w = -m.arm_torque_nm(0.0, 1.0);
+  const model::Parameters<double> exact{truth.mu1 / g, truth.mu2 / g, truth.mu3 / g,
+                                        truth.mu4 / g, truth.mug / g, (truth.fv1 + k_w) / g,
+                                        truth.fv2 / g};
+  const model::Parameters<Interval> per_gain =
+      rig_parameters_per_gain(exact.map([](double v) { return Interval(v); }), in.drive);
+  const model::Parameters<Interval> rig_set =
+      rig_parameters(exact.map([](double v) { return Interval(v); }), in.drive);
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    EXPECT_TRUE(per_gain[k].contains(truth[k] / g)) << k;
+    if (k != 5) {
+      EXPECT_EQ(per_gain[k], Interval(exact[k])) << k;
+    }
+  }
+  EXPECT_FALSE(Interval(exact.fv1).contains(truth.fv1 / g));
+  EXPECT_LT(per_gain.fv1.width() / per_gain.fv1.mid(), 0.5 * rig_set.fv1.width() / truth.fv1);
+  EXPECT_TRUE((Interval(1.0) / in.drive.gain_nm()).contains(1.0 / g));
+}
+
 TEST(PhysicalInputs, EveryInputSaysWhereItCameFrom) {
   const config::RigConfig rig = shipped_rig();
   const PhysicalInputs in = physical_inputs(rig, supply_readings(rig, 10));

@@ -6,10 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "short_scenario_run.hpp"
@@ -210,6 +212,67 @@ TEST_F(ShortRun, EarlyEndIsReported) {
   EXPECT_EQ(r.q2_step.outside_time, m.t_s.size() - r.q2_step.in_time);
   EXPECT_GT(r.q2_step.outside_time, 20u);
   EXPECT_LT(r.q2_step.rate(), r.q2_step.rate_in_time());
+}
+
+// A set known up to the drive's gain, through the Taylor-model flow: theta = p / g in a box, the
+// torque times 1 / g's interval. Every rig (g theta, any g in the gain's interval, theta at a
+// corner of the box) under the scenario's torque is inside the tube at every sample, in both
+// modes; a rig whose gain is outside the interval is not, so the check can fail.
+TEST(ScenarioTaylorModels, ARigKnownUpToItsGainIsInsideTheTube) {
+  Scenario scenario = paper_scenario(3);  // -90 deg, 0.17 N m
+  scenario.duration_s = 0.3;
+  const model::Parameters<double> rig = model::paper_run1();
+  const Interval gain(7.0, 7.4);
+  model::Parameters<double> theta = rig;
+  for (double* x :
+       {&theta.mu1, &theta.mu2, &theta.mu3, &theta.mu4, &theta.mug, &theta.fv1, &theta.fv2}) {
+    *x /= gain.mid();
+  }
+  ParameterSet set;
+  set.name = "per gain";
+  set.parameters = parameters_around(theta, 1e-3);
+  set.torque_scale = Interval(1.0) / gain;
+  const ScenarioTubes tubes =
+      run_scenario_taylor_models(scenario, set, {}, scenario_taylor_model_options());
+  ASSERT_EQ(tubes.status, IntegrationResult::Status::ok) << tubes.reason;
+  ASSERT_EQ(tubes.pieces.size(), 1U);
+  ASSERT_EQ(tubes.initial.size(), FurutaRampedDynamics::dimension);
+  EXPECT_GT(tubes.steps, 20U);
+
+  MeasurementOptions fine;
+  fine.sample_period_s = 0.004;
+  const auto rig_at = [&](unsigned corner, double g) {
+    const std::array<Interval, 7> box{set.parameters.mu1, set.parameters.mu2, set.parameters.mu3,
+                                      set.parameters.mu4, set.parameters.mug, set.parameters.fv1,
+                                      set.parameters.fv2};
+    std::array<double, 7> v{};
+    for (std::size_t i = 0; i < 7; ++i) v[i] = g * ((corner >> i) & 1U ? box[i].hi() : box[i].lo());
+    return model::Parameters<double>{v[0], v[1], v[2], v[3], v[4], v[5], v[6]};
+  };
+  const auto covered = [&](const model::Parameters<double>& p, double q2_offset) {
+    Scenario start = scenario;
+    start.q2_initial_rad += q2_offset;
+    const ScenarioMeasurement m = measure_scenario(start, p, fine);
+    std::size_t n = 0;
+    for (const CoverageMode mode : {CoverageMode::step, CoverageMode::interpolated}) {
+      n += coverage(tubes.views(), FurutaDynamics::q1, m.t_s, m.q1_true_rad, mode).covered;
+      n += coverage(tubes.views(), FurutaDynamics::q2, m.t_s, m.q2_true_rad, mode).covered;
+    }
+    return std::pair{n, 4 * m.t_s.size()};
+  };
+  std::size_t checks = 0;
+  for (unsigned corner = 0; corner < 128; ++corner) {
+    for (const double g : {gain.lo(), gain.hi()}) {
+      for (const double offset : {-1.5e-3, 1.5e-3}) {
+        const auto [n, all] = covered(rig_at(corner, g), offset);
+        EXPECT_EQ(n, all) << "corner " << corner << ", gain " << g << ", q2 offset " << offset;
+        checks += all;
+      }
+    }
+  }
+  EXPECT_GT(checks, 50000U);
+  const auto [n, all] = covered(rig_at(0, 1.1 * gain.hi()), 0.0);
+  EXPECT_LT(n, all * 3 / 4) << "a gain 10 % outside the interval";
 }
 
 }  // namespace

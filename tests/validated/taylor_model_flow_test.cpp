@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "furuta/model/model.hpp"
@@ -82,6 +83,27 @@ TEST(TaylorModelFlow, PendulumWideBoxIsSoundAndCarriedFurther) {
   EXPECT_GT(r.shrink_wraps, 20U);
   EXPECT_GT(r.t_reached(), u.t_reached());
   EXPECT_GT(u.t_reached(), d.tube.t_end());
+}
+
+// The flow as a Tube (what coverage reads): at a step's end its end box, inside a step its box
+// over the step, outside the tube nothing; a step of the flow has no Taylor form to give.
+TEST(TaylorModelFlow, AsATubeItGivesTheFlowsOwnBoxes) {
+  const SimplePendulum pendulum;
+  const Box x0{Interval(-1.8, -1.7), Interval(-0.05, 0.05)};
+  const TaylorModelFlowResult r = integrate_taylor_models(pendulum, x0, flow_options(0.5));
+  ASSERT_TRUE(r.ok()) << r.reason;
+  const Tube tube = as_tube(r);
+  ASSERT_EQ(tube.steps.size(), r.steps.size());
+  EXPECT_EQ(tube.dimension, 2U);
+  EXPECT_EQ(tube.t_end(), r.t_reached());
+  EXPECT_EQ(tube.enclosure_at(0.0), x0);
+  const TaylorModelFlowStep& s = r.steps[r.steps.size() / 2];
+  EXPECT_EQ(tube.enclosure_at(s.t1), s.end);
+  EXPECT_EQ(tube.enclosure_at(0.5 * (s.t0 + s.t1)), s.over);
+  EXPECT_EQ(tube.enclosure_at(0.5 * (s.t0 + s.t1)), r.enclosure_at(0.5 * (s.t0 + s.t1)));
+  EXPECT_TRUE(tube.enclosure_at(0.6)[0].is_empty());
+  EXPECT_FALSE(tube.steps.front().has_form());
+  EXPECT_THROW((void)tube.affine_at(s.t1), std::out_of_range);
 }
 
 // The Furuta model with its seven parameters carried as state (11 variables): +-0.1 % of the

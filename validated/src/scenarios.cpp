@@ -167,13 +167,14 @@ bool all_points(const model::Parameters<Interval>& p) {
 
 }  // namespace
 
-ScenarioTubes run_scenario_tubes(const Scenario& scenario,
-                                 const model::Parameters<Interval>& parameters,
-                                 const StateUncertainty& uncertainty, IntegratorOptions options,
-                                 const SplitOptions& split) {
+namespace {
+
+ScenarioTubes scaled_torque_tubes(const Scenario& scenario,
+                                  const model::Parameters<Interval>& parameters,
+                                  const Interval& torque, const StateUncertainty& uncertainty,
+                                  IntegratorOptions options, const SplitOptions& split) {
   options.t_start = 0.0;
   options.t_end = scenario.duration_s;
-  const Interval torque(scenario.torque_nm);
   const Box state = initial_state_box(scenario, uncertainty);
   // Point parameters need not be carried as state: the 4-dimensional system is several times
   // cheaper per step and its q1, dq1, q2, dq2 are the same components.
@@ -191,6 +192,63 @@ ScenarioTubes run_scenario_tubes(const Scenario& scenario,
   out.pieces = std::move(r.pieces);
   out.t_reached_s = time_reached(out.views());
   return out;
+}
+
+}  // namespace
+
+ScenarioTubes run_scenario_tubes(const Scenario& scenario,
+                                 const model::Parameters<Interval>& parameters,
+                                 const StateUncertainty& uncertainty, IntegratorOptions options,
+                                 const SplitOptions& split) {
+  return scaled_torque_tubes(scenario, parameters, Interval(scenario.torque_nm), uncertainty,
+                             std::move(options), split);
+}
+
+TaylorModelFlowOptions scenario_taylor_model_options() {
+  TaylorModelFlowOptions o;
+  o.integrator.order = 8;
+  // The Lagrange remainder's target: the models' truncation is far above it.
+  o.integrator.tolerance = 1e-8;
+  o.integrator.max_inflation = 1.0;
+  o.integrator.max_width = 2 * std::numbers::pi;
+  o.space_order = 3;
+  o.shrink_wrap_max_delta = 1.0;
+  o.wrap_without_collapsed = true;
+  o.wrap_at_base_point = true;
+  return o;
+}
+
+ScenarioTubes run_scenario_taylor_models(const Scenario& scenario, const ParameterSet& set,
+                                         const StateUncertainty& uncertainty,
+                                         TaylorModelFlowOptions options) {
+  options.integrator.t_start = 0.0;
+  options.integrator.t_end = scenario.duration_s;
+  const Interval torque = Interval(scenario.torque_nm) * set.torque_scale;
+  const FurutaRampedDynamics system({InputPiece{0.0, Interval(0.0)}});
+  ScenarioTubes out;
+  out.initial = FurutaRampedDynamics::initial_box(initial_state_box(scenario, uncertainty),
+                                                  set.parameters, torque);
+  out.torque_nm = torque;
+  const TaylorModelFlowResult r = integrate_taylor_models(system, out.initial, options);
+  out.status = r.status;
+  out.reason = r.reason;
+  out.steps = r.steps.size();
+  out.rejected = r.rejected;
+  out.seconds = r.seconds;
+  out.pieces.push_back(as_tube(r));
+  out.t_reached_s = time_reached(out.views());
+  return out;
+}
+
+ScenarioTubes run_scenario_tubes(const Scenario& scenario, const ParameterSet& set,
+                                 const StateUncertainty& uncertainty,
+                                 const IntegratorOptions& options, const SplitOptions& split) {
+  if (set.taylor_models) {
+    return run_scenario_taylor_models(scenario, set, uncertainty, scenario_taylor_model_options());
+  }
+  return scaled_torque_tubes(scenario, set.parameters,
+                             Interval(scenario.torque_nm) * set.torque_scale, uncertainty, options,
+                             split);
 }
 
 ScenarioResult evaluate_tubes(const Scenario& scenario, const ParameterSet& parameters,
@@ -239,8 +297,7 @@ ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& p
                                  const ScenarioMeasurement& measurement,
                                  const StateUncertainty& uncertainty,
                                  const IntegratorOptions& options, const SplitOptions& split) {
-  const ScenarioTubes tubes =
-      run_scenario_tubes(scenario, parameters.parameters, uncertainty, options, split);
+  const ScenarioTubes tubes = run_scenario_tubes(scenario, parameters, uncertainty, options, split);
   return evaluate_tubes(scenario, parameters, uncertainty, measurement, tubes);
 }
 

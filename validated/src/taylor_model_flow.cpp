@@ -100,6 +100,28 @@ Box TaylorModelFlowResult::enclosure_at(double t) const {
   return it->t1 == t ? it->end : it->over;
 }
 
+Tube as_tube(const TaylorModelFlowResult& result) {
+  Tube tube;
+  tube.dimension = result.initial.size();
+  tube.t_start = result.t_start;
+  tube.initial = result.initial;
+  tube.r0 = std::vector<Interval>(result.initial.size());
+  for (std::size_t i = 0; i < result.initial.size(); ++i) {
+    tube.r0[i] = result.initial[i] - Interval(result.initial[i].mid());
+  }
+  tube.steps.reserve(result.steps.size());
+  for (const TaylorModelFlowStep& s : result.steps) {
+    TubeStep& step = tube.steps.emplace_back();
+    step.t0 = s.t0;
+    step.t1 = s.t1;
+    step.h = Interval(s.t1) - Interval(s.t0);
+    step.apriori = s.over;
+    step.over = s.over;
+    step.end = s.end;
+  }
+  return tube;
+}
+
 namespace internal {
 
 TaylorModelFlowSetup::TaylorModelFlowSetup(const std::vector<Tape>& tapes_,

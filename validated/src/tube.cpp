@@ -47,6 +47,7 @@ FormTerms form_terms(const TubeStep& step, std::size_t n, int order, const Inter
 
 Box Tube::step_form(std::size_t index, const Interval& s) const {
   const TubeStep& step = steps.at(index);
+  if (!step.has_form()) return step.over;
   const std::size_t n = dimension;
   const std::vector<Interval>& step_r0 = step.r0.empty() ? r0 : step.r0;
   const FormTerms t = form_terms(step, n, order, s, step_r0);
@@ -67,6 +68,7 @@ AffineEnclosure Tube::affine_at(double t) const {
                              [](double time, const TubeStep& s) { return time < s.t1; });
   if (it == steps.end()) --it;
   const TubeStep& step = *it;
+  if (!step.has_form()) throw std::out_of_range("Tube::affine_at: the step has no Taylor form");
   const std::size_t n = dimension;
   const Interval s = (Interval(t) - Interval(step.t0)) & Interval(0.0, step.h.hi());
   AffineEnclosure out;

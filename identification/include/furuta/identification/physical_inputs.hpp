@@ -84,5 +84,12 @@ model::Parameters<Interval> scaled_parameters(const model::Parameters<Interval>&
 // The rig parameters of scaled parameters theta: the inverse map, over every drive in `drive`.
 model::Parameters<Interval> rig_parameters(const model::Parameters<Interval>& theta,
                                            const DriveData& drive);
+// The rig's parameters per unit of its gain, p / g, of scaled parameters theta for every drive in
+// `drive`: theta with b's back-EMF part taken out of fv1 (fv1 / g = b - N (60 / 2 pi) /
+// omega0_s). The model moves the same with p under a torque u as with p / g under u / g, so a
+// scaled set simulates the rig's motions under a torque without the gain's tolerance on the
+// parameters (validated::ParameterSet::torque_scale).
+model::Parameters<Interval> rig_parameters_per_gain(const model::Parameters<Interval>& theta,
+                                                    const DriveData& drive);
 
 }  // namespace furuta::identification

@@ -262,6 +262,8 @@ struct HeldOutFreeRuns {
 
 // Its parameter set's name in the scenarios (Table III) and Table I.
 inline constexpr const char* kOutputErrorSetName = "output error";
+// The windowed set's (Table III's guaranteed rows from the logs themselves).
+inline constexpr const char* kWindowedSetName = "guaranteed";
 
 // The output-error refinement, started from the combined LSMI estimate.
 struct OutputError {

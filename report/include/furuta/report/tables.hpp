@@ -57,6 +57,9 @@ std::string windowed_excluded_text(const pipeline::EstimateOutsideSet& excluded)
 // the paper's figures for comparison. The integrator's reason for an early end has its numbers
 // cut to 4 digits (tubes.json and results.json keep them whole).
 std::string format_table_three(const std::vector<validated::ScenarioResult>& results);
+// What Table III's rows of a set known up to the drive's gain are (validated::ParameterSet::
+// torque_scale), one line per such set; empty when there is none.
+std::vector<std::string> per_gain_set_notes(const std::vector<validated::ScenarioResult>& results);
 
 // Where the scenarios' measurements came from, as a sentence's part: "the simulated sessions'
 // truth", ...

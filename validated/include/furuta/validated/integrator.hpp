@@ -100,6 +100,10 @@ struct TubeStep {
   std::vector<Interval> jacobian;   // (k+1) x n x n, block i = V_i (row-major)
   std::vector<Interval> second;     // (k+1) x n, row i = q_i
   std::vector<Interval> remainder;  // n
+
+  // A step of another flow (the Taylor-model flow's as a Tube, taylor_model_flow.hpp) holds only
+  // t0, t1, h, over and end: its enclosure inside [t0, t1] is `over`.
+  bool has_form() const { return !centre.empty(); }
 };
 
 class Tube {
@@ -119,10 +123,12 @@ class Tube {
   // An enclosure of every solution over [ta, tb] (the hull of the steps' enclosures over their
   // parts of it). Empty outside [t_start, t_end()] or when ta > tb.
   Box enclosure_over(double ta, double tb) const;
-  // The Taylor form of step i over s (a part of [0, h]), not intersected with anything.
+  // The Taylor form of step i over s (a part of [0, h]), not intersected with anything; a step
+  // without a form gives its box over the step.
   Box step_form(std::size_t i, const Interval& s) const;
   // The affine form of every solution at t in [t_start, t_end()] (see AffineEnclosure); at a
-  // step's boundary the later step's. Throws std::out_of_range outside the tube.
+  // step's boundary the later step's. Throws std::out_of_range outside the tube or in a step
+  // without a form.
   AffineEnclosure affine_at(double t) const;
 };
 

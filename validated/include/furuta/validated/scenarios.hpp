@@ -20,6 +20,7 @@
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/ode.hpp"
 #include "furuta/validated/split.hpp"
+#include "furuta/validated/taylor_model_flow.hpp"
 
 namespace furuta::validated {
 
@@ -78,6 +79,15 @@ interval::Box initial_state_box(const Scenario& scenario, const StateUncertainty
 struct ParameterSet {
   std::string name;
   model::Parameters<Interval> parameters;
+  // The scenario's torque acts as torque_nm * torque_scale. The model is homogeneous in its
+  // parameters and the torque: the rig's parameters g theta under a torque u move as theta under
+  // u / g. So a set known only up to a drive gain g (the scaled parameters of a guaranteed set,
+  // identification/physical_inputs.hpp) is given as theta with torque_scale = 1 / g's interval.
+  Interval torque_scale{1.0};
+  // Carry the set through the Taylor-model flow (run_scenario_taylor_models) rather than the
+  // doubleton integrator: for sets narrow enough that the flow's higher orders in the
+  // parameters, not the splits of the start box, decide how far a tube goes.
+  bool taylor_models = false;
 };
 
 // Point parameters (every interval a single value).
@@ -136,6 +146,28 @@ ScenarioTubes run_scenario_tubes(const Scenario& scenario,
                                  const StateUncertainty& uncertainty, IntegratorOptions options,
                                  const SplitOptions& split = single_tube());
 
+// The Taylor-model flow's settings for the Furuta scenarios (bench/README.md, "Taylor models IV"
+// and "V"): order 8 in time at tolerance 1e-8, order 3 in the variables, the error part wrapped
+// into the start (the arm's collapsed velocity left out when the whole wrap fails, the wrap's
+// preconditioner at the base point), the QR frame, max_width 2 pi.
+TaylorModelFlowOptions scenario_taylor_model_options();
+
+// One tube of a scenario through the Taylor-model flow over `set` (its `taylor_models` flag is
+// not read): FurutaRampedDynamics with the torque torque_nm * set.torque_scale as the input
+// variable (rate 0), so that the set's parameters and its torque scale are variables of the flow.
+// The tube's components are [q1, dq1, q2, dq2, mu1, ..., fv2, u]; options' t_start and t_end are
+// set from the scenario. Not split: a run that fails ends the tube.
+ScenarioTubes run_scenario_taylor_models(const Scenario& scenario, const ParameterSet& set,
+                                         const StateUncertainty& uncertainty,
+                                         TaylorModelFlowOptions options);
+
+// The tube set of `set` for a scenario: run_scenario_taylor_models when the set says so (with
+// scenario_taylor_model_options(); `options` and `split` are not used then), else
+// run_scenario_tubes with the torque times the set's torque scale.
+ScenarioTubes run_scenario_tubes(const Scenario& scenario, const ParameterSet& set,
+                                 const StateUncertainty& uncertainty,
+                                 const IntegratorOptions& options, const SplitOptions& split);
+
 // One step of the q2 tube (for figures): the enclosure of q2 over [t0, t1].
 struct TubeBand {
   double t0_s = 0.0;
@@ -168,7 +200,7 @@ struct ScenarioResult {
 ScenarioResult evaluate_tubes(const Scenario& scenario, const ParameterSet& parameters,
                               const StateUncertainty& uncertainty,
                               const ScenarioMeasurement& measurement, const ScenarioTubes& tubes);
-// run_scenario_tubes, then evaluate_tubes.
+// run_scenario_tubes for the set, then evaluate_tubes.
 ScenarioResult evaluate_scenario(const Scenario& scenario, const ParameterSet& parameters,
                                  const ScenarioMeasurement& measurement,
                                  const StateUncertainty& uncertainty,

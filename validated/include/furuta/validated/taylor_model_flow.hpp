@@ -103,4 +103,9 @@ TaylorModelFlowResult integrate_taylor_models(const System& system, const Box& x
   return integrate_taylor_models(record_system(system), switch_times(system), x0, options);
 }
 
+// The flow's steps as a Tube (integrator.hpp) of the same enclosures: each step's box over it and
+// at its end, no Taylor form (inside a step the enclosure is its box over the step), `order` 0.
+// What the doubleton's tubes are read with (coverage.hpp) then reads the flow's.
+Tube as_tube(const TaylorModelFlowResult& result);
+
 }  // namespace furuta::validated
