@@ -102,7 +102,7 @@ Simulation run_simulation(const SimulationSettings& settings, const Run& run, co
   source.kind = batch.truth ? MeasurementSource::Kind::sessions_truth
                             : MeasurementSource::Kind::configured_rig;
   return simulate(settings.scenarios, sets, batch.truth.value_or(batch.rig.simulation.parameters),
-                  source, settings.pieces, progress);
+                  source, settings.pieces, progress, settings.taylor_model_pieces);
 }
 
 // identify() prefixes LSMI's warnings with the experiment's name (or "all experiments"); the

@@ -69,20 +69,23 @@ std::vector<StepBoxes> TubeSet::all_steps(std::size_t piece) const {
 Simulation simulate(const std::vector<validated::Scenario>& scenarios,
                     const std::vector<validated::ParameterSet>& sets,
                     const model::Parameters<double>& truth, const MeasurementSource& source,
-                    std::size_t pieces, Progress* progress) {
+                    std::size_t pieces, Progress* progress, std::size_t taylor_model_pieces) {
   Simulation out;
   out.source = source;
   out.truth = truth;
   out.integrator = validated::scenario_integrator_options();
   out.pieces = pieces;
+  out.taylor_model_pieces = taylor_model_pieces;
   for (const validated::Scenario& scenario : scenarios) {
     const validated::ScenarioMeasurement measurement =
         validated::measure_scenario(scenario, truth, out.measurement);
     for (const validated::ParameterSet& set : sets) {
       if (progress != nullptr) progress->scenario(scenario, set.name);
-      const validated::ScenarioTubes tubes = validated::run_scenario_tubes(
-          scenario, set, out.uncertainty, out.integrator,
-          validated::scenario_split_options(pieces, scenario.duration_s));
+      validated::SplitOptions split =
+          validated::scenario_split_options(pieces, scenario.duration_s);
+      if (set.taylor_models) split.max_pieces = taylor_model_pieces;
+      const validated::ScenarioTubes tubes =
+          validated::run_scenario_tubes(scenario, set, out.uncertainty, out.integrator, split);
       out.results.push_back(
           validated::evaluate_tubes(scenario, set, out.uncertainty, measurement, tubes));
       out.tubes.push_back(step_boxes(tubes));

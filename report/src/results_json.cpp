@@ -189,7 +189,8 @@ Json simulation_json(const pipeline::Simulation& s) {
                                   {"tolerance", s.integrator.tolerance},
                                   {"h_min", s.integrator.h_min},
                                   {"max_width", s.integrator.max_width},
-                                  {"pieces", s.pieces}}},
+                                  {"pieces", s.pieces},
+                                  {"taylor_model_pieces", s.taylor_model_pieces}}},
               {"figures", figures},
               {"tubes_file", "tubes.json"},
               {"results", scenarios_json(s.results)}};

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "furuta/validated/taylor_model_split.hpp"
+
 namespace furuta::validated {
 
 namespace {
@@ -220,7 +222,7 @@ TaylorModelFlowOptions scenario_taylor_model_options() {
 
 ScenarioTubes run_scenario_taylor_models(const Scenario& scenario, const ParameterSet& set,
                                          const StateUncertainty& uncertainty,
-                                         TaylorModelFlowOptions options) {
+                                         TaylorModelFlowOptions options, std::size_t max_pieces) {
   options.integrator.t_start = 0.0;
   options.integrator.t_end = scenario.duration_s;
   const Interval torque = Interval(scenario.torque_nm) * set.torque_scale;
@@ -229,13 +231,28 @@ ScenarioTubes run_scenario_taylor_models(const Scenario& scenario, const Paramet
   out.initial = FurutaRampedDynamics::initial_box(initial_state_box(scenario, uncertainty),
                                                   set.parameters, torque);
   out.torque_nm = torque;
-  const TaylorModelFlowResult r = integrate_taylor_models(system, out.initial, options);
-  out.status = r.status;
-  out.reason = r.reason;
-  out.steps = r.steps.size();
-  out.rejected = r.rejected;
-  out.seconds = r.seconds;
-  out.pieces.push_back(as_tube(r));
+  if (max_pieces <= 1) {
+    const TaylorModelFlowResult r = integrate_taylor_models(system, out.initial, options);
+    out.status = r.status;
+    out.reason = r.reason;
+    out.steps = r.steps.size();
+    out.rejected = r.rejected;
+    out.seconds = r.seconds;
+    out.pieces.push_back(as_tube(r));
+  } else {
+    TaylorModelSplitOptions split;
+    split.max_pieces = max_pieces;
+    const TaylorModelSplitResult r =
+        integrate_taylor_models_split(system, out.initial, options, split);
+    out.status = r.status;
+    out.reason = r.reason;
+    out.steps = r.steps;
+    out.seconds = r.seconds;
+    for (const TaylorModelFlowResult& piece : r.pieces) {
+      out.rejected += piece.rejected;
+      out.pieces.push_back(as_tube(piece));
+    }
+  }
   out.t_reached_s = time_reached(out.views());
   return out;
 }
@@ -244,7 +261,8 @@ ScenarioTubes run_scenario_tubes(const Scenario& scenario, const ParameterSet& s
                                  const StateUncertainty& uncertainty,
                                  const IntegratorOptions& options, const SplitOptions& split) {
   if (set.taylor_models) {
-    return run_scenario_taylor_models(scenario, set, uncertainty, scenario_taylor_model_options());
+    return run_scenario_taylor_models(scenario, set, uncertainty, scenario_taylor_model_options(),
+                                      split.max_pieces);
   }
   return scaled_torque_tubes(scenario, set.parameters,
                              Interval(scenario.torque_nm) * set.torque_scale, uncertainty, options,

@@ -118,6 +118,9 @@ struct SimulationSettings {
   bool run = false;
   std::vector<validated::Scenario> scenarios = validated::paper_scenarios();
   std::size_t pieces = 1;  // tubes per run (validated::scenario_split_options)
+  // The most pieces a Taylor-model set's run is cut into where it fails (the windowed set's):
+  // each cut doubles the work from the cut on.
+  std::size_t taylor_model_pieces = 2;
 };
 
 struct OutputErrorSettings {
@@ -248,6 +251,7 @@ struct Simulation {
   validated::IntegratorOptions integrator;
   validated::StateUncertainty uncertainty;
   std::size_t pieces = 1;
+  std::size_t taylor_model_pieces = 1;
   std::vector<validated::ScenarioResult> results;  // per scenario, per parameter set
   std::vector<TubeSet> tubes;                      // tubes[i] is results[i]'s
 };
@@ -335,6 +339,7 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress = nullp
 Simulation simulate(const std::vector<validated::Scenario>& scenarios,
                     const std::vector<validated::ParameterSet>& sets,
                     const model::Parameters<double>& truth, const MeasurementSource& source,
-                    std::size_t pieces = 1, Progress* progress = nullptr);
+                    std::size_t pieces = 1, Progress* progress = nullptr,
+                    std::size_t taylor_model_pieces = 1);
 
 }  // namespace furuta::pipeline

@@ -156,14 +156,18 @@ TaylorModelFlowOptions scenario_taylor_model_options();
 // not read): FurutaRampedDynamics with the torque torque_nm * set.torque_scale as the input
 // variable (rate 0), so that the set's parameters and its torque scale are variables of the flow.
 // The tube's components are [q1, dq1, q2, dq2, mu1, ..., fv2, u]; options' t_start and t_end are
-// set from the scenario. Not split: a run that fails ends the tube.
+// set from the scenario. With max_pieces 1 a run that fails ends the tube; with more it is cut
+// where it fails (taylor_model_split.hpp) into at most that many pieces. The pieces are not boxes
+// of the start: each piece's Tube starts from the whole start box with its ancestors' steps, and
+// every solution is at each time inside some piece's enclosure.
 ScenarioTubes run_scenario_taylor_models(const Scenario& scenario, const ParameterSet& set,
                                          const StateUncertainty& uncertainty,
-                                         TaylorModelFlowOptions options);
+                                         TaylorModelFlowOptions options,
+                                         std::size_t max_pieces = 1);
 
 // The tube set of `set` for a scenario: run_scenario_taylor_models when the set says so (with
-// scenario_taylor_model_options(); `options` and `split` are not used then), else
-// run_scenario_tubes with the torque times the set's torque scale.
+// scenario_taylor_model_options() and at most split.max_pieces pieces), else run_scenario_tubes
+// with the torque times the set's torque scale.
 ScenarioTubes run_scenario_tubes(const Scenario& scenario, const ParameterSet& set,
                                  const StateUncertainty& uncertainty,
                                  const IntegratorOptions& options, const SplitOptions& split);
