@@ -109,6 +109,7 @@ std::string svg_axes(const PlotArea& a, const Ticks& x, const Ticks& y, const st
   }
   s << "<text class=\"axis-label\" x=\"" << a.x + a.width / 2 << "\" y=\"" << a.y + a.height + 29
     << "\" font-size=\"11\">" << text::xml_escape(x_name) << "</text>\n</g>\n";
+  if (y.values.empty() && y_name.empty()) return s.str();
   s << "<g class=\"axis y\" data-ticks=\"" << y.values.size()
     << "\" font-size=\"10\" text-anchor=\"end\">\n";
   for (const double v : y.values) {

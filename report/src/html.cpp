@@ -393,6 +393,13 @@ void section_guaranteed(Html& h, const ReportInput& in) {
             "g), which the angles determine",
             {"parameter", "searched", "set", "half-width", "truth (simulated rig)"}, g.scaled_rows);
   }
+  if (!g.set_svg.empty()) {
+    h.figure("guaranteed-set", g.set_svg,
+             "The set (blue) in its search box (grey), per scaled parameter, as offsets from the "
+             "output-error estimate (|) in its standard deviations; the truth (red circle) when "
+             "the sessions were simulated; on the right the set's half-width and the step (the "
+             "k-th windows of every recording) after which it was within 1 % of it.");
+  }
   if (!g.rig_rows.empty()) {
     h.table("guaranteed-rig",
             "The set at the rig's scale: the scaled set times the drive's interval ([motor] and "

@@ -77,6 +77,7 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
     write_text_file(dir / "sivia.svg", paving_svg);
     write_text_file(dir / "paving.json", json_text(paving_json(*run.sivia), 2));
   }
+  if (run.windowed) write_text_file(dir / "guaranteed_set.svg", svg_windowed_set(*run.windowed));
   if (run.simulation) {
     write_text_file(dir / "table3.txt", format_table_three(run.simulation->results));
     write_scenario_figures(dir, *run.simulation);

@@ -76,6 +76,7 @@ GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
                                      const std::vector<pipeline::EstimateOutsideSet>& excluded) {
   const identification::WindowedSet& r = w.result;
   GuaranteedSummary g;
+  g.set_svg = svg_windowed_set(w);
   std::size_t carried = 0;
   for (const identification::WindowRecord& record : r.windows) {
     carried += record.verdict == identification::WindowVerdict::contracted;

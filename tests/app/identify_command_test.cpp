@@ -328,7 +328,10 @@ TEST_F(SimulatedTruth, GuaranteedWritesTheSetAroundTheFitWithTheTruthInside) {
                           "\"physical_inputs\"", "\"verdict\": \"contracted\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key;
   }
-  EXPECT_NE(file_text(options.output_dir / "report.html").find("id=\"guaranteed-scaled\""),
+  const std::string html = file_text(options.output_dir / "report.html");
+  EXPECT_NE(html.find("id=\"guaranteed-scaled\""), std::string::npos);
+  EXPECT_NE(html.find("<figure id=\"guaranteed-set\">"), std::string::npos);
+  EXPECT_NE(file_text(options.output_dir / "guaranteed_set.svg").find("class=\"set\""),
             std::string::npos);
 }
 

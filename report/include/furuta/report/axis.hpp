@@ -36,7 +36,8 @@ struct PlotArea {
 // The frame, the grid lines and tick labels of both axes, and their names (`x_name` under the
 // plot, `y_name` turned along its left side). Marked for readers and tests: each axis is a
 // <g class="axis x|y" data-ticks="n"> holding its <text class="tick"> labels and its
-// <text class="axis-label">.
+// <text class="axis-label">. A y axis with neither ticks nor a name is left out (a figure whose
+// rows are categories names them itself).
 std::string svg_axes(const PlotArea& area, const Ticks& x, const Ticks& y,
                      const std::string& x_name, const std::string& y_name);
 

@@ -94,6 +94,7 @@ struct GuaranteedSummary {
   std::vector<std::vector<std::string>> rig_rows;     // parameter, unit, set, drive's share
   std::vector<std::vector<std::string>> window_rows;  // recording, window, times, verdict
   std::vector<std::string> notes;                     // the lag, exclusions, why it stopped
+  std::string set_svg;                                // svg_windowed_set
 };
 
 struct ReportInput {

@@ -7,6 +7,7 @@
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/identification/output_error.hpp"
+#include "furuta/pipeline/pipeline.hpp"
 #include "furuta/validated/scenarios.hpp"
 
 namespace furuta::report {
@@ -29,6 +30,14 @@ std::string svg_free_runs(const std::string& name, const identification::FreeRun
 // boxes in three colours, axes with units, the truth or a reference point if given.
 std::string svg_paving(const identification::GuaranteedResult& result, int x_parameter = 5,
                        int y_parameter = 6, const std::vector<double>* reference = nullptr);
+
+// The windowed set (identify --guaranteed) as the paper's Fig. 4 is SIVIA's: one row per scaled
+// parameter, its search box, the set and the estimate in the estimate's sd (the truth when
+// known), and on the right the set's half-width and the step that narrowed it (deciding_step).
+std::string svg_windowed_set(const pipeline::WindowedGuaranteed& windowed);
+// The step (1-based: the k-th windows of every recording) after which parameter k's set was
+// within 1 % of its final width; 0 when the windows did not narrow it.
+std::size_t deciding_step(const pipeline::WindowedGuaranteed& windowed, std::size_t k);
 
 // Fig. 6: the q2 tube (filled step boxes) with the measured q2 over it (samples outside the
 // paper's test in red), axes in s and deg, the scenario as the title, the coverage rates in the
