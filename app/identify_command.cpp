@@ -431,6 +431,12 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   print_identification(out, run, options.output_dir, true);
   if (replaced)
     out << "(the previous run's files in " << options.output_dir.string() << " were replaced)\n";
+  // Done in part: the estimate asked for (the refinement's) is not had.
+  if (run.output_error && !run.output_error->result.converged) {
+    err << "furuta identify: done in part: the output-error refinement did not converge (its "
+           "warning says where it stopped); Table I shows LSMI alone\n";
+    return 1;
+  }
   return 0;
 }
 

@@ -53,8 +53,8 @@ OutputErrorConfig read_output_error(Section s) {
       "in (0, 0.01] (the arm's time constant is 4.4 ms)");
   oc.estimate_lag = s.boolean("estimate_lag", oc.estimate_lag);
   oc.max_iterations = static_cast<int>(s.integer(
-      "max_iterations", oc.max_iterations, [](std::int64_t v) { return v >= 1 && v <= 1000; },
-      "in [1, 1000]"));
+      "max_iterations", oc.max_iterations, [](std::int64_t v) { return v >= 1 && v <= 10000; },
+      "in [1, 10000]"));
   s.reject_unknown_keys();
   return oc;
 }

@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <memory>
 #include <numbers>
 #include <optional>
 #include <span>
+#include <sstream>
 #include <stdexcept>
 
 #include "board_1065.hpp"
@@ -412,6 +414,40 @@ std::optional<LeadingCovariance> leading_covariance(
   return out;
 }
 
+// The fit against what its noise model predicts: angles much further from the model than their
+// assumed noise, or segments that do not join, say the model does not describe the data as
+// recorded, and name what usually causes it.
+void misfit_warnings(OutputErrorResult& result, const std::vector<OeExperiment>& experiments,
+                     const OutputErrorOptions& options) {
+  std::array<double, 2> sigma = {0, 0};
+  for (const OeExperiment& e : experiments) {
+    for (int j = 0; j < 2; ++j) sigma[j] = std::max(sigma[j], e.angle_sigma_rad[j]);
+  }
+  const auto g = [](double v) {
+    std::ostringstream s;
+    s << std::setprecision(3) << v;
+    return s.str();
+  };
+  if (result.residual_sigma > options.misfit_sigma) {
+    result.warnings.push_back(
+        "output error: the angles lie " + g(result.residual_sigma) +
+        " times further from the fitted model than their assumed noise (residual RMS q1 " +
+        g(result.angle_rms_rad[0]) + ", q2 " + g(result.angle_rms_rad[1]) +
+        " rad against an angle noise of " + g(sigma[0]) + " and " + g(sigma[1]) +
+        " rad): the model does not describe these data as recorded; likely causes: an angle's or "
+        "the input's unit, sign, scale or zero, time stamps that are late or jittered, dynamics "
+        "the model lacks, or an angle noise stated too small; the standard deviations are "
+        "scaled by it");
+  }
+  if (result.continuity_rms > options.continuity_weight) {
+    result.warnings.push_back(
+        "output error: the segments do not join into one trajectory (continuity RMS " +
+        g(result.continuity_rms) + ", above " + g(options.continuity_weight) +
+        ": the state jumps between segments by more than the angle noise): the model cannot "
+        "follow these data over a segment");
+  }
+}
+
 ceres::Solver::Options solver_options(int max_iterations, int threads) {
   ceres::Solver::Options o;
   o.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
@@ -750,6 +786,7 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
   // tie consecutive states, so the degrees of freedom are those of one state per experiment.
   const double dof = static_cast<double>(summary.num_residuals - summary.num_effective_parameters);
   result.residual_sigma = dof > 0 ? std::sqrt(2.0 * summary.final_cost / dof) : 0.0;
+  misfit_warnings(result, experiments, options);
 
   const int lag_column = options.estimate_lag ? 7 : -1;
   const std::optional<LeadingCovariance> covariance =

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -83,7 +85,8 @@ Simulation run_simulation(const SimulationSettings& settings, const Run& run, co
         {"SIVIA", model::Parameters<interval::Interval>{h[0], h[1], h[2], h[3], h[4], h[5], h[6]}});
   }
   sets.push_back(validated::point_parameters("LSMI", run.identification.combined.estimate));
-  if (run.output_error) {
+  // A fit that did not converge is not an answer to simulate.
+  if (run.output_error && run.output_error->result.converged) {
     sets.push_back(
         validated::point_parameters(kOutputErrorSetName, run.output_error->result.estimate));
   }
@@ -161,6 +164,24 @@ double smallest_step(const std::vector<double>& q) {
   return std::isfinite(step) ? step : 1e-3;
 }
 
+// The index of the better of several fits of the same data: a converged one before one that is
+// not, then the smaller residual sigma.
+std::size_t better_fit(const std::vector<identification::OutputErrorResult>& fits) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < fits.size(); ++i) {
+    const auto& a = fits[i];
+    const auto& b = fits[best];
+    if (a.converged != b.converged ? a.converged : a.residual_sigma < b.residual_sigma) best = i;
+  }
+  return best;
+}
+
+std::string short_sigma(const identification::OutputErrorResult& fit) {
+  std::ostringstream s;
+  s << std::setprecision(3) << fit.residual_sigma << (fit.converged ? "" : " not converged");
+  return s.str();
+}
+
 identification::OeExperiment oe_experiment(const Recording& r, const Batch& batch) {
   if (r.oe) return *r.oe;
   const identification::RawExperiment& e = r.experiment;
@@ -190,15 +211,6 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
         "report times, the commands written)");
     return std::nullopt;
   }
-  // A recording mistake (a sign, a zero, a unit) makes the model wrong for the data: a fit kept
-  // inside the physical region would look like an answer and take its full iterations (about 4 s
-  // on the mistakes of tests/app/identify_physical_test.cpp) to say nothing.
-  if (run.physical.clear() || run.physical.cause != identification::LikelyCause::none) {
-    warn(std::string("skipped: the LSMI estimate points to a recording mistake (") +
-         identification::cause_name(run.physical.cause) +
-         "); refining it would fit the model to data it cannot describe");
-    return std::nullopt;
-  }
   std::vector<identification::OeExperiment> experiments;
   for (const Recording* r : fitted) experiments.push_back(oe_experiment(*r, batch));
   if (progress != nullptr) progress->output_error_started(experiments.size());
@@ -207,12 +219,39 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
   // Another logger may stamp its input after the angles (docs/csv-import.md); a session log's
   // angles never lead the commands written.
   if (!logs) options.min_lag_s = -0.05;
+  // LSMI is biased exactly where the refinement is needed (coarse sampling, a lag, closed-loop
+  // input), so its verdict only adds starts: when it is not physical the fit also starts from the
+  // CAD values, and the better fit is kept. A recording mistake shows in the fit's residuals.
+  struct Start {
+    const char* name;
+    model::Parameters<double> parameters;
+  };
+  std::vector<Start> starts = {{"the LSMI estimate", run.identification.combined.estimate}};
+  const bool lsmi_suspect =
+      run.physical.clear() || run.physical.cause != identification::LikelyCause::none;
+  if (lsmi_suspect && batch.nominal) starts.push_back({"the CAD values", *batch.nominal});
+  std::vector<identification::OutputErrorResult> fits;
   try {
-    out.result = identification::refine_output_error(
-        experiments, run.identification.combined.estimate, batch.rig.motor, options);
+    for (const Start& start : starts) {
+      fits.push_back(identification::refine_output_error(experiments, start.parameters,
+                                                         batch.rig.motor, options));
+    }
   } catch (const std::invalid_argument& e) {
     warn(std::string("skipped: ") + e.what());
     return std::nullopt;
+  }
+  const std::size_t best = better_fit(fits);
+  out.result = fits[best];
+  if (starts.size() > 1) {
+    std::ostringstream said;
+    said << "LSMI is not physical (" << identification::cause_name(run.physical.cause)
+         << "), so the refinement also started from " << starts[1].name << "; kept the fit from "
+         << starts[best].name << " (residual sigma";
+    for (std::size_t i = 0; i < fits.size(); ++i) {
+      said << (i == 0 ? " " : ", ") << short_sigma(fits[i]) << " from " << starts[i].name;
+    }
+    said << ")";
+    warn(said.str());
   }
   for (const auto& e : experiments) {
     for (const auto& w : e.warnings) warn(w);
@@ -220,15 +259,15 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
   for (const auto& w : out.result.warnings) warn(w);
   if (!out.result.converged) warn("did not converge: " + out.result.message);
 
+  // The parametrisation keeps the inertias and mug positive and M positive definite, but lets mu3
+  // take either sign and a parameter reach its bound: a sign-flipped pendulum fits exactly with
+  // mu3 < 0. So the refined estimate is checked like LSMI's, and a violation names its cause.
   out.physical = identification::check_physical(out.result.estimate, out.result.std_dev);
   if (!out.physical.consistent()) {
-    warn(
-        "BUG: the refined estimate is outside the physical region its parametrisation keeps it "
-        "in: " +
-        identification::physical_warning(out.physical,
-                                         logs ? identification::RecordingSource::session_log
-                                              : identification::RecordingSource::csv,
-                                         "the output-error estimate"));
+    warn(identification::physical_warning(
+        out.physical,
+        logs ? identification::RecordingSource::session_log : identification::RecordingSource::csv,
+        "the output-error estimate"));
   }
 
   if (batch.held_out && usable(*batch.held_out)) {

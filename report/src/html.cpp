@@ -176,7 +176,9 @@ void table_one(Html& h, const ReportInput& in) {
   std::vector<std::string> header = {"parameter", "unit"};
   for (const auto& head : heads.heads) header.push_back(head);
   header.push_back("all experiments");
-  if (in.output_error) header.push_back("output error");
+  // A refinement that did not converge is no estimate: its column says so instead of numbers.
+  const bool refined = in.output_error && in.output_error->converged;
+  if (in.output_error) header.push_back(refined ? "output error" : "output error: not converged");
   if (in.nominal) header.push_back("CAD");
   if (in.truth) header.push_back("truth");
   std::vector<std::vector<std::string>> rows;
@@ -189,16 +191,17 @@ void table_one(Html& h, const ReportInput& in) {
     for (const auto& r : in.per_experiment) row.push_back(cell(r));
     row.push_back(cell(in.combined));
     if (in.output_error) {
-      row.push_back(plus_minus(dash_sci(in.output_error->estimate[i], 4),
-                               dash_sci(in.output_error->std_dev[i], 1)));
+      row.push_back(refined ? plus_minus(dash_sci(in.output_error->estimate[i], 4),
+                                         dash_sci(in.output_error->std_dev[i], 1))
+                            : "-");
     }
     if (in.nominal) row.push_back((*in.nominal)[i] != 0 ? dash_sci((*in.nominal)[i], 4) : "-");
     if (in.truth) row.push_back(dash_sci((*in.truth)[i], 4));
     rows.push_back(std::move(row));
   }
   h.table("table-1",
-          in.output_error ? "Table I: LSMI and output-error estimates \u00b1 one standard deviation"
-                          : "Table I: LSMI estimates \u00b1 one standard deviation",
+          refined ? "Table I: LSMI and output-error estimates \u00b1 one standard deviation"
+                  : "Table I: LSMI estimates \u00b1 one standard deviation",
           header, rows);
   if (heads.legend) {
     h.raw("<ul class=\"keys\" id=\"table-1-keys\">\n");
@@ -242,10 +245,11 @@ void section_lsmi(Html& h, const ReportInput& in) {
         "Output error: the model simulated with the input as the board applied it and fitted to "
         "the measured angles (multiple shooting, " +
         std::to_string(oe.segments) + " segments, " + std::to_string(oe.iterations) +
-        " iterations, " + (oe.converged ? "converged" : "not converged") +
-        "), from the LSMI estimate and inside the physical region; angle residual RMS q1 " +
-        dash_sci(oe.angle_rms_rad[0], 2) + " rad, q2 " + dash_sci(oe.angle_rms_rad[1], 2) +
-        " rad; data path lag " + dash_fixed(oe.input_lag_s * 1e3, 3) +
+        " iterations, " +
+        (oe.converged ? "converged" : "not converged: where it stopped is in results.json") +
+        "), inside the physical region; angle residual RMS q1 " + dash_sci(oe.angle_rms_rad[0], 2) +
+        " rad, q2 " + dash_sci(oe.angle_rms_rad[1], 2) + " rad; data path lag " +
+        dash_fixed(oe.input_lag_s * 1e3, 3) +
         " ms. Its standard deviations are local (from the Jacobian at the optimum, robust to "
         "angle errors correlated within a segment) and take the model and the input as exact.");
   }

@@ -203,10 +203,12 @@ Json output_error_json(const pipeline::OutputError& oe) {
   };
   Json j{{"estimate", parameters_json(r.estimate)},
          {"std_dev", parameters_json(r.std_dev)},
+         {"local_std_dev", parameters_json(r.local_std_dev)},
          {"std_dev_basis",
-          "local: sqrt(diag((J^T J)^-1)) of the angle residuals at the optimum, scaled by their "
-          "estimated sigma, or where larger the cluster-robust sandwich over the segments (errors "
-          "correlated within a segment); the model and the input taken as exact"},
+          "per parameter the larger of two local figures at the optimum: sqrt(diag((J^T J)^-1)) "
+          "of the angle residuals scaled by their estimated sigma, and the cluster-robust "
+          "sandwich over the segments (errors correlated within a segment); `local_std_dev` "
+          "is the first alone; the model and the input taken as exact"},
          {"input_lag_s", r.input_lag_s},
          {"input_lag_std_s", r.input_lag_std_s},
          {"q2_offset_rad", r.q2_offset_rad},

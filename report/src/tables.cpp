@@ -37,7 +37,9 @@ std::string format_table_one(const identification::Identification& id,
   out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
   for (const std::string& head : heads.heads) out << std::setw(w) << head;
   out << std::setw(w) << "all experiments";
-  if (refined != nullptr) out << std::setw(w) << "output error";
+  // A refinement that did not converge is no estimate: its column says so instead of numbers.
+  const bool converged = refined != nullptr && refined->converged;
+  if (refined != nullptr) out << std::setw(w) << (converged ? "output error" : "output error:");
   if (id.nominal) out << std::setw(13) << "CAD";
   if (id.truth) out << std::setw(13) << "truth";
   out << "\n";
@@ -50,7 +52,9 @@ std::string format_table_one(const identification::Identification& id,
     for (const identification::LsmiResult& r : id.per_experiment) out << std::setw(w) << cell(r);
     out << std::setw(w) << cell(id.combined);
     if (refined != nullptr) {
-      out << std::setw(w) << (sci(refined->estimate[k], 4) + " +-" + sci(refined->std_dev[k], 1));
+      out << std::setw(w)
+          << (converged ? sci(refined->estimate[k], 4) + " +-" + sci(refined->std_dev[k], 1)
+                        : std::string(k == 0 ? "NOT converged" : "-"));
     }
     if (id.nominal)
       out << std::setw(13) << ((*id.nominal)[k] != 0 ? sci((*id.nominal)[k], 4) : "-");

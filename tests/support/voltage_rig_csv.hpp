@@ -35,13 +35,14 @@ struct CsvEncoders {
 };
 
 // 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms after 2 s of settling, in radians from
-// hanging down, as columns t,q1,q2,volts. The volts column may be written late by input_delay_s (a
-// logger that stamps the input after the angles it drives; negative: the voltage reaches the motor
-// that much after it is recorded, an amplifier's lag).
-inline std::filesystem::path write_voltage_rig_csv(const std::filesystem::path& path, double phase,
-                                                   double input_delay_s = 0,
-                                                   const CsvColumns& columns = {}, int digits = 10,
-                                                   CsvEncoders encoders = {}) {
+// hanging down, as columns t,q1,q2,volts (the rig's parameters p, the voltage rig's by default).
+// The volts column may be written late by input_delay_s (a logger that stamps the input after the
+// angles it drives; negative: the voltage reaches the motor that much after it is recorded, an
+// amplifier's lag).
+inline std::filesystem::path write_voltage_rig_csv(
+    const std::filesystem::path& path, double phase, double input_delay_s = 0,
+    const CsvColumns& columns = {}, int digits = 10, CsvEncoders encoders = {},
+    const model::Parameters<double>& p = voltage_rig_truth()) {
   const auto quantised = [](double q, double counts_per_rev) {
     if (counts_per_rev <= 0) return q;
     const double step = 2 * std::numbers::pi / counts_per_rev;
@@ -57,7 +58,6 @@ inline std::filesystem::path write_voltage_rig_csv(const std::filesystem::path& 
     }
     return 3.5 * sum / std::sqrt(6.0);
   };
-  const model::Parameters<double> p = voltage_rig_truth();
   model::PendulumState x;
   const double h = 5e-4;
   for (int step = -4000; step < 20000; ++step) {

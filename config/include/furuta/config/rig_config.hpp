@@ -95,7 +95,9 @@ struct OutputErrorConfig {
   double segment_s = 0.25;   // multiple shooting's segment length
   double substep_s = 1e-3;   // the RK4 substeps' longest
   bool estimate_lag = true;  // the data path's lag as a parameter (else held at the core's 1 ms)
-  int max_iterations = 50;
+  // A cap only: the fit ends on Levenberg-Marquardt's tolerances, which real data reach later
+  // than simulated data do.
+  int max_iterations = 200;
 };
 
 // [sivia] inner_test: how SIVIA proves a box inside the feasible set (identification::InnerTest),

@@ -94,7 +94,11 @@ struct OutputErrorOptions {
   // (angle sigma / continuity_weight), velocities over the same per 10 ms, so that at the optimum
   // the trajectory is one continuous simulation to well within the angle noise.
   double continuity_weight = 30.0;
-  int max_iterations = 50;
+  // A cap only: the fit ends on the solver's function and parameter tolerances.
+  int max_iterations = 200;
+  // A residual sigma above this (the angles this many times further from the model than their
+  // assumed noise) is a warning: the model does not describe the data as recorded.
+  double misfit_sigma = 10.0;
   int num_threads = 2;
 };
 

@@ -269,11 +269,14 @@ inline constexpr const char* kOutputErrorSetName = "output error";
 // The windowed set's (Table III's guaranteed rows from the logs themselves).
 inline constexpr const char* kWindowedSetName = "guaranteed";
 
-// The output-error refinement, started from the combined LSMI estimate.
+// The output-error refinement, started from the combined LSMI estimate (and from the CAD values
+// too when LSMI is not physical; the better fit kept). It always runs when asked: LSMI's verdict
+// is one diagnostic, the fit's residuals another.
 struct OutputError {
   identification::OutputErrorResult result;
-  // Inside the region by its parametrisation: a violation here is a bug (a Stage::physical
-  // warning says so).
+  // The refined estimate against the physical region: its parametrisation keeps the inertias
+  // positive but not mu3's sign, which a sign-flipped pendulum turns (an output_error warning
+  // names the cause).
   identification::PhysicalCheck physical;
   std::optional<HeldOutFreeRuns> held_out;
 };
