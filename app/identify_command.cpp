@@ -226,6 +226,7 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   if (spec.angle_unit == identification::AngleUnit::counts) {
     in.angle_resolution_rad = 2 * std::numbers::pi / spec.pendulum_counts_per_rev;
   }
+  in.encoder_resolution_rad = spec.resolution_rad;
 
   // The differentiator's stop band (twice the cut-off) must fit below every file's Nyquist
   // frequency; a recording slower than the rig's loop needs a lower cut-off than its default.

@@ -152,6 +152,23 @@ void read_units(Section& s, CsvImportSpec& spec) {
     (std::string_view(key) == "arm_counts_per_rev" ? spec.arm_counts_per_rev
                                                    : spec.pendulum_counts_per_rev) = *cpr;
   }
+  // The smallest change each angle can show, in the angle unit: the output-error refinement's
+  // angle noise (one resolution / sqrt(12)). With counts it is one count, so stating it is refused.
+  const double per_unit = spec.angle_unit == AngleUnit::deg ? std::numbers::pi / 180.0 : 1.0;
+  for (std::size_t j = 0; j < 2; ++j) {
+    const char* key = j == 0 ? "arm_resolution" : "pendulum_resolution";
+    const std::optional<double> r = s.optional_number(key);
+    if (spec.angle_unit == AngleUnit::counts) {
+      if (r)
+        s.fail(key, s.node(key), "not with angle_unit = \"counts\": one count is the resolution");
+      spec.resolution_rad[j] = 2.0 * std::numbers::pi /
+                               (j == 0 ? spec.arm_counts_per_rev : spec.pendulum_counts_per_rev);
+      continue;
+    }
+    if (!r) continue;
+    if (!(*r > 0) || !std::isfinite(*r)) s.fail(key, s.node(key), "must be a number > 0");
+    spec.resolution_rad[j] = *r * per_unit;
+  }
   spec.pendulum_zero = s.required_choice<PendulumZero>(
       "pendulum_zero", {{"down", PendulumZero::down}, {"up", PendulumZero::up}});
   spec.input_kind = s.required_choice<InputKind>(
@@ -233,6 +250,9 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
   spec.has_header = s.boolean("has_header", true);
   read_columns(s, spec);
   read_units(s, spec);
+  // A column scale (a flipped or geared encoder) scales its resolution too.
+  spec.resolution_rad[0] *= std::abs(spec.arm_angle.scale);
+  spec.resolution_rad[1] *= std::abs(spec.pendulum_angle.scale);
   spec.time_unit_at = source_name + ":" + std::to_string(s.node("time_unit")->source().begin.line);
   s.reject_unknown_keys();
   spec.voltage_motor = read_motor_table(top, s, spec.input_kind);

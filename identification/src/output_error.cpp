@@ -420,24 +420,44 @@ std::optional<LeadingCovariance> leading_covariance(
 void misfit_warnings(OutputErrorResult& result, const std::vector<OeExperiment>& experiments,
                      const OutputErrorOptions& options) {
   std::array<double, 2> sigma = {0, 0};
+  std::array<bool, 2> from_steps = {false, false};
   for (const OeExperiment& e : experiments) {
-    for (int j = 0; j < 2; ++j) sigma[j] = std::max(sigma[j], e.angle_sigma_rad[j]);
+    for (int j = 0; j < 2; ++j) {
+      sigma[j] = std::max(sigma[j], e.angle_sigma_rad[j]);
+      from_steps[j] = from_steps[j] || e.angle_noise_source[j] == AngleNoiseSource::smallest_step;
+    }
+  }
+  result.angle_noise_rad = sigma;
+  for (int j = 0; j < 2; ++j) {
+    result.angle_noise_source[j] =
+        from_steps[j] ? AngleNoiseSource::smallest_step : AngleNoiseSource::encoder_resolution;
   }
   const auto g = [](double v) {
     std::ostringstream s;
     s << std::setprecision(3) << v;
     return s.str();
   };
+  const auto noise = [&](int j) {
+    return g(sigma[j]) + " rad (" +
+           (from_steps[j] ? "its smallest step between samples / sqrt(12): the recording states "
+                            "no resolution"
+                          : "the encoder's resolution / sqrt(12)") +
+           ")";
+  };
   if (result.residual_sigma > options.misfit_sigma) {
     result.warnings.push_back(
         "output error: the angles lie " + g(result.residual_sigma) +
         " times further from the fitted model than their assumed noise (residual RMS q1 " +
         g(result.angle_rms_rad[0]) + ", q2 " + g(result.angle_rms_rad[1]) +
-        " rad against an angle noise of " + g(sigma[0]) + " and " + g(sigma[1]) +
-        " rad): the model does not describe these data as recorded; likely causes: an angle's or "
+        " rad against an angle noise of q1 " + noise(0) + ", q2 " + noise(1) +
+        "): the model does not describe these data as recorded; likely causes: an angle's or "
         "the input's unit, sign, scale or zero, time stamps that are late or jittered, dynamics "
-        "the model lacks, or an angle noise stated too small; the standard deviations are "
-        "scaled by it");
+        "the model lacks" +
+        (from_steps[0] || from_steps[1]
+             ? ", or an angle noise too small (state arm_resolution and pendulum_resolution in "
+               "the import spec)"
+             : "") +
+        "; the standard deviations are scaled by it");
   }
   if (result.continuity_rms > options.continuity_weight) {
     result.warnings.push_back(

@@ -185,10 +185,21 @@ std::string short_sigma(const identification::OutputErrorResult& fit) {
 identification::OeExperiment oe_experiment(const Recording& r, const Batch& batch) {
   if (r.oe) return *r.oe;
   const identification::RawExperiment& e = r.experiment;
+  // The angle noise from each encoder's resolution as the import spec states it; where it says
+  // nothing, from the smallest step between samples, and the misfit warning says so.
+  std::array<double, 2> sigma{};
+  std::array<identification::AngleNoiseSource, 2> source{};
+  for (std::size_t j = 0; j < 2; ++j) {
+    const double stated = batch.encoder_resolution_rad[j];
+    source[j] = stated > 0 ? identification::AngleNoiseSource::encoder_resolution
+                           : identification::AngleNoiseSource::smallest_step;
+    sigma[j] = (stated > 0 ? stated : smallest_step(j == 0 ? e.q1 : e.q2)) / std::sqrt(12.0);
+  }
   // As the import spec says (docs/csv-import.md, input_between_samples; linear unless it says).
-  return identification::oe_experiment_from_raw(
-      e, {smallest_step(e.q1) / std::sqrt(12.0), smallest_step(e.q2) / std::sqrt(12.0)},
-      batch.input_between_samples, batch.voltage_motor);
+  identification::OeExperiment out = identification::oe_experiment_from_raw(
+      e, sigma, batch.input_between_samples, batch.voltage_motor);
+  out.angle_noise_source = source;
+  return out;
 }
 
 // The refinement from the combined LSMI estimate, the held-out free runs, and the check that the

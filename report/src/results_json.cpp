@@ -196,6 +196,11 @@ Json simulation_json(const pipeline::Simulation& s) {
               {"results", scenarios_json(s.results)}};
 }
 
+const char* noise_source_name(identification::AngleNoiseSource source) {
+  return source == identification::AngleNoiseSource::smallest_step ? "smallest_step"
+                                                                   : "encoder_resolution";
+}
+
 Json output_error_json(const pipeline::OutputError& oe) {
   const identification::OutputErrorResult& r = oe.result;
   const auto joints = [](const std::array<double, 2>& v) {
@@ -216,6 +221,9 @@ Json output_error_json(const pipeline::OutputError& oe) {
          {"angle_rms_rad", joints(r.angle_rms_rad)},
          {"continuity_rms", r.continuity_rms},
          {"residual_sigma", r.residual_sigma},
+         {"angle_noise_rad", joints(r.angle_noise_rad)},
+         {"angle_noise_source", Json{{"q1", noise_source_name(r.angle_noise_source[0])},
+                                     {"q2", noise_source_name(r.angle_noise_source[1])}}},
          {"segments", r.segments},
          {"observations", r.observations},
          {"iterations", r.iterations},

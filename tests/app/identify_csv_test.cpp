@@ -12,6 +12,7 @@
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -233,6 +234,54 @@ TEST_F(IdentifyCsv, WhereLsmiIsNotPhysicalTheRefinementStillRunsAndRecoversTheRi
     }
   }
   EXPECT_NEAR(oe["input_lag_s"].get<double>(), 5e-3, 0.3e-3);
+}
+
+// An interpolating encoder (angles with 2e-4 rad of white noise, so steps between samples far
+// below it): without a stated resolution the refinement's noise model is the smallest step, which
+// results.json says, and the residual sigma comes out many times 1; with arm_resolution and
+// pendulum_resolution stated (noise x sqrt(12)) the noise model is the encoder's and the residual
+// sigma is about 1.
+TEST_F(IdentifyCsv, AnInterpolatingEncodersNoiseIsTheStatedResolutionNotTheSmallestStep) {
+  options_.no_output_error = false;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 2e-4);
+  furuta::testing::CsvColumns noisy;
+  noisy.q1 = [&](double q) { return q + noise(rng); };
+  noisy.q2 = [&](double q) { return q + noise(rng); };
+  options_.csvs = {furuta::testing::write_voltage_rig_csv(dir_.path() / "na.csv", 0.0, 0.0, noisy),
+                   furuta::testing::write_voltage_rig_csv(dir_.path() / "nb.csv", 1.3, 0.0, noisy)};
+  const auto refined = [&](const fs::path& out) {
+    const nlohmann::json j = nlohmann::json::parse(read(out / "results.json"));
+    EXPECT_TRUE(j["output_error"]["converged"].get<bool>());
+    return j["output_error"];
+  };
+  options_.output_dir = dir_.path() / "unstated";
+  ASSERT_EQ(run(), 0) << err_.str();
+  const nlohmann::json unstated = refined(options_.output_dir);
+  EXPECT_EQ(unstated["angle_noise_source"]["q2"], "smallest_step");
+  const double q1_noise = unstated["angle_noise_rad"]["q1"].get<double>();
+  const double q2_noise = unstated["angle_noise_rad"]["q2"].get<double>();
+  std::printf("[ measured ] angle noise from the smallest step: q1 %.3g, q2 %.3g rad (true 2e-4)\n",
+              q1_noise, q2_noise);
+  EXPECT_LT(std::min(q1_noise, q2_noise), 1e-4);
+
+  std::string spec = kSpec;
+  spec.insert(spec.find("\n[motor]"), "arm_resolution = 6.93e-4\npendulum_resolution = 6.93e-4\n");
+  write(spec_, spec);
+  options_.output_dir = dir_.path() / "stated";
+  ASSERT_EQ(run(), 0) << err_.str();
+  const nlohmann::json stated = refined(options_.output_dir);
+  EXPECT_EQ(stated["angle_noise_source"]["q1"], "encoder_resolution");
+  EXPECT_NEAR(stated["angle_noise_rad"]["q2"].get<double>(), 2e-4, 1e-6);
+  const double sigma_unstated = unstated["residual_sigma"].get<double>();
+  const double sigma_stated = stated["residual_sigma"].get<double>();
+  std::printf(
+      "[ measured ] residual sigma with the smallest step %.3g, with the stated resolution "
+      "%.3g\n",
+      sigma_unstated, sigma_stated);
+  EXPECT_GT(sigma_unstated, 5 * sigma_stated);
+  EXPECT_GT(sigma_stated, 0.7);
+  EXPECT_LT(sigma_stated, 1.5);
 }
 
 // A voltage-driven rig's torque is not eq. 4's, and it came with no configuration: the report says

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -472,6 +473,33 @@ TEST(CsvImportSpec, CountsNeedCountsPerRevolution) {
                 text + "arm_counts_per_rev = 4096.0\npendulum_counts_per_rev = 2000\n", "s")
                 .arm_counts_per_rev,
             4096.0);
+}
+
+// Each angle's resolution, the refinement's angle noise: one count with counts; stated in the angle
+// unit otherwise (scaled by the column's scale); unsaid is 0; stating it with counts, or a
+// resolution that is not positive, is refused where it is written.
+TEST(CsvImportSpec, ResolutionIsOneCountOrStatedInTheAngleUnit) {
+  std::string counts = spec_text();
+  counts.replace(counts.find("\"rad\""), 5, "\"counts\"");
+  const CsvImportSpec c = parse_csv_import_spec(
+      counts + "arm_counts_per_rev = 4096\npendulum_counts_per_rev = 2000\n", "s");
+  EXPECT_DOUBLE_EQ(c.resolution_rad[0], 2 * kPi / 4096);
+  EXPECT_DOUBLE_EQ(c.resolution_rad[1], 2 * kPi / 2000);
+  EXPECT_EQ(parse_csv_import_spec(spec_text(), "s").resolution_rad, (std::array<double, 2>{0, 0}));
+  const CsvImportSpec stated = parse_csv_import_spec(
+      spec_text("pendulum_resolution = 7.5e-7\narm_angle_scale = -2\narm_resolution = 1e-3\n"),
+      "s");
+  EXPECT_DOUBLE_EQ(stated.resolution_rad[0], 2e-3);
+  EXPECT_DOUBLE_EQ(stated.resolution_rad[1], 7.5e-7);
+  std::string degrees = spec_text("pendulum_resolution = 0.1\n");
+  degrees.replace(degrees.find("\"rad\""), 5, "\"deg\"");
+  EXPECT_DOUBLE_EQ(parse_csv_import_spec(degrees, "s").resolution_rad[1], 0.1 * kDeg);
+  const ConfigError with_counts = spec_error(
+      counts + "arm_counts_per_rev = 4096\npendulum_counts_per_rev = 2000\narm_resolution = 1\n");
+  EXPECT_THAT(with_counts.what(),
+              HasSubstr("spec.toml:12: csv.arm_resolution: not with angle_unit = \"counts\""));
+  EXPECT_THAT(spec_error(spec_text("pendulum_resolution = 0\n")).what(),
+              HasSubstr("spec.toml:10: csv.pendulum_resolution: must be a number > 0"));
 }
 
 TEST(CsvImportSpec, OtherMistakesAreLocated) {

@@ -2,6 +2,7 @@
 // Data from other rigs and loggers (MATLAB exports, other programs) as CSV, mapped by a small
 // import spec (TOML) onto the quantities identification needs.
 
+#include <array>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -54,6 +55,10 @@ struct CsvImportSpec {
   std::string time_unit_at;
   AngleUnit angle_unit = AngleUnit::rad;
   double arm_counts_per_rev = 0, pendulum_counts_per_rev = 0;
+  // Each angle's resolution [rad] (arm, pendulum): one count with angle_unit = "counts", else
+  // arm_resolution / pendulum_resolution in the angle unit when the spec states them; 0 when it
+  // does not say.
+  std::array<double, 2> resolution_rad = {0, 0};
   PendulumZero pendulum_zero = PendulumZero::down;
   InputKind input_kind = InputKind::duty;
   InputBetweenSamples input_between_samples = InputBetweenSamples::linear;

@@ -26,6 +26,11 @@ struct OeObservation {
 
 // One experiment as the output-error fit needs it: the angles at their own times and the input
 // the actuator applied, as a piecewise-linear function of time on the same clock.
+// Where an angle's assumed noise came from: the encoder's resolution (a log's configuration, a
+// CSV's counts or stated resolution), or, when a CSV does not say, its smallest step between
+// samples, which an interpolating encoder or a filtered signal makes far too small.
+enum class AngleNoiseSource { encoder_resolution, smallest_step };
+
 struct OeExperiment {
   std::string name;
   std::vector<OeObservation> observations;  // time order
@@ -45,8 +50,10 @@ struct OeExperiment {
   // gain, so without it the standard deviations would ignore the largest error there is.
   double input_gain_sigma = 0.0;
   // Standard deviation of each joint's angle noise [rad]: one count / sqrt(12) for a quantising
-  // encoder.
+  // encoder; and where each came from (the misfit warning says it).
   std::array<double, 2> angle_sigma_rad = {0, 0};
+  std::array<AngleNoiseSource, 2> angle_noise_source = {AngleNoiseSource::encoder_resolution,
+                                                        AngleNoiseSource::encoder_resolution};
   std::vector<std::string> warnings;
   // Session logs: every supply reading of the 1065's reports [V] (the guaranteed identification's
   // drive, physical_inputs.hpp); empty for other recordings.
@@ -118,6 +125,11 @@ struct OutputErrorResult {
   std::array<double, 2> angle_rms_rad = {0, 0};  // fitted minus measured, per joint
   double continuity_rms = 0;  // the weighted continuity defects' RMS (<< 1: continuous)
   double residual_sigma = 0;  // estimated sigma of the weighted angle residuals (1: as assumed)
+  // The angle noise assumed per joint (the largest over the experiments) and where it came from
+  // (smallest_step when any experiment's did).
+  std::array<double, 2> angle_noise_rad = {0, 0};
+  std::array<AngleNoiseSource, 2> angle_noise_source = {AngleNoiseSource::encoder_resolution,
+                                                        AngleNoiseSource::encoder_resolution};
   std::size_t segments = 0;
   std::size_t observations = 0;
   int iterations = 0;

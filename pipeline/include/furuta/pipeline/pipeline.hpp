@@ -11,6 +11,7 @@
 //   settings.sivia.run = true;
 //   const pipeline::Run run = pipeline::run(batch, settings);
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -106,6 +107,9 @@ struct Batch {
   identification::InputBetweenSamples input_between_samples =
       identification::InputBetweenSamples::linear;
   double angle_resolution_rad = 0;  // the pendulum's quantisation
+  // CSV recordings: each angle's resolution [rad] (arm, pendulum) as the import spec gives it
+  // (counts, or arm_resolution / pendulum_resolution); 0 where it does not say.
+  std::array<double, 2> encoder_resolution_rad = {0, 0};
 };
 
 struct SiviaSettings {
