@@ -159,6 +159,14 @@ Identification identify(const std::vector<RawExperiment>& experiments,
     preprocess.input_lag_s = id.input_lag_s;
     v.series = identification::preprocess(*validation, preprocess, motor, voltage_motor);
     v.fit = torque_fit(v.series, id.combined.estimate, lsmi.trim_samples);
+    // A held-out figure from a few samples is one pendulum swing's, not the recording's.
+    if (v.fit.samples < kFewValidationSamples) {
+      id.warnings.push_back("held-out " + v.name + ": its torque RMSE rests on " +
+                            std::to_string(v.fit.samples) +
+                            " samples after the filters' edges are trimmed (fewer than " +
+                            std::to_string(kFewValidationSamples) +
+                            "): a longer held-out session makes it a figure to compare");
+    }
     id.validation = std::move(v);
   }
   return id;

@@ -133,6 +133,7 @@ TorqueFit torque_fit(const JointSeries& s, const model::Parameters<double>& p, s
     hi = first ? s.tau[i] : std::max(hi, s.tau[i]);
     first = false;
   }
+  fit.samples = n;
   fit.rmse_nm = n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0.0;
   fit.rmse_percent_of_range = hi > lo ? fit.rmse_nm / (hi - lo) * 100.0 : 0.0;
   return fit;

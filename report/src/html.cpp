@@ -300,7 +300,8 @@ void section_validation(Html& h, const ReportInput& in) {
                 ", the torque predicted by the combined LSMI "
                 "estimate misses the measured one by RMSE " +
                 dash_sci(v.rmse_nm, 3) + " N m, " + dash_fixed(v.rmse_percent_of_range, 2) +
-                " % of the torque range (eq. 12; the paper: 6.4 % with LSMI).");
+                " % of the torque range over " + std::to_string(v.samples) +
+                " samples (eq. 12; the paper: 6.4 % with LSMI).");
     h.figure("fig-5", v.svg,
              "Fig. 5: measured (black" +
                  (in.torque_source.empty() ? std::string() : ", " + in.torque_source) +

@@ -39,9 +39,9 @@ ReportInput report_input(const identification::Identification& id) {
   r.truth = id.truth;
   r.input_lag_s = id.input_lag_s;
   if (id.validation) {
-    r.validation = ValidationSummary{id.validation->name, id.validation->fit.rmse_nm,
-                                     id.validation->fit.rmse_percent_of_range,
-                                     svg_torque_validation(*id.validation)};
+    r.validation = ValidationSummary{
+        id.validation->name, id.validation->fit.rmse_nm, id.validation->fit.rmse_percent_of_range,
+        id.validation->fit.samples, svg_torque_validation(*id.validation)};
   }
   // identify() prefixes LSMI's warnings as below; what else it warns about comes from the data
   // (lost reports, missing samples, a cut-short session, irregular CSV time stamps).

@@ -60,7 +60,8 @@ Json results_json(const identification::Identification& id,
   if (id.validation) {
     j["validation"] = Json{{"name", id.validation->name},
                            {"rmse_nm", id.validation->fit.rmse_nm},
-                           {"rmse_percent_of_range", id.validation->fit.rmse_percent_of_range}};
+                           {"rmse_percent_of_range", id.validation->fit.rmse_percent_of_range},
+                           {"samples", id.validation->fit.samples}};
   }
   for (const auto& [key, value] : more.items()) j[key] = value;
   j["warnings"] = id.warnings;

@@ -81,8 +81,8 @@ std::string format_table_one(const identification::Identification& id,
   if (id.validation) {
     out << "\nheld-out torque on " << id.validation->name << ": RMSE "
         << sci(id.validation->fit.rmse_nm, 3) << " N m = " << std::fixed << std::setprecision(2)
-        << id.validation->fit.rmse_percent_of_range
-        << " % of the torque range (the paper: 6.4 % with LSMI)\n";
+        << id.validation->fit.rmse_percent_of_range << " % of the torque range over "
+        << id.validation->fit.samples << " samples (the paper: 6.4 % with LSMI)\n";
   }
   for (const auto& warning : id.warnings) out << "warning: " << warning << "\n";
   return out.str();

@@ -57,6 +57,27 @@ TEST(ExperimentLength, AShortFittedOrHeldOutExperimentIsRefusedByName) {
   }
 }
 
+// A held-out session long enough to use but short of two pendulum periods after trimming: its
+// RMSE is given with its sample count and a warning; a long one gives no warning.
+TEST(ExperimentLength, AHeldOutRmseFromFewSamplesSaysHowFew) {
+  const IdentifyOptions options;
+  const model::MotorData motor;
+  const Identification short_one =
+      identify({experiment("long", 400)}, experiment("held-out", 94), options, motor);
+  ASSERT_TRUE(short_one.validation);
+  EXPECT_EQ(short_one.validation->fit.samples, 94u - 2 * edge_samples(options.preprocess));
+  const auto warned = [](const Identification& id) {
+    return std::count_if(id.warnings.begin(), id.warnings.end(), [](const std::string& w) {
+      return w.starts_with("held-out held-out: its torque RMSE rests on 16 samples");
+    });
+  };
+  EXPECT_EQ(warned(short_one), 1);
+  const Identification long_one =
+      identify({experiment("long", 400)}, experiment("held-out", 400), options, motor);
+  EXPECT_EQ(long_one.validation->fit.samples, 400u - 2 * edge_samples(options.preprocess));
+  EXPECT_EQ(warned(long_one), 0);
+}
+
 // A free-decay or zero-duty session gives homogeneous equations: every parameter 0 +- 0.
 TEST(ExperimentInput, AnInputThatNeverMovesInEveryFittedRecordingIsNothingToIdentify) {
   const IdentifyOptions options;

@@ -20,6 +20,9 @@ struct IdentifyOptions {
   bool estimate_input_lag = true;
 };
 
+// Fewer held-out samples than this (two pendulum periods at 16 ms) make its RMSE a warning.
+inline constexpr std::size_t kFewValidationSamples = 100;
+
 struct ValidationResult {
   std::string name;
   TorqueFit fit;  // with the combined LSMI estimate

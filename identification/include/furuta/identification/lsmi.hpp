@@ -50,6 +50,7 @@ std::vector<double> predicted_torque(const JointSeries& series, const model::Par
 struct TorqueFit {
   double rmse_nm = 0;                // eq. 12
   double rmse_percent_of_range = 0;  // RMSE / (max tau - min tau) * 100
+  std::size_t samples = 0;           // the samples compared (the trimmed edges left out)
   std::vector<double> predicted;
 };
 TorqueFit torque_fit(const JointSeries& series, const model::Parameters<double>& p,

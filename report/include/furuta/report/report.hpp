@@ -63,7 +63,8 @@ struct ValidationSummary {
   std::string name;  // the held-out experiment
   double rmse_nm = 0;
   double rmse_percent_of_range = 0;
-  std::string svg;  // Fig. 5 (svg_torque_validation)
+  std::size_t samples = 0;  // the samples compared
+  std::string svg;          // Fig. 5 (svg_torque_validation)
 };
 
 // The output-error refinement: Table I's column, its diagnostics, the held-out free runs.
