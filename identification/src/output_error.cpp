@@ -414,32 +414,37 @@ std::optional<LeadingCovariance> leading_covariance(
   return out;
 }
 
+// The angle noise the fit assumed, per joint: the largest over the experiments, and from the
+// smallest step when any experiment's was.
+void assumed_angle_noise(OutputErrorResult& result, const std::vector<OeExperiment>& experiments) {
+  result.angle_noise_rad = {0, 0};
+  result.angle_noise_source = {AngleNoiseSource::encoder_resolution,
+                               AngleNoiseSource::encoder_resolution};
+  for (const OeExperiment& e : experiments) {
+    for (int j = 0; j < 2; ++j) {
+      result.angle_noise_rad[j] = std::max(result.angle_noise_rad[j], e.angle_sigma_rad[j]);
+      if (e.angle_noise_source[j] == AngleNoiseSource::smallest_step) {
+        result.angle_noise_source[j] = AngleNoiseSource::smallest_step;
+      }
+    }
+  }
+}
+
 // The fit against what its noise model predicts: angles much further from the model than their
 // assumed noise, or segments that do not join, say the model does not describe the data as
 // recorded, and name what usually causes it.
-void misfit_warnings(OutputErrorResult& result, const std::vector<OeExperiment>& experiments,
-                     const OutputErrorOptions& options) {
-  std::array<double, 2> sigma = {0, 0};
-  std::array<bool, 2> from_steps = {false, false};
-  for (const OeExperiment& e : experiments) {
-    for (int j = 0; j < 2; ++j) {
-      sigma[j] = std::max(sigma[j], e.angle_sigma_rad[j]);
-      from_steps[j] = from_steps[j] || e.angle_noise_source[j] == AngleNoiseSource::smallest_step;
-    }
-  }
-  result.angle_noise_rad = sigma;
-  for (int j = 0; j < 2; ++j) {
-    result.angle_noise_source[j] =
-        from_steps[j] ? AngleNoiseSource::smallest_step : AngleNoiseSource::encoder_resolution;
-  }
+void misfit_warnings(OutputErrorResult& result, const OutputErrorOptions& options) {
   const auto g = [](double v) {
     std::ostringstream s;
     s << std::setprecision(3) << v;
     return s.str();
   };
+  const auto from_steps = [&](int j) {
+    return result.angle_noise_source[j] == AngleNoiseSource::smallest_step;
+  };
   const auto noise = [&](int j) {
-    return g(sigma[j]) + " rad (" +
-           (from_steps[j] ? "its smallest step between samples / sqrt(12): the recording states "
+    return g(result.angle_noise_rad[j]) + " rad (" +
+           (from_steps(j) ? "its smallest step between samples / sqrt(12): the recording states "
                             "no resolution"
                           : "the encoder's resolution / sqrt(12)") +
            ")";
@@ -453,7 +458,7 @@ void misfit_warnings(OutputErrorResult& result, const std::vector<OeExperiment>&
         "): the model does not describe these data as recorded; likely causes: an angle's or "
         "the input's unit, sign, scale or zero, time stamps that are late or jittered, dynamics "
         "the model lacks" +
-        (from_steps[0] || from_steps[1]
+        (from_steps(0) || from_steps(1)
              ? ", or an angle noise too small (state arm_resolution and pendulum_resolution in "
                "the import spec)"
              : "") +
@@ -806,7 +811,8 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
   // tie consecutive states, so the degrees of freedom are those of one state per experiment.
   const double dof = static_cast<double>(summary.num_residuals - summary.num_effective_parameters);
   result.residual_sigma = dof > 0 ? std::sqrt(2.0 * summary.final_cost / dof) : 0.0;
-  misfit_warnings(result, experiments, options);
+  assumed_angle_noise(result, experiments);
+  misfit_warnings(result, options);
 
   const int lag_column = options.estimate_lag ? 7 : -1;
   const std::optional<LeadingCovariance> covariance =

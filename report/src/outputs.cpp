@@ -77,7 +77,6 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
     write_text_file(dir / "sivia.svg", paving_svg);
     write_text_file(dir / "paving.json", json_text(paving_json(*run.sivia), 2));
   }
-  if (run.windowed) write_text_file(dir / "guaranteed_set.svg", svg_windowed_set(*run.windowed));
   if (run.simulation) {
     write_text_file(dir / "table3.txt", format_table_three(run.simulation->results));
     write_scenario_figures(dir, *run.simulation);
@@ -96,8 +95,12 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
     const pipeline::HeldOutFreeRuns& h = *run.output_error->held_out;
     write_text_file(dir / "free_run.svg", svg_free_runs(h.name, h.lsmi, h.refined));
   }
-  write_text_file(dir / "report.html",
-                  render_html(report_page(run, software_version, signals, paving_svg)));
+  const ReportInput page = report_page(run, software_version, signals, paving_svg);
+  // The page's figure is the file's: drawn once.
+  if (page.guaranteed && !page.guaranteed->set_svg.empty()) {
+    write_text_file(dir / "guaranteed_set.svg", page.guaranteed->set_svg);
+  }
+  write_text_file(dir / "report.html", render_html(page));
 }
 
 std::vector<std::string> write_simulation(const std::filesystem::path& dir,
