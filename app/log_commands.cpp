@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iomanip>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -125,17 +126,38 @@ int run_log_export_csv_command(const std::filesystem::path& path,
     err << "furuta log export-csv: cannot write " << csv_path.string() << "\n";
     return 2;
   }
+  // Beside each row's values, when each was taken (docs/csv-import.md reads them back): the host
+  // time of the newest report behind each angle (a row without one repeats the last), and the
+  // command in force on the 1065 at the row's end as the board received it (its byte's duty) with
+  // the time it was written.
   csv << "seq,t_s,arm_counts,pendulum_counts,q1_rad,q2_rad,commanded_duty,applied_duty,"
-         "current_a,supply_v,motor_flags,encoder_flags,motor_lost,encoder_lost,overruns,flags\n";
+         "current_a,supply_v,motor_flags,encoder_flags,motor_lost,encoder_lost,overruns,flags,"
+         "arm_time_s,pendulum_time_s,written_duty,written_s\n";
   csv << std::setprecision(10);
   const std::int64_t t0 = log.samples.empty() ? 0 : log.samples.front().monotonic_ns;
-  for (const auto& s : log.samples) {
-    csv << s.seq << ',' << static_cast<double>(s.monotonic_ns - t0) * 1e-9 << ',' << s.arm_counts
-        << ',' << s.pendulum_counts << ',' << s.arm_angle_rad << ',' << s.pendulum_angle_rad << ','
+  const auto seconds = [t0](std::int64_t ns) { return static_cast<double>(ns - t0) * 1e-9; };
+  const std::vector<session_log::MotorCommandWrite> writes = session_log::motor_command_writes(log);
+  std::size_t next_write = 0;
+  std::optional<session_log::MotorCommandWrite> written;
+  std::optional<std::int64_t> arm_ns, pendulum_ns;
+  for (std::size_t i = 0; i < log.samples.size(); ++i) {
+    const auto& s = log.samples[i];
+    if (s.n_motor_reports > 0) arm_ns = s.motor_report_host_ns.back();
+    if (s.n_encoder_reports > 0) pendulum_ns = s.encoder_report_host_ns.back();
+    const std::int64_t row_end = i + 1 < log.samples.size()
+                                     ? log.samples[i + 1].monotonic_ns
+                                     : std::numeric_limits<std::int64_t>::max();
+    while (next_write < writes.size() && writes[next_write].time_ns < row_end) {
+      written = writes[next_write++];
+    }
+    csv << s.seq << ',' << seconds(s.monotonic_ns) << ',' << s.arm_counts << ','
+        << s.pendulum_counts << ',' << s.arm_angle_rad << ',' << s.pendulum_angle_rad << ','
         << s.commanded_duty << ',' << s.applied_duty << ',' << s.motor_current_a << ','
         << s.supply_voltage_v << ',' << s.motor_status_flags << ',' << s.encoder_flags << ','
         << s.motor_lost_reports << ',' << s.encoder_lost_reports << ',' << s.overruns << ','
-        << s.flags << '\n';
+        << s.flags << ',' << seconds(arm_ns.value_or(s.monotonic_ns)) << ','
+        << seconds(pendulum_ns.value_or(s.monotonic_ns)) << ',' << (written ? written->duty : 0.0)
+        << ',' << seconds(written ? written->time_ns : s.monotonic_ns) << '\n';
   }
   csv.close();
   if (!csv) {

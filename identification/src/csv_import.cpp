@@ -95,13 +95,25 @@ void read_columns(Section& s, CsvImportSpec& spec) {
   spec.arm_angle = read_column(s, "arm_angle", h, true, "the arm angle column");
   spec.pendulum_angle = read_column(s, "pendulum_angle", h, true, "the pendulum angle column");
   spec.input = read_column(s, "input", h, true, "the input column (duty, voltage or torque)");
-  const std::array<std::pair<const char*, const CsvColumn*>, 4> columns = {{
+  const auto optional = [&](const char* key, CsvColumn& column) {
+    if (s.has(key)) column = read_column(s, key, h, false, "");
+  };
+  optional("arm_time", spec.arm_time);
+  optional("pendulum_time", spec.pendulum_time);
+  optional("input_time", spec.input_time);
+  optional("supply", spec.supply);
+  const std::array<std::pair<const char*, const CsvColumn*>, 8> columns = {{
       {"time", &spec.time},
       {"arm_angle", &spec.arm_angle},
       {"pendulum_angle", &spec.pendulum_angle},
       {"input", &spec.input},
+      {"arm_time", &spec.arm_time},
+      {"pendulum_time", &spec.pendulum_time},
+      {"input_time", &spec.input_time},
+      {"supply", &spec.supply},
   }};
   for (std::size_t i = 0; i < columns.size(); ++i) {
+    if (columns[i].second->name.empty()) continue;
     for (std::size_t j = 0; j < i; ++j) {
       if (columns[i].second->name == columns[j].second->name) {
         s.fail(columns[i].first, s.node(columns[i].first),
@@ -179,6 +191,13 @@ void read_units(Section& s, CsvImportSpec& spec) {
                                     {{"held", InputBetweenSamples::held},
                                      {"linear", InputBetweenSamples::linear},
                                      {"cubic", InputBetweenSamples::cubic}});
+  spec.input_rate_limit_per_s = s.number(
+      "input_rate_limit", 0.0, [](double v) { return v > 0 && std::isfinite(v); },
+      "> 0 (the input's units per second, after input_scale)");
+  if (!spec.supply.name.empty() && spec.input_kind != InputKind::duty) {
+    s.fail("supply", s.node("supply"),
+           "only applies when input_kind = \"duty\" (the duty's torque scales with the supply)");
+  }
 }
 
 // The [motor] table: the DC motor of a voltage-driven rig. Required with input_kind = "voltage"
@@ -454,6 +473,92 @@ void check_sample_period(const std::string& file, const std::string& column,
   throw CsvImportError(file, 0, column, problem);
 }
 
+// A reading at time t from readings at their own increasing times: linear between them (or the one
+// in force, `held`), the first or last outside.
+double reading_at(const std::vector<double>& t, const std::vector<double>& x, double at,
+                  bool held) {
+  const auto after = std::upper_bound(t.begin(), t.end(), at);
+  if (after == t.begin()) return x.front();
+  const auto i = static_cast<std::size_t>(after - t.begin()) - 1;
+  if (held || i + 1 == t.size()) return x[i];
+  const double w = (at - t[i]) / (t[i + 1] - t[i]);
+  return x[i] + w * (x[i + 1] - x[i]);
+}
+
+// One quantity's readings at their own times: in the project's units, a reading whose time repeats
+// the previous one's dropped as the same reading; a time that goes back, or a repeat with another
+// value, is refused with both lines.
+void own_times(const std::string& file, const Channel& time, const Channel& value,
+               const std::vector<double>& t_raw, const std::vector<double>& x,
+               const std::vector<int>& row_line, double time_scale, std::vector<double>& t_out,
+               std::vector<double>& x_out) {
+  std::size_t last = 0;
+  for (std::size_t i = 0; i < t_raw.size(); ++i) {
+    const double t = t_raw[i] * time_scale;
+    if (!t_out.empty()) {
+      const std::string before = "line " + std::to_string(row_line[last]);
+      if (t < t_out.back()) {
+        throw CsvImportError(file, row_line[i], time.label,
+                             exact(t_raw[i]) + " goes back from " + exact(t_raw[last]) + " on " +
+                                 before + " (the time of " + value.label + ")");
+      }
+      if (t == t_out.back()) {
+        if (x[i] != x_out.back()) {
+          throw CsvImportError(file, row_line[i], value.label,
+                               "a second value at the same time " + exact(t_raw[i]) + " as " +
+                                   before + " (" + time.label + "); one time, one reading");
+        }
+        continue;
+      }
+    }
+    t_out.push_back(t);
+    x_out.push_back(x[i]);
+    last = i;
+  }
+}
+
+template <typename Slot>
+RecordedSeries recorded_series(const std::string& file, const CsvImportSpec& spec,
+                               const std::vector<Channel>& channels,
+                               const std::vector<std::vector<double>>& raw,
+                               const std::vector<int>& row_line, const Slot& slot) {
+  const double arm_factor =
+      angle_factor(spec.angle_unit, spec.arm_counts_per_rev) * spec.arm_angle.scale;
+  const double pendulum_factor =
+      angle_factor(spec.angle_unit, spec.pendulum_counts_per_rev) * spec.pendulum_angle.scale;
+  // Upright-zero rigs report the angle from the top; the project's q2 is from hanging down. Not
+  // wrapped: a pendulum that swings over keeps a continuous angle, which differentiation needs.
+  const double pendulum_offset = spec.pendulum_zero == PendulumZero::up ? std::numbers::pi : 0.0;
+  std::vector<double> q1, q2, u;
+  for (std::size_t i = 0; i < row_line.size(); ++i) {
+    q1.push_back(raw[1][i] * arm_factor);
+    q2.push_back(raw[2][i] * pendulum_factor + pendulum_offset);
+    u.push_back(raw[3][i] * spec.input.scale);
+  }
+  const auto time_of = [&](const CsvColumn& own) -> std::size_t {
+    return slot(own).value_or(0);  // the row's time when the spec names none
+  };
+  RecordedSeries r;
+  const std::size_t a = time_of(spec.arm_time), p = time_of(spec.pendulum_time),
+                    c = time_of(spec.input_time);
+  own_times(file, channels[a], channels[1], raw[a], q1, row_line, spec.time_scale_s, r.q1_t_s,
+            r.q1_rad);
+  own_times(file, channels[p], channels[2], raw[p], q2, row_line, spec.time_scale_s, r.q2_t_s,
+            r.q2_rad);
+  own_times(file, channels[c], channels[3], raw[c], u, row_line, spec.time_scale_s, r.input_t_s,
+            r.input);
+  if (const auto v = slot(spec.supply)) {
+    r.supply_v = raw[*v];
+    for (std::size_t i = 0; i < r.supply_v.size(); ++i) {
+      if (!(r.supply_v[i] > 0)) {
+        throw CsvImportError(file, row_line[i], channels[*v].label,
+                             "a supply of " + exact(r.supply_v[i]) + " V (it must be > 0)");
+      }
+    }
+  }
+  return r;
+}
+
 }  // namespace
 
 ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec& spec) {
@@ -483,12 +588,25 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
   std::size_t next = 0;
   while (next < lines.size() && blank(lines[next])) ++next;
 
-  std::array<Channel, 4> channels = {{
+  // The four required columns first, then the optional ones the spec names.
+  std::vector<Channel> channels = {
       {"time", &spec.time, 0, {}},
       {"arm_angle", &spec.arm_angle, 0, {}},
       {"pendulum_angle", &spec.pendulum_angle, 0, {}},
       {"input", &spec.input, 0, {}},
-  }};
+  };
+  for (const Channel& optional :
+       {Channel{"arm_time", &spec.arm_time, 0, {}},
+        Channel{"pendulum_time", &spec.pendulum_time, 0, {}},
+        Channel{"input_time", &spec.input_time, 0, {}}, Channel{"supply", &spec.supply, 0, {}}}) {
+    if (!optional.column->name.empty()) channels.push_back(optional);
+  }
+  const auto slot = [&](const CsvColumn& column) -> std::optional<std::size_t> {
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      if (channels[c].column == &column) return c;
+    }
+    return std::nullopt;
+  };
   std::vector<std::string> fields;
   if (spec.has_header) {
     if (next == lines.size()) throw CsvImportError(file, 0, "", "the file is empty (no header)");
@@ -526,7 +644,7 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
     }
   }
 
-  std::array<std::vector<double>, 4> raw;
+  std::vector<std::vector<double>> raw(channels.size());
   std::vector<int> row_line;
   for (; next < lines.size(); ++next) {
     const int line_no = static_cast<int>(next + 1);
@@ -571,25 +689,24 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
         file, 0, "",
         std::to_string(n) + " data rows; at least " + std::to_string(kMinRows) + " are needed");
   }
-
   ImportedSeries out;
+  out.recorded = recorded_series(file, spec, channels, raw, row_line, slot);
+  out.input_rate_limit_per_s = spec.input_rate_limit_per_s;
+
   out.input_kind = spec.input_kind;
   out.t_s.reserve(n);
   out.q1_rad.reserve(n);
   out.q2_rad.reserve(n);
   out.input.reserve(n);
-  const double arm_factor =
-      angle_factor(spec.angle_unit, spec.arm_counts_per_rev) * spec.arm_angle.scale;
-  const double pendulum_factor =
-      angle_factor(spec.angle_unit, spec.pendulum_counts_per_rev) * spec.pendulum_angle.scale;
-  // Upright-zero rigs report the angle from the top; the project's q2 is from hanging down. Not
-  // wrapped: a pendulum that swings over keeps a continuous angle, which differentiation needs.
-  const double pendulum_offset = spec.pendulum_zero == PendulumZero::up ? std::numbers::pi : 0.0;
+  // At the row times: a reading with its own time interpolated (linear) to them, the input held
+  // from when it took effect.
+  const RecordedSeries& r = out.recorded;
   for (std::size_t i = 0; i < n; ++i) {
-    out.t_s.push_back(raw[0][i] * spec.time_scale_s);
-    out.q1_rad.push_back(raw[1][i] * arm_factor);
-    out.q2_rad.push_back(raw[2][i] * pendulum_factor + pendulum_offset);
-    out.input.push_back(raw[3][i] * spec.input.scale);
+    const double t = raw[0][i] * spec.time_scale_s;
+    out.t_s.push_back(t);
+    out.q1_rad.push_back(reading_at(r.q1_t_s, r.q1_rad, t, false));
+    out.q2_rad.push_back(reading_at(r.q2_t_s, r.q2_rad, t, false));
+    out.input.push_back(reading_at(r.input_t_s, r.input, t, !spec.input_time.name.empty()));
   }
 
   std::vector<double> steps(n - 1);

@@ -484,6 +484,82 @@ ceres::Solver::Options solver_options(int max_iterations, int threads) {
   return o;
 }
 
+// A duty's torque scales with the supply: the experiment's supply_scale from every reading of it,
+// and the input gain's prior from how well they fix it. The mean, with a tenth cut at each end
+// against glitches, resolves the supply below the reading's step when the reading is noisy;
+// readings that never change resolve it to one step (`step_v`; 0: unknown, and the gain is held).
+void scale_duty_by_supply(OeExperiment& e, std::vector<double> supply_v, double nominal_v,
+                          double step_v) {
+  e.supply_readings_v = supply_v;
+  std::sort(supply_v.begin(), supply_v.end());
+  const std::size_t cut = supply_v.size() / 10;
+  const std::span<const double> kept(supply_v.data() + cut, supply_v.size() - 2 * cut);
+  if (kept.empty() || !(nominal_v > 0)) return;
+  double mean = 0, spread = 0;
+  for (double v : kept) mean += v;
+  mean /= static_cast<double>(kept.size());
+  for (double v : kept) spread += (v - mean) * (v - mean);
+  spread = std::sqrt(spread / static_cast<double>(std::max<std::size_t>(1, kept.size() - 1)));
+  if (!(mean > 0)) return;
+  e.supply_scale = mean / nominal_v;
+  // Without half a step of noise to dither it, the supply is known to a step, uniform; with it, to
+  // the mean's own spread.
+  const double sigma_v = spread < step_v / 2 ? step_v / std::sqrt(12.0)
+                                             : spread / std::sqrt(static_cast<double>(kept.size()));
+  e.input_gain_sigma = sigma_v / mean;
+}
+
+// The input as an actuator with a slew limit applies it (the 1065's duty ramp): from each
+// command's time it moves towards the command at the command's rate. Appends the breakpoints of
+// the piecewise-linear result to the experiment's input, from a second before `t` (at `applied`)
+// to a second after the last observation.
+class RampedInput {
+ public:
+  RampedInput(OeExperiment& e, double t, double applied, double braking)
+      : e_(e), t_(t), applied_(applied), target_(applied), braking_(braking) {
+    add(t - 1.0, applied, braking);
+  }
+  // A command at `at` (ignored when earlier than the previous one).
+  void command(double at, double target, double rate_per_s, double braking) {
+    if (at < t_) return;
+    ramp_until(at);
+    target_ = target;
+    braking_ = braking;
+    rate_per_s_ = rate_per_s;
+    add(at, applied_, braking_);
+  }
+  void finish(double last_observation_s) {
+    ramp_until(std::max(t_, last_observation_s) + 1.0);
+    add(t_, applied_, braking_);
+  }
+
+ private:
+  void add(double at, double value, double brake) {
+    if (!e_.input_t_s.empty() && at <= e_.input_t_s.back()) {
+      e_.input.back() = value;
+      e_.braking_fraction.back() = brake;
+      return;
+    }
+    e_.input_t_s.push_back(at);
+    e_.input.push_back(value);
+    e_.braking_fraction.push_back(brake);
+  }
+  void ramp_until(double until) {
+    const double reach = t_ + std::abs(target_ - applied_) / rate_per_s_;
+    if (reach < until) {
+      if (applied_ != target_) add(reach, target_, braking_);
+      applied_ = target_;
+    } else {
+      applied_ += std::copysign(rate_per_s_ * (until - t_), target_ - applied_);
+    }
+    t_ = until;
+  }
+
+  OeExperiment& e_;
+  double t_, applied_, target_, braking_;
+  double rate_per_s_ = 1.0;
+};
+
 }  // namespace
 
 OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
@@ -551,74 +627,22 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
                    [](const OeObservation& a, const OeObservation& b) { return a.t_s < b.t_s; });
   if (e.observations.empty()) throw std::invalid_argument(e.name + ": no board reports");
 
-  // The supply: every report's reading. Its mean, with a tenth cut at each end against glitches,
-  // resolves the supply below the reading's step when the reading is noisy; readings that never
-  // change resolve it to one step only.
   std::vector<double> supply_v;
   for (const auto& r : arm_positions) supply_v.push_back(r.supply_v);
-  e.supply_readings_v = supply_v;
-  std::sort(supply_v.begin(), supply_v.end());
-  const std::size_t cut = supply_v.size() / 10;
-  const std::span<const double> kept(supply_v.data() + cut, supply_v.size() - 2 * cut);
-  if (!kept.empty()) {
-    double mean = 0, spread = 0;
-    for (double v : kept) mean += v;
-    mean /= static_cast<double>(kept.size());
-    for (double v : kept) spread += (v - mean) * (v - mean);
-    spread = std::sqrt(spread / static_cast<double>(std::max<std::size_t>(1, kept.size() - 1)));
-    if (mean > 0) {
-      e.supply_scale = mean / rig.motor.nominal_voltage_v;
-      // The reading's quantisation (docs/phidget-protocol.md): without half a step of noise to
-      // dither it, the supply is known to a step, uniform; with it, to the mean's own spread.
-      const double sigma_v = spread < kSupplyStep_v / 2
-                                 ? kSupplyStep_v / std::sqrt(12.0)
-                                 : spread / std::sqrt(static_cast<double>(kept.size()));
-      e.input_gain_sigma = sigma_v / mean;
-    }
-  }
+  scale_duty_by_supply(e, supply_v, rig.motor.nominal_voltage_v, kSupplyStep_v);
 
   // The board ramps its applied duty towards the newest command at the command's rate, from the
   // moment the command is written (docs/model.md; firmware_bridge's simulated rig does the same).
   const std::vector<session_log::MotorCommandWrite> writes = session_log::motor_command_writes(log);
-  double t =
-      std::min(e.observations.front().t_s, writes.empty() ? 0.0 : seconds(writes[0].time_ns));
-  double applied = log.samples.front().applied_duty;
-  double target = applied;
-  double rate_per_s = 1.0;
-  double braking = rig.safety.stop_braking_fraction;
-  const auto add = [&](double at, double value, double brake) {
-    if (!e.input_t_s.empty() && at <= e.input_t_s.back()) {
-      e.input.back() = value;
-      e.braking_fraction.back() = brake;
-      return;
-    }
-    e.input_t_s.push_back(at);
-    e.input.push_back(value);
-    e.braking_fraction.push_back(brake);
-  };
-  add(t - 1.0, applied, braking);
-  const auto ramp_until = [&](double until) {
-    const double reach = t + std::abs(target - applied) / rate_per_s;
-    if (reach < until) {
-      if (applied != target) add(reach, target, braking);
-      applied = target;
-    } else {
-      applied += std::copysign(rate_per_s * (until - t), target - applied);
-    }
-    t = until;
-  };
+  RampedInput ramp(
+      e, std::min(e.observations.front().t_s, writes.empty() ? 0.0 : seconds(writes[0].time_ns)),
+      log.samples.front().applied_duty, rig.safety.stop_braking_fraction);
   for (const auto& w : writes) {
-    const double at = seconds(w.time_ns);
-    if (at < t) continue;
-    ramp_until(at);
-    target = w.duty;
-    braking = w.braking_fraction;
     // Raw acceleration 0 is never sent; taken as the slowest ramp the wire can express.
-    rate_per_s = std::max(w.acceleration_pct_per_s, 6250.0 / 255.0) / 100.0;
-    add(at, applied, braking);
+    ramp.command(seconds(w.time_ns), w.duty,
+                 std::max(w.acceleration_pct_per_s, 6250.0 / 255.0) / 100.0, w.braking_fraction);
   }
-  ramp_until(std::max(t, e.observations.back().t_s) + 1.0);
-  add(t, applied, braking);
+  ramp.finish(e.observations.back().t_s);
 
   const double arm_counts = rig.arm_encoder.counts_per_joint_rev();
   const double pendulum_counts = rig.pendulum_encoder.counts_per_joint_rev();
@@ -635,9 +659,8 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
 }
 
 OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,
-                                    InputBetweenSamples between,
-                                    const VoltageMotor& voltage_motor) {
-  const bool hold_input = between == InputBetweenSamples::held;
+                                    InputBetweenSamples between, const VoltageMotor& voltage_motor,
+                                    double nominal_supply_v) {
   OeExperiment e;
   e.name = raw.name;
   e.input_kind = raw.input_kind;
@@ -648,26 +671,52 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
   if (n == 0 || raw.q1.size() != n || raw.q2.size() != n || raw.input.size() != n) {
     throw std::invalid_argument(raw.name + ": angles, input and times differ in length");
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    e.observations.push_back({raw.t_s[i], 0, raw.q1[i]});
-    e.observations.push_back({raw.t_s[i], 1, raw.q2[i]});
-    if (hold_input && i > 0) {
-      // A step: the previous value up to (just before) this sample.
-      e.input_t_s.push_back(std::nextafter(raw.t_s[i], -1e300));
-      e.input.push_back(raw.input[i - 1]);
-    }
-    e.input_t_s.push_back(raw.t_s[i]);
-    e.input.push_back(raw.input[i]);
+  RecordedSeries r = raw.recorded;
+  if (r.empty()) r = {raw.t_s, raw.q1, raw.t_s, raw.q2, raw.t_s, raw.input, {}};
+  if (r.q1_t_s.empty() || r.q2_t_s.empty() || r.input_t_s.empty()) {
+    throw std::invalid_argument(raw.name + ": an angle or the input has no readings");
   }
-  // Braking at zero: a recorded duty of 0 is taken as eq. 4 at zero duty (the board braking).
-  e.braking_fraction.assign(e.input.size(), 1.0);
-  if (between == InputBetweenSamples::cubic && n >= 2) {
-    // Catmull-Rom slopes: the centred difference inside, the one-sided one at the ends.
-    e.input_slope.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t lo = i == 0 ? 0 : i - 1, hi = i + 1 == n ? i : i + 1;
-      e.input_slope[i] = (raw.input[hi] - raw.input[lo]) / (raw.t_s[hi] - raw.t_s[lo]);
+  for (std::size_t j = 0; j < 2; ++j) {
+    const std::vector<double>& t = j == 0 ? r.q1_t_s : r.q2_t_s;
+    const std::vector<double>& x = j == 0 ? r.q1_rad : r.q2_rad;
+    for (std::size_t i = 0; i < t.size(); ++i)
+      e.observations.push_back({t[i], static_cast<int>(j), x[i]});
+  }
+  std::stable_sort(e.observations.begin(), e.observations.end(),
+                   [](const OeObservation& a, const OeObservation& b) { return a.t_s < b.t_s; });
+
+  const std::size_t m = r.input_t_s.size();
+  if (raw.input_rate_limit_per_s > 0) {
+    // Braking at zero: a recorded duty of 0 is taken as eq. 4 at zero duty (the board braking).
+    RampedInput ramp(e, std::min(r.input_t_s.front(), e.observations.front().t_s), r.input.front(),
+                     1.0);
+    for (std::size_t i = 0; i < m; ++i) {
+      ramp.command(r.input_t_s[i], r.input[i], raw.input_rate_limit_per_s, 1.0);
     }
+    ramp.finish(e.observations.back().t_s);
+  } else {
+    for (std::size_t i = 0; i < m; ++i) {
+      if (between == InputBetweenSamples::held && i > 0) {
+        // A step: the previous value up to (just before) this sample.
+        e.input_t_s.push_back(std::nextafter(r.input_t_s[i], -1e300));
+        e.input.push_back(r.input[i - 1]);
+      }
+      e.input_t_s.push_back(r.input_t_s[i]);
+      e.input.push_back(r.input[i]);
+    }
+    e.braking_fraction.assign(e.input.size(), 1.0);
+    if (between == InputBetweenSamples::cubic && m >= 2) {
+      // Catmull-Rom slopes: the centred difference inside, the one-sided one at the ends.
+      e.input_slope.resize(m);
+      for (std::size_t i = 0; i < m; ++i) {
+        const std::size_t lo = i == 0 ? 0 : i - 1, hi = i + 1 == m ? i : i + 1;
+        e.input_slope[i] = (r.input[hi] - r.input[lo]) / (r.input_t_s[hi] - r.input_t_s[lo]);
+      }
+    }
+  }
+  if (!r.supply_v.empty() && raw.input_kind == InputKind::duty) {
+    // A logger's supply reading has no known step: the gain is held unless the readings vary.
+    scale_duty_by_supply(e, r.supply_v, nominal_supply_v, 0.0);
   }
   return e;
 }

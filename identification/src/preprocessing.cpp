@@ -126,6 +126,8 @@ RawExperiment experiment_from_csv(const ImportedSeries& series, const std::strin
   e.input = series.input;
   e.input_kind = series.input_kind;
   e.warnings = series.warnings;
+  e.recorded = series.recorded;
+  e.input_rate_limit_per_s = series.input_rate_limit_per_s;
   return e;
 }
 

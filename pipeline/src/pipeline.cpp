@@ -197,7 +197,8 @@ identification::OeExperiment oe_experiment(const Recording& r, const Batch& batc
   }
   // As the import spec says (docs/csv-import.md, input_between_samples; linear unless it says).
   identification::OeExperiment out = identification::oe_experiment_from_raw(
-      e, sigma, batch.input_between_samples, batch.voltage_motor);
+      e, sigma, batch.input_between_samples, batch.voltage_motor,
+      batch.rig.motor.nominal_voltage_v);
   out.angle_noise_source = source;
   return out;
 }

@@ -224,6 +224,80 @@ TEST(CsvImport, JitterWithinOnePercentIsKeptAsRecorded) {
   EXPECT_NEAR(s.sample_period_s, 0.016, 0.0001);
 }
 
+// Each angle and the input at their own times: kept as recorded (a repeated time is the same
+// reading, kept once), and at the row times interpolated (angles) or held (the input).
+TEST(CsvImport, EachReadingAtItsOwnTime) {
+  testing::TempDir dir;
+  std::ostringstream csv;
+  csv.precision(17);
+  csv << "t,theta,t_theta,alpha,t_alpha,u,t_u,vbus\n";
+  for (int k = 0; k < 16; ++k) {
+    const double t = 0.016 * k;
+    // The arm read 4 ms before the row, the pendulum only every second row (copied in between),
+    // the input written 1 ms after the row.
+    const double t_alpha = 0.032 * (k / 2) - 0.002;
+    csv << t << "," << 10 * (t - 0.004) << "," << t - 0.004 << "," << -t_alpha << "," << t_alpha
+        << "," << (k % 3 == 0 ? 0.5 : -0.5) << "," << t + 0.001 << "," << 12 + 0.1 * (k % 2)
+        << "\n";
+  }
+  const CsvImportSpec spec = parse_csv_import_spec(
+      spec_text("arm_time = \"t_theta\"\npendulum_time = \"t_alpha\"\ninput_time = \"t_u\"\n"
+                "input_rate_limit = 62.5\nsupply = \"vbus\"\n"),
+      "spec.toml");
+  EXPECT_EQ(spec.input_rate_limit_per_s, 62.5);
+  const ImportedSeries s = import_csv(write_file(dir, "own.csv", csv.str()), spec);
+  const RecordedSeries& r = s.recorded;
+  ASSERT_EQ(r.q1_t_s.size(), 16u);
+  EXPECT_NEAR(r.q1_t_s[3], 0.048 - 0.004, 1e-15);
+  ASSERT_EQ(r.q2_t_s.size(), 8u);  // each pendulum reading once
+  EXPECT_NEAR(r.q2_t_s[1], 0.030, 1e-15);
+  EXPECT_NEAR(r.q2_rad[1], -0.030, 1e-15);
+  ASSERT_EQ(r.input_t_s.size(), 16u);
+  EXPECT_NEAR(r.input_t_s[0], 0.001, 1e-15);
+  ASSERT_EQ(r.supply_v.size(), 16u);
+  EXPECT_NEAR(r.supply_v[1], 12.1, 1e-12);
+  EXPECT_EQ(s.input_rate_limit_per_s, 62.5);
+  // At the rows: the arm's line through its readings, the pendulum's between its readings, the
+  // input in force (row 3's own command comes 1 ms after the row).
+  EXPECT_NEAR(s.q1_rad[3], 10 * 0.048, 1e-12);
+  EXPECT_NEAR(s.q2_rad[3], -0.048, 1e-12);
+  EXPECT_EQ(s.input[3], -0.5);
+  EXPECT_EQ(s.input[4], 0.5);
+}
+
+TEST(CsvImport, AnOwnTimeThatGoesBackOrTwoValuesAtOneTimeNameTheLine) {
+  testing::TempDir dir;
+  const CsvImportSpec spec =
+      parse_csv_import_spec(spec_text("arm_time = \"t_theta\"\n"), "spec.toml");
+  const auto file = [&](int row, double t_theta, double theta) {
+    std::ostringstream csv;
+    csv << "t,theta,t_theta,alpha,u\n";
+    for (int k = 0; k < 16; ++k) {
+      csv << 0.01 * k << "," << (k == row ? theta : 0.1 * k) << ","
+          << (k == row ? t_theta : 0.01 * k) << ",0,0\n";
+    }
+    return write_file(dir, "own.csv", csv.str());
+  };
+  const CsvImportError back = import_error(file(6, 0.03, 0.6), spec);
+  EXPECT_EQ(back.line(), 8);
+  EXPECT_EQ(back.field(), "t_theta");
+  EXPECT_THAT(back.what(), HasSubstr("goes back from 0.05 on line 7"));
+  const CsvImportError twice = import_error(file(6, 0.05, 0.7), spec);
+  EXPECT_EQ(twice.line(), 8);
+  EXPECT_EQ(twice.field(), "theta");
+  EXPECT_THAT(twice.what(), HasSubstr("a second value at the same time"));
+}
+
+TEST(CsvImportSpec, OwnTimesRateLimitAndSupplyAreChecked) {
+  EXPECT_THAT(spec_error(spec_text("input_rate_limit = 0\n")).what(),
+              HasSubstr("spec.toml:10: csv.input_rate_limit"));
+  EXPECT_THAT(spec_error(spec_text("arm_time = \"t\"\n")).what(),
+              HasSubstr("csv.arm_time: same column as time"));
+  std::string torque = spec_text("supply = \"v\"\n");
+  torque.replace(torque.find("\"duty\""), 6, "\"torque\"");
+  EXPECT_THAT(spec_error(torque).what(), HasSubstr("csv.supply: only applies when input_kind"));
+}
+
 TEST(CsvImport, AGapOfManyPeriodsIsNotInterpolatedAcross) {
   testing::TempDir dir;
   std::ostringstream csv;

@@ -41,6 +41,10 @@ struct CsvColumn {
 //   arm_counts_per_rev = 4096   pendulum_counts_per_rev = 4096     (angle_unit = "counts")
 //   pendulum_zero = "up" | "down"
 //   input = "u"   input_kind = "voltage" | "duty" | "torque"
+// and optionally each reading's own time (docs/csv-import.md, "Each reading at its own time"):
+//   arm_time = "t_arm"   pendulum_time = "t_pend"   input_time = "t_cmd"   (in time_unit)
+//   input_rate_limit = 62.5   (the actuator slews towards each new input at most this fast, per s)
+//   supply = "v_bus"          (duty only: the supply [V], scaling the duty by it / nominal)
 // and, for input_kind = "voltage" only, the rig's DC motor:
 //   [motor]
 //   torque_constant_nm_per_a = 0.05   back_emf_v_s_per_rad = 0.05   resistance_ohm = 2.5
@@ -65,6 +69,12 @@ struct CsvImportSpec {
   // The [motor] table: set exactly when input_kind = voltage (pass *voltage_motor to preprocess or
   // identify).
   std::optional<VoltageMotor> voltage_motor;
+  // Optional columns (an empty name: not in the file): when each angle was read and when the input
+  // took effect, on the time column's clock; the supply voltage behind a duty.
+  CsvColumn arm_time, pendulum_time, input_time, supply;
+  // The input, after its scale, changes towards each new value at most this fast [unit/s] (a motor
+  // board's ramp); 0: as input_between_samples says.
+  double input_rate_limit_per_s = 0;
 };
 
 // Parses the [csv] and [motor] tables of an import spec file; errors name file, line and field
@@ -72,8 +82,18 @@ struct CsvImportSpec {
 CsvImportSpec load_csv_import_spec(const std::filesystem::path& path);
 CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& source_name);
 
+// The recording as it was, before any resampling, in the project's units: each angle and the input
+// at their own times (the row's time unless the spec names a column for it). A reading whose time
+// repeats the previous one's is the same reading (a logger that copies the last value into every
+// row) and is kept once. The output-error refinement takes every reading at its own time.
+struct RecordedSeries {
+  std::vector<double> q1_t_s, q1_rad, q2_t_s, q2_rad, input_t_s, input;
+  std::vector<double> supply_v;  // every row's supply reading, when the spec names one
+  bool empty() const { return q1_t_s.empty(); }
+};
+
 // A recording in the project's conventions: seconds, radians, pendulum zero hanging down, on a
-// uniform time grid.
+// uniform time grid (the angles and input interpolated to the row times where they have their own).
 struct ImportedSeries {
   double sample_period_s = 0;
   std::vector<double> t_s, q1_rad, q2_rad;
@@ -81,6 +101,8 @@ struct ImportedSeries {
   InputKind input_kind = InputKind::duty;
   std::vector<std::string>
       warnings;  // e.g. "irregular time stamps (max gap 23 ms): resampled to 10 ms"
+  RecordedSeries recorded;
+  double input_rate_limit_per_s = 0;  // the spec's
 };
 
 class CsvImportError : public std::runtime_error {

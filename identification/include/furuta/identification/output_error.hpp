@@ -68,14 +68,17 @@ struct OeExperiment {
 OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
                                     const config::RigConfig& rig);
 
-// From a recording (a CSV, or any RawExperiment): both angles at each sample time, the input as
-// recorded with `between` samples (held: a logger that records what it wrote; linear; cubic: a
-// sampled smooth signal, where linear's chords shrink every peak: 0.06 % of every parameter on
-// the voltage rig's six sines at 10 ms). `angle_sigma_rad` as in OeExperiment (one count /
-// sqrt(12)).
+// From a recording (a CSV, or any RawExperiment): each angle at its own time as recorded (or at the
+// sample times when `raw.recorded` is empty); the input from its own times, ramped at
+// `raw.input_rate_limit_per_s` when it has one, else as recorded with `between` samples (held: a
+// logger that records what it wrote; linear; cubic: a sampled smooth signal, where linear's chords
+// shrink every peak: 0.06 % of every parameter on the voltage rig's six sines at 10 ms).
+// `angle_sigma_rad` as in OeExperiment (one count / sqrt(12)). A duty with supply readings is
+// scaled by their mean over `nominal_supply_v` (the rig configuration's motor voltage).
 OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,
                                     InputBetweenSamples between,
-                                    const VoltageMotor& voltage_motor = {});
+                                    const VoltageMotor& voltage_motor = {},
+                                    double nominal_supply_v = 0);
 
 struct OutputErrorOptions {
   // Multiple shooting: each experiment is cut into segments of about this length, each with its

@@ -20,6 +20,10 @@ struct RawExperiment {
   std::vector<double> t_s, q1, q2, input;
   InputKind input_kind = InputKind::duty;
   std::vector<std::string> warnings;
+  // A CSV's readings as recorded, each at its own time, and its input's slew limit
+  // (ImportedSeries); empty for a session log, whose OeExperiment is read from its reports.
+  RecordedSeries recorded;
+  double input_rate_limit_per_s = 0;
 };
 
 // The samples of a session log: q1, q2 as the daemon computed them, the duty the board applied
