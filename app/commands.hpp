@@ -127,6 +127,7 @@ struct IdentifyCommandOptions {
   bool guaranteed = false;
   // Skip the output-error refinement the configuration's [output_error] enables.
   bool no_output_error = false;
+  bool diagnose = false;       // the refits of candidate recording mistakes, whatever the fit
   std::optional<int> threads;  // SIVIA threads (default: the configuration's)
   // The paper's scenarios after the fit (Table III, Fig. 6), with the LSMI estimate and, with
   // --sivia, SIVIA's hull; measured on the simulated rig (its truth, or the configuration's

@@ -225,6 +225,7 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   in.files.push_back(options.import_spec);
   if (spec.angle_unit == identification::AngleUnit::counts) {
     in.angle_resolution_rad = 2 * std::numbers::pi / spec.pendulum_counts_per_rev;
+    in.counts_per_rev = {spec.arm_counts_per_rev, spec.pendulum_counts_per_rev};
   }
   in.encoder_resolution_rad = spec.resolution_rad;
 
@@ -305,6 +306,7 @@ pipeline::Settings identify_settings(const config::RigConfig& rig,
   pipeline::Settings settings = pipeline::settings_for(rig);
   settings.identify = identify_options_for(rig, options);
   if (options.no_output_error) settings.output_error.run = false;
+  settings.output_error.diagnose = options.diagnose;
   settings.sivia.run = options.sivia;
   settings.windowed.run = options.guaranteed;
   settings.sivia.threads = options.threads.value_or(rig.sivia.threads);

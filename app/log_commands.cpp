@@ -127,12 +127,14 @@ int run_log_export_csv_command(const std::filesystem::path& path,
     return 2;
   }
   // Beside each row's values, when each was taken (docs/csv-import.md reads them back): the host
-  // time of the newest report behind each angle (a row without one repeats the last), and the
-  // command in force on the 1065 at the row's end as the board received it (its byte's duty) with
-  // the time it was written.
+  // time of the newest report behind each angle and its time on the board's own clock
+  // (session_log::BoardTimeline; a row without a new report repeats the last), and the command in
+  // force on the 1065 at the row's end as the board received it (its byte's duty) with the time
+  // it was written.
   csv << "seq,t_s,arm_counts,pendulum_counts,q1_rad,q2_rad,commanded_duty,applied_duty,"
          "current_a,supply_v,motor_flags,encoder_flags,motor_lost,encoder_lost,overruns,flags,"
-         "arm_time_s,pendulum_time_s,written_duty,written_s\n";
+         "arm_time_s,pendulum_time_s,written_duty,written_s,arm_board_reports,pendulum_board_"
+         "ticks\n";
   csv << std::setprecision(10);
   const std::int64_t t0 = log.samples.empty() ? 0 : log.samples.front().monotonic_ns;
   const auto seconds = [t0](std::int64_t ns) { return static_cast<double>(ns - t0) * 1e-9; };
@@ -140,10 +142,18 @@ int run_log_export_csv_command(const std::filesystem::path& path,
   std::size_t next_write = 0;
   std::optional<session_log::MotorCommandWrite> written;
   std::optional<std::int64_t> arm_ns, pendulum_ns;
+  session_log::BoardTimeline board_time;
+  double arm_board = 0, pendulum_board = 0;
   for (std::size_t i = 0; i < log.samples.size(); ++i) {
     const auto& s = log.samples[i];
     if (s.n_motor_reports > 0) arm_ns = s.motor_report_host_ns.back();
     if (s.n_encoder_reports > 0) pendulum_ns = s.encoder_report_host_ns.back();
+    for (const std::int16_t counter : s.motor_packet_counter) {
+      arm_board = board_time.motor_report(counter);
+    }
+    for (const std::int32_t ticks : s.encoder_packet_ticks) {
+      pendulum_board = board_time.encoder_report(ticks);
+    }
     const std::int64_t row_end = i + 1 < log.samples.size()
                                      ? log.samples[i + 1].monotonic_ns
                                      : std::numeric_limits<std::int64_t>::max();
@@ -157,7 +167,8 @@ int run_log_export_csv_command(const std::filesystem::path& path,
         << s.motor_lost_reports << ',' << s.encoder_lost_reports << ',' << s.overruns << ','
         << s.flags << ',' << seconds(arm_ns.value_or(s.monotonic_ns)) << ','
         << seconds(pendulum_ns.value_or(s.monotonic_ns)) << ',' << (written ? written->duty : 0.0)
-        << ',' << seconds(written ? written->time_ns : s.monotonic_ns) << '\n';
+        << ',' << seconds(written ? written->time_ns : s.monotonic_ns) << ',' << arm_board << ','
+        << pendulum_board << '\n';
   }
   csv.close();
   if (!csv) {

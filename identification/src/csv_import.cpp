@@ -102,7 +102,9 @@ void read_columns(Section& s, CsvImportSpec& spec) {
   optional("pendulum_time", spec.pendulum_time);
   optional("input_time", spec.input_time);
   optional("supply", spec.supply);
-  const std::array<std::pair<const char*, const CsvColumn*>, 8> columns = {{
+  optional("arm_board_time", spec.arm_board_time);
+  optional("pendulum_board_time", spec.pendulum_board_time);
+  const std::array<std::pair<const char*, const CsvColumn*>, 10> columns = {{
       {"time", &spec.time},
       {"arm_angle", &spec.arm_angle},
       {"pendulum_angle", &spec.pendulum_angle},
@@ -111,6 +113,8 @@ void read_columns(Section& s, CsvImportSpec& spec) {
       {"pendulum_time", &spec.pendulum_time},
       {"input_time", &spec.input_time},
       {"supply", &spec.supply},
+      {"arm_board_time", &spec.arm_board_time},
+      {"pendulum_board_time", &spec.pendulum_board_time},
   }};
   for (std::size_t i = 0; i < columns.size(); ++i) {
     if (columns[i].second->name.empty()) continue;
@@ -288,6 +292,9 @@ CsvImportSpec load_csv_import_spec(const std::filesystem::path& path) {
 namespace {
 
 constexpr std::size_t kMinRows = 16;
+// A board clock whose line leaves most host stamps later than this does not keep time: a report
+// period of a slow board.
+constexpr double kMaxBoardClockDelay_s = 8e-3;
 constexpr double kIrregularTolerance = 0.01;  // of the median step
 // A grid much denser than the recording means a gap of many periods (files joined, logger paused):
 // interpolating across it would invent data.
@@ -488,10 +495,12 @@ double reading_at(const std::vector<double>& t, const std::vector<double>& x, do
 // One quantity's readings at their own times: in the project's units, a reading whose time repeats
 // the previous one's dropped as the same reading; a time that goes back, or a repeat with another
 // value, is refused with both lines.
-void own_times(const std::string& file, const Channel& time, const Channel& value,
-               const std::vector<double>& t_raw, const std::vector<double>& x,
-               const std::vector<int>& row_line, double time_scale, std::vector<double>& t_out,
-               std::vector<double>& x_out) {
+std::vector<std::size_t> own_times(const std::string& file, const Channel& time,
+                                   const Channel& value, const std::vector<double>& t_raw,
+                                   const std::vector<double>& x, const std::vector<int>& row_line,
+                                   double time_scale, std::vector<double>& t_out,
+                                   std::vector<double>& x_out) {
+  std::vector<std::size_t> kept;
   std::size_t last = 0;
   for (std::size_t i = 0; i < t_raw.size(); ++i) {
     const double t = t_raw[i] * time_scale;
@@ -513,8 +522,40 @@ void own_times(const std::string& file, const Channel& time, const Channel& valu
     }
     t_out.push_back(t);
     x_out.push_back(x[i]);
+    kept.push_back(i);
     last = i;
   }
+  return kept;
+}
+
+// An angle's readings also stamped by the board's clock: their times mapped from it onto the host
+// clock (fit_board_clock), the board's unit whatever it is (its rate is fitted). The board's stamps
+// must increase with the readings; a board clock that does not keep time is a warning, and the
+// host's stamps stay.
+void map_board_times(const std::string& file, const Channel& board_column,
+                     const std::vector<double>& board_raw, const std::vector<std::size_t>& kept,
+                     const std::vector<int>& row_line, std::vector<double>& t,
+                     std::optional<BoardClock>& clock, std::vector<std::string>& warnings) {
+  std::vector<double> board;
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    const std::size_t i = kept[k];
+    if (k > 0 && !(board_raw[i] > board.back())) {
+      throw CsvImportError(file, row_line[i], board_column.label,
+                           exact(board_raw[i]) + " does not increase from " + exact(board.back()) +
+                               " on line " + std::to_string(row_line[kept[k - 1]]) +
+                               " though the reading is a new one");
+    }
+    board.push_back(board_raw[i]);
+  }
+  clock = fit_board_clock(t, board, kMaxBoardClockDelay_s);
+  if (!clock) {
+    warnings.push_back(board_column.label +
+                       ": the board's clock does not keep time against the host's stamps (more "
+                       "than a tenth of them lie over " +
+                       milliseconds(kMaxBoardClockDelay_s) + " off its line); the host's are used");
+    return;
+  }
+  for (std::size_t k = 0; k < t.size(); ++k) t[k] = clock->host_time(board[k]);
 }
 
 template <typename Slot>
@@ -541,10 +582,18 @@ RecordedSeries recorded_series(const std::string& file, const CsvImportSpec& spe
   RecordedSeries r;
   const std::size_t a = time_of(spec.arm_time), p = time_of(spec.pendulum_time),
                     c = time_of(spec.input_time);
-  own_times(file, channels[a], channels[1], raw[a], q1, row_line, spec.time_scale_s, r.q1_t_s,
-            r.q1_rad);
-  own_times(file, channels[p], channels[2], raw[p], q2, row_line, spec.time_scale_s, r.q2_t_s,
-            r.q2_rad);
+  const std::vector<std::size_t> q1_rows = own_times(
+      file, channels[a], channels[1], raw[a], q1, row_line, spec.time_scale_s, r.q1_t_s, r.q1_rad);
+  const std::vector<std::size_t> q2_rows = own_times(
+      file, channels[p], channels[2], raw[p], q2, row_line, spec.time_scale_s, r.q2_t_s, r.q2_rad);
+  if (const auto b = slot(spec.arm_board_time)) {
+    map_board_times(file, channels[*b], raw[*b], q1_rows, row_line, r.q1_t_s, r.board_clock[0],
+                    r.warnings);
+  }
+  if (const auto b = slot(spec.pendulum_board_time)) {
+    map_board_times(file, channels[*b], raw[*b], q2_rows, row_line, r.q2_t_s, r.board_clock[1],
+                    r.warnings);
+  }
   own_times(file, channels[c], channels[3], raw[c], u, row_line, spec.time_scale_s, r.input_t_s,
             r.input);
   if (const auto v = slot(spec.supply)) {
@@ -598,7 +647,9 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
   for (const Channel& optional :
        {Channel{"arm_time", &spec.arm_time, 0, {}},
         Channel{"pendulum_time", &spec.pendulum_time, 0, {}},
-        Channel{"input_time", &spec.input_time, 0, {}}, Channel{"supply", &spec.supply, 0, {}}}) {
+        Channel{"input_time", &spec.input_time, 0, {}}, Channel{"supply", &spec.supply, 0, {}},
+        Channel{"arm_board_time", &spec.arm_board_time, 0, {}},
+        Channel{"pendulum_board_time", &spec.pendulum_board_time, 0, {}}}) {
     if (!optional.column->name.empty()) channels.push_back(optional);
   }
   const auto slot = [&](const CsvColumn& column) -> std::optional<std::size_t> {
@@ -691,6 +742,7 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
   }
   ImportedSeries out;
   out.recorded = recorded_series(file, spec, channels, raw, row_line, slot);
+  out.warnings = out.recorded.warnings;
   out.input_rate_limit_per_s = spec.input_rate_limit_per_s;
 
   out.input_kind = spec.input_kind;

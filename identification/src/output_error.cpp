@@ -430,6 +430,26 @@ void assumed_angle_noise(OutputErrorResult& result, const std::vector<OeExperime
   }
 }
 
+// Whose times each joint's observations carry, and how late the host's stamps were where a
+// board's clock replaced them.
+void time_stamps(OutputErrorResult& result, const std::vector<OeExperiment>& experiments) {
+  for (int j = 0; j < 2; ++j) {
+    std::size_t mapped = 0;
+    double delay_sum = 0;
+    for (const OeExperiment& e : experiments) {
+      if (!e.board_clock[j]) continue;
+      ++mapped;
+      delay_sum += e.board_clock[j]->host_delay_mean_s;
+      result.host_delay_max_s[j] =
+          std::max(result.host_delay_max_s[j], e.board_clock[j]->host_delay_max_s);
+    }
+    result.time_stamps[j] = mapped == 0                    ? TimeStamps::host
+                            : mapped == experiments.size() ? TimeStamps::board_clock
+                                                           : TimeStamps::mixed;
+    if (mapped > 0) result.host_delay_mean_s[j] = delay_sum / static_cast<double>(mapped);
+  }
+}
+
 // The fit against what its noise model predicts: angles much further from the model than their
 // assumed noise, or segments that do not join, say the model does not describe the data as
 // recorded, and name what usually causes it.
@@ -483,6 +503,10 @@ ceres::Solver::Options solver_options(int max_iterations, int threads) {
   o.logging_type = ceres::SILENT;
   return o;
 }
+
+// A board clock whose line leaves most host stamps later than this is not keeping time: one
+// report period of the boards.
+constexpr double kMaxBoardClockDelay_s = 8e-3;
 
 // A duty's torque scales with the supply: the experiment's supply_scale from every reading of it,
 // and the input gain's prior from how well they fix it. The mean, with a tenth cut at each end
@@ -591,18 +615,26 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
   const double pendulum_rad_per_count =
       rig.pendulum_encoder.sign * kTwoPi / rig.pendulum_encoder.counts_per_joint_rev();
 
-  std::array<double, 2> last_t = {-1e300, -1e300};
-  const auto observe = [&](std::int64_t host_ns, int joint, double angle_rad) {
+  // Each joint's readings with the host's time and the board's own (the 1065's report counter,
+  // the 1047's accumulated packet ticks); a reading whose host time does not move on is dropped.
+  std::array<std::vector<double>, 2> host_s, board, angle;
+  const auto observe = [&](int joint, std::int64_t host_ns, double board_time, double angle_rad) {
     const double t = seconds(host_ns);
-    if (t > last_t[joint]) e.observations.push_back({t, joint, angle_rad});
-    last_t[joint] = std::max(last_t[joint], t);
+    if (!host_s[joint].empty() && !(t > host_s[joint].back())) return;
+    host_s[joint].push_back(t);
+    board[joint].push_back(board_time);
+    angle[joint].push_back(angle_rad);
   };
+  session_log::BoardTimeline board_time;
   std::vector<const session_log::MotorInputReport*> cycle;
+  std::vector<double> cycle_board;
   for (const auto& s : log.samples) {
     if (s.n_motor_reports > 0) {
       cycle.clear();
+      cycle_board.clear();
       for (std::int16_t k = 0; k < s.n_motor_reports; ++k) {
         cycle.push_back(position_at(s.motor_report_host_ns[k]));
+        cycle_board.push_back(board_time.motor_report(s.motor_packet_counter[k]));
       }
       const session_log::MotorInputReport* newest = cycle.back();
       for (std::int16_t k = 0; k + 1 < s.n_motor_reports; ++k) {
@@ -611,16 +643,30 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
         const auto behind =
             static_cast<std::int32_t>(static_cast<std::uint32_t>(cycle[k]->encoder_position) -
                                       static_cast<std::uint32_t>(newest->encoder_position));
-        observe(s.motor_report_host_ns[k], 0, s.arm_angle_rad + behind * arm_rad_per_count);
+        observe(0, s.motor_report_host_ns[k], cycle_board[k],
+                s.arm_angle_rad + behind * arm_rad_per_count);
       }
-      observe(s.motor_report_host_ns[s.n_motor_reports - 1], 0, s.arm_angle_rad);
+      observe(0, s.motor_report_host_ns[s.n_motor_reports - 1], cycle_board.back(),
+              s.arm_angle_rad);
     }
     std::int64_t after = 0;  // counts of the cycle's reports after report k
     for (std::int16_t k = 0; k < s.n_encoder_reports; ++k) after += s.encoder_delta_counts[k];
     for (std::int16_t k = 0; k < s.n_encoder_reports; ++k) {
       after -= s.encoder_delta_counts[k];
-      observe(s.encoder_report_host_ns[k], 1,
+      observe(1, s.encoder_report_host_ns[k], board_time.encoder_report(s.encoder_packet_ticks[k]),
               s.pendulum_angle_rad - after * pendulum_rad_per_count);
+    }
+  }
+  const bool pendulum_ticks_whole = log.samples.back().encoder_lost_reports == 0;
+  for (int j = 0; j < 2; ++j) {
+    const std::optional<BoardClock> clock =
+        j == 1 && !pendulum_ticks_whole
+            ? std::nullopt
+            : fit_board_clock(host_s[j], board[j], kMaxBoardClockDelay_s);
+    e.board_clock[j] = clock;
+    for (std::size_t i = 0; i < host_s[j].size(); ++i) {
+      e.observations.push_back(
+          {clock ? clock->host_time(board[j][i]) : host_s[j][i], j, angle[j][i]});
     }
   }
   std::stable_sort(e.observations.begin(), e.observations.end(),
@@ -672,7 +718,12 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
     throw std::invalid_argument(raw.name + ": angles, input and times differ in length");
   }
   RecordedSeries r = raw.recorded;
-  if (r.empty()) r = {raw.t_s, raw.q1, raw.t_s, raw.q2, raw.t_s, raw.input, {}};
+  if (r.empty()) {
+    r.q1_t_s = r.q2_t_s = r.input_t_s = raw.t_s;
+    r.q1_rad = raw.q1;
+    r.q2_rad = raw.q2;
+    r.input = raw.input;
+  }
   if (r.q1_t_s.empty() || r.q2_t_s.empty() || r.input_t_s.empty()) {
     throw std::invalid_argument(raw.name + ": an angle or the input has no readings");
   }
@@ -684,6 +735,7 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
   }
   std::stable_sort(e.observations.begin(), e.observations.end(),
                    [](const OeObservation& a, const OeObservation& b) { return a.t_s < b.t_s; });
+  e.board_clock = r.board_clock;
 
   const std::size_t m = r.input_t_s.size();
   if (raw.input_rate_limit_per_s > 0) {
@@ -861,6 +913,7 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
   const double dof = static_cast<double>(summary.num_residuals - summary.num_effective_parameters);
   result.residual_sigma = dof > 0 ? std::sqrt(2.0 * summary.final_cost / dof) : 0.0;
   assumed_angle_noise(result, experiments);
+  time_stamps(result, experiments);
   misfit_warnings(result, options);
 
   const int lag_column = options.estimate_lag ? 7 : -1;

@@ -205,8 +205,9 @@ identification::OeExperiment oe_experiment(const Recording& r, const Batch& batc
 
 // The refinement from the combined LSMI estimate, the held-out free runs, and the check that the
 // result is physical. Nothing (with a warning) when a recording has no OeExperiment of its own.
-std::optional<OutputError> run_output_error(const OutputErrorSettings& settings, const Batch& batch,
-                                            Run& run, Progress* progress) {
+std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
+                                            const identification::IdentifyOptions& identify_options,
+                                            const Batch& batch, Run& run, Progress* progress) {
   const auto warn = [&](const std::string& text) {
     // The refinement's own warnings already say where they come from.
     const std::string said = text.rfind("output error: ", 0) == 0 ? text : "output error: " + text;
@@ -280,6 +281,39 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
         out.physical,
         logs ? identification::RecordingSource::session_log : identification::RecordingSource::csv,
         "the output-error estimate"));
+  }
+
+  // A fit that is no rig's answer is refitted with each candidate recording mistake undone; the
+  // one the data support is named (a warning), with what to change.
+  const identification::MistakeFit judged =
+      identification::judge_fit(out.result, options, batch.nominal);
+  if (settings.diagnose || identification::needs_diagnosis(judged)) {
+    // Without CAD, each correction's fit starts from LSMI on the corrected data.
+    const auto lsmi_start = [&](identification::Mistake mistake,
+                                double value) -> std::optional<model::Parameters<double>> {
+      std::vector<identification::RawExperiment> raws;
+      for (const Recording* r : fitted) {
+        raws.push_back(identification::corrected_raw(r->experiment, mistake, value));
+      }
+      try {
+        return identification::identify(raws, std::nullopt, identify_options, batch.rig.motor,
+                                        batch.voltage_motor)
+            .combined.estimate;
+      } catch (const std::exception&) {
+        return std::nullopt;
+      }
+    };
+    out.diagnosis = identification::diagnose_recording(experiments, out.result, batch.rig.motor,
+                                                       options, batch.nominal, lsmi_start);
+    out.counts_per_rev = logs ? std::array<double, 2>{batch.rig.arm_encoder.counts_per_rev,
+                                                      batch.rig.pendulum_encoder.counts_per_rev}
+                              : batch.counts_per_rev;
+    if (!judged.plausible) {
+      warn(identification::diagnosis_text(*out.diagnosis,
+                                          logs ? identification::RecordingSource::session_log
+                                               : identification::RecordingSource::csv,
+                                          out.counts_per_rev));
+    }
   }
 
   if (batch.held_out && usable(*batch.held_out)) {
@@ -496,7 +530,8 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
   out.physical = check_physical(out.identification, batch.kind, out.warnings);
   if (progress != nullptr) progress->lsmi_done(out.identification);
   if (settings.output_error.run) {
-    out.output_error = run_output_error(settings.output_error, batch, out, progress);
+    out.output_error =
+        run_output_error(settings.output_error, settings.identify, batch, out, progress);
   }
   if (progress != nullptr) {
     progress->fit_done(out.identification, out.output_error ? &out.output_error->result : nullptr);

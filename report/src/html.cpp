@@ -249,8 +249,8 @@ void section_lsmi(Html& h, const ReportInput& in) {
         (oe.converged ? "converged" : "not converged: where it stopped is in results.json") +
         "), inside the physical region; angle residual RMS q1 " + dash_sci(oe.angle_rms_rad[0], 2) +
         " rad, q2 " + dash_sci(oe.angle_rms_rad[1], 2) + " rad; data path lag " +
-        dash_fixed(oe.input_lag_s * 1e3, 3) +
-        " ms. Its standard deviations are local (from the Jacobian at the optimum, robust to "
+        dash_fixed(oe.input_lag_s * 1e3, 3) + " ms; " + oe.time_stamps +
+        ". Its standard deviations are local (from the Jacobian at the optimum, robust to "
         "angle errors correlated within a segment) and take the model and the input as exact.");
   }
   std::vector<std::vector<std::string>> diagnostics;

@@ -146,6 +146,7 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
     oe.segments = r.segments;
     oe.iterations = r.iterations;
     oe.converged = r.converged;
+    oe.time_stamps = time_stamps_text(r);
     if (run.output_error->held_out) {
       const pipeline::HeldOutFreeRuns& h = *run.output_error->held_out;
       oe.held_out_name = h.name;

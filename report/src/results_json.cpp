@@ -202,6 +202,39 @@ const char* noise_source_name(identification::AngleNoiseSource source) {
                                                                    : "encoder_resolution";
 }
 
+const char* time_stamps_name(identification::TimeStamps stamps) {
+  switch (stamps) {
+    case identification::TimeStamps::board_clock:
+      return "board_clock";
+    case identification::TimeStamps::mixed:
+      return "mixed";
+    case identification::TimeStamps::host:
+      break;
+  }
+  return "host";
+}
+
+Json mistake_fit_json(const identification::MistakeFit& m) {
+  Json j{{"mistake", identification::mistake_name(m.mistake)},
+         {"value", m.value},
+         {"converged", m.converged},
+         {"residual_sigma", m.residual_sigma},
+         {"physical", m.physical.consistent()},
+         {"plausible", m.plausible},
+         {"estimate", parameters_json(m.estimate)}};
+  if (m.physical.inertia_ratio_to_cad) j["inertia_ratio_to_cad"] = *m.physical.inertia_ratio_to_cad;
+  return j;
+}
+
+// The refits with each candidate recording mistake undone (identification/diagnosis.hpp).
+Json diagnosis_json(const identification::Diagnosis& d) {
+  Json candidates = Json::array();
+  for (const auto& c : d.candidates) candidates.push_back(mistake_fit_json(c));
+  Json j{{"as_recorded", mistake_fit_json(d.as_recorded)}, {"candidates", candidates}};
+  j["named"] = d.named ? mistake_fit_json(*d.named) : Json(nullptr);
+  return j;
+}
+
 Json output_error_json(const pipeline::OutputError& oe) {
   const identification::OutputErrorResult& r = oe.result;
   const auto joints = [](const std::array<double, 2>& v) {
@@ -225,6 +258,10 @@ Json output_error_json(const pipeline::OutputError& oe) {
          {"angle_noise_rad", joints(r.angle_noise_rad)},
          {"angle_noise_source", Json{{"q1", noise_source_name(r.angle_noise_source[0])},
                                      {"q2", noise_source_name(r.angle_noise_source[1])}}},
+         {"time_stamps", Json{{"q1", time_stamps_name(r.time_stamps[0])},
+                              {"q2", time_stamps_name(r.time_stamps[1])}}},
+         {"host_delay_mean_s", joints(r.host_delay_mean_s)},
+         {"host_delay_max_s", joints(r.host_delay_max_s)},
          {"segments", r.segments},
          {"observations", r.observations},
          {"iterations", r.iterations},
@@ -232,6 +269,7 @@ Json output_error_json(const pipeline::OutputError& oe) {
          {"message", r.message},
          {"physical", oe.physical.consistent()},
          {"warnings", r.warnings}};
+  if (oe.diagnosis) j["diagnosis"] = diagnosis_json(*oe.diagnosis);
   if (oe.held_out) {
     j["held_out_free_run"] = Json{{"name", oe.held_out->name},
                                   {"lsmi_rmse_rad", joints(oe.held_out->lsmi.rmse_rad)},

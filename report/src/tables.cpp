@@ -76,7 +76,8 @@ std::string format_table_one(const identification::Identification& id,
         << " iterations, " << (refined->converged ? "converged" : "NOT converged")
         << "; angle residual RMS q1 " << sci(refined->angle_rms_rad[0], 2) << " rad, q2 "
         << sci(refined->angle_rms_rad[1], 2) << " rad; lag " << std::fixed << std::setprecision(3)
-        << refined->input_lag_s * 1e3 << " ms (its sd: local, from the Jacobian)\n";
+        << refined->input_lag_s * 1e3 << " ms (its sd: local, from the Jacobian)\n"
+        << time_stamps_text(*refined) << "\n";
   }
   if (id.validation) {
     out << "\nheld-out torque on " << id.validation->name << ": RMSE "
@@ -86,6 +87,42 @@ std::string format_table_one(const identification::Identification& id,
   }
   for (const auto& warning : id.warnings) out << "warning: " << warning << "\n";
   return out.str();
+}
+
+std::string time_stamps_text(const identification::OutputErrorResult& r) {
+  using identification::TimeStamps;
+  const auto name = [](TimeStamps t) {
+    switch (t) {
+      case TimeStamps::board_clock:
+        return "the board's clock";
+      case TimeStamps::mixed:
+        return "the board's clock where it kept time, else the host's stamps";
+      case TimeStamps::host:
+        break;
+    }
+    return "the host's stamps";
+  };
+  std::ostringstream s;
+  s << "times: ";
+  if (r.time_stamps[0] == r.time_stamps[1]) {
+    s << (r.time_stamps[0] == TimeStamps::board_clock ? "the boards' clocks"
+                                                      : name(r.time_stamps[0]));
+  } else {
+    s << "q1 " << name(r.time_stamps[0]) << ", q2 " << name(r.time_stamps[1]);
+  }
+  double mean = 0, most = 0;
+  int mapped = 0;
+  for (int j = 0; j < 2; ++j) {
+    if (r.time_stamps[j] == TimeStamps::host) continue;
+    mean += r.host_delay_mean_s[j];
+    most = std::max(most, r.host_delay_max_s[j]);
+    ++mapped;
+  }
+  if (mapped > 0) {
+    s << std::fixed << std::setprecision(2) << " (the host's stamps were on average "
+      << mean / mapped * 1e3 << " ms, at most " << most * 1e3 << " ms later)";
+  }
+  return s.str();
 }
 
 std::string sivia_summary_text(const identification::GuaranteedResult& r,
@@ -297,10 +334,23 @@ std::string held_out_free_run_text(const pipeline::HeldOutFreeRuns& runs) {
   return out.str();
 }
 
+identification::RecordingSource recording_source(const pipeline::Run& run) {
+  return run.kind == pipeline::InputKind::csv_recordings
+             ? identification::RecordingSource::csv
+             : identification::RecordingSource::session_log;
+}
+
 std::string terminal_text_after_lsmi(const pipeline::Run& run) {
   std::string text;
   if (run.output_error && run.output_error->held_out) {
     text += held_out_free_run_text(*run.output_error->held_out);
+  }
+  // A diagnosis asked for on a fit that needed none (one that did is among Table I's warnings).
+  if (run.output_error && run.output_error->diagnosis &&
+      run.output_error->diagnosis->as_recorded.plausible) {
+    text += identification::diagnosis_text(*run.output_error->diagnosis, recording_source(run),
+                                           run.output_error->counts_per_rev) +
+            "\n";
   }
   if (run.sivia) text += sivia_summary_text(run.sivia->result, run.identification.truth);
   for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {

@@ -104,6 +104,18 @@ SessionLog load_session_log(const std::filesystem::path& path) {
   return log;
 }
 
+double BoardTimeline::motor_report(std::int16_t packet_counter) {
+  const auto counter = static_cast<std::uint8_t>(packet_counter);
+  if (last_counter_) reports_ += static_cast<std::uint8_t>(counter - *last_counter_);
+  last_counter_ = counter;
+  return reports_;
+}
+
+double BoardTimeline::encoder_report(std::int32_t packet_ticks) {
+  ticks_ = ticks_ ? *ticks_ + packet_ticks : 0.0;
+  return *ticks_;
+}
+
 std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log) {
   std::vector<MotorCommandWrite> out;
   for (const furuta::rig_usb_report_t& r : log.usb_reports) {

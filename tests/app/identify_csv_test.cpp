@@ -278,6 +278,90 @@ TEST_F(IdentifyCsv, ASessionExportedAndImportedBackIsIdentifiedWithinOnePercent)
   EXPECT_LT(oe["residual_sigma"].get<double>(), 10.0);  // no misfit
 }
 
+// The project's rig.toml with 1 ms of USB jitter on every report, written into `dir`.
+fs::path jittered_rig_config(const fs::path& dir) {
+  std::string toml = read(FURUTA_SOURCE_DIR "/config/rig.toml");
+  const std::string still = "\nusb_latency_jitter_ns = 0\n";
+  const auto at = toml.find(still);
+  EXPECT_NE(at, std::string::npos) << "config/rig.toml: no `" << still << "`";
+  if (at != std::string::npos)
+    toml.replace(at, still.size(), "\nusb_latency_jitter_ns = 1000000\n");
+  return write(dir / "jittered.toml", toml);
+}
+
+// Host time stamps late by up to 1 ms at random: the boards' own clocks (the 1065's report
+// counter, the 1047's packet ticks) put every reading back at its time, from the log and from its
+// CSV export with the board columns named; the CSV without them is fitted on the host's stamps and
+// the misfit is said.
+TEST_F(IdentifyCsv, JitteredHostTimesAreReplacedByTheBoardsClocks) {
+  const fs::path config = jittered_rig_config(dir_.path());
+  const fs::path log =
+      furuta::testing::simulated_session_log(dir_.path() / "logs", "jit", 1, {}, {}, {}, config);
+  ASSERT_FALSE(log.empty());
+  const config::RigConfig rig = config::load_rig_config(config);
+  const model::Parameters<double>& truth = rig.simulation.parameters;
+  const auto refined = [&](const char* what) {
+    const nlohmann::json oe =
+        nlohmann::json::parse(read(options_.output_dir / "results.json"))["output_error"];
+    EXPECT_TRUE(oe["converged"].get<bool>()) << what;
+    std::printf("[ measured ] 1 ms jitter, %s: residual sigma %.2f, times %s\n", what,
+                oe["residual_sigma"].get<double>(), oe["time_stamps"]["q1"].dump().c_str());
+    return oe;
+  };
+  const auto within_3_sd = [&](const nlohmann::json& oe, const char* what) {
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      const char* name = model::kParameterNames[k];
+      const double error = oe["estimate"][name].get<double>() - truth[k];
+      EXPECT_LT(std::abs(error), 3 * oe["std_dev"][name].get<double>()) << what << " " << name;
+    }
+  };
+  options_.no_output_error = false;
+  options_.config_path = config;
+
+  IdentifyCommandOptions from_log = options_;
+  from_log.csvs.clear();
+  from_log.import_spec.clear();
+  from_log.logs = {log};
+  ASSERT_EQ(run_identify_command(from_log, out_, err_), 0) << err_.str();
+  const nlohmann::json logged = refined("log");
+  EXPECT_EQ(logged["time_stamps"]["q1"], "board_clock");
+  EXPECT_EQ(logged["time_stamps"]["q2"], "board_clock");
+  EXPECT_NEAR(logged["host_delay_max_s"]["q2"].get<double>(), 1e-3, 0.1e-3);
+  EXPECT_LT(logged["residual_sigma"].get<double>(), 3.0);
+  within_3_sd(logged, "log");
+  EXPECT_NE(out_.str().find("times: the boards' clocks (the host's stamps were on average"),
+            std::string::npos)
+      << out_.str();
+
+  const fs::path csv = dir_.path() / "jittered.csv";
+  ASSERT_EQ(run_log_export_csv_command(log, csv, out_, err_), 0) << err_.str();
+  std::ostringstream spec;
+  spec << std::setprecision(17) << "[csv]\ntime = \"t_s\"\ntime_unit = \"s\"\n"
+       << "arm_angle = \"q1_rad\"\narm_time = \"arm_time_s\"\n"
+       << "pendulum_angle = \"q2_rad\"\npendulum_time = \"pendulum_time_s\"\n"
+       << "angle_unit = \"rad\"\npendulum_zero = \"down\"\n"
+       << "input = \"written_duty\"\ninput_time = \"written_s\"\ninput_kind = \"duty\"\n"
+       << "input_rate_limit = " << rig.excitation.board_acceleration_pct_per_s / 100 << "\n"
+       << "arm_resolution = " << 2 * kPi / rig.arm_encoder.counts_per_joint_rev() << "\n"
+       << "pendulum_resolution = " << 2 * kPi / rig.pendulum_encoder.counts_per_joint_rev() << "\n";
+  write(spec_, spec.str());
+  options_.csvs = {csv};
+  ASSERT_EQ(run(), 0) << err_.str();
+  const nlohmann::json host = refined("CSV, host stamps");
+  EXPECT_EQ(host["time_stamps"]["q1"], "host");
+  EXPECT_GT(host["residual_sigma"].get<double>(), 10.0);
+  EXPECT_NE(host["warnings"].dump().find("further from the fitted model"), std::string::npos);
+
+  write(spec_, spec.str() +
+                   "arm_board_time = \"arm_board_reports\"\n"
+                   "pendulum_board_time = \"pendulum_board_ticks\"\n");
+  ASSERT_EQ(run(), 0) << err_.str();
+  const nlohmann::json board = refined("CSV, board columns");
+  EXPECT_EQ(board["time_stamps"]["q2"], "board_clock");
+  EXPECT_LT(board["residual_sigma"].get<double>(), 3.0);
+  within_3_sd(board, "CSV");
+}
+
 // An interpolating encoder (angles with 2e-4 rad of white noise, so steps between samples far
 // below it): without a stated resolution the refinement's noise model is the smallest step, which
 // results.json says, and the residual sigma comes out many times 1; with arm_resolution and

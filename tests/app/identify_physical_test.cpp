@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -128,6 +129,20 @@ class IdentifyPhysical : public ::testing::Test {
                 refined["residual_sigma"].get<double>(), misfit ? ", misfit warned" : "",
                 refined_unphysical ? ", its estimate not physical" : "");
     EXPECT_TRUE(!refined["converged"].get<bool>() || misfit || refined_unphysical) << o.out;
+    // And the diagnosis refits the mistake and names it.
+    const auto diagnosis = o.out.find("diagnosis: ");
+    ASSERT_NE(diagnosis, std::string::npos) << o.out;
+    const std::string said = o.out.substr(diagnosis, o.out.find('\n', diagnosis) - diagnosis);
+    std::printf("[ diagnosis] %s\n", said.c_str());
+    const std::map<std::string, std::string> named = {
+        {"pendulum sign", "the pendulum's angle counted the other way"},
+        {"pendulum zero", "the pendulum's angle counted from upright, not"},
+        {"pendulum zero and sign", "the pendulum's angle counted from upright and the other way"},
+        {"angle unit", "both angles in degrees read as radians"},
+        {"arm sign", "the arm's angle counted the other way"},
+        {"input sign", "the input's sign flipped"}};
+    ASSERT_TRUE(named.contains(cause)) << cause;
+    EXPECT_NE(said.find("the data fit best with " + named.at(cause)), std::string::npos) << said;
     EXPECT_EQ(o.out.find("BUG"), std::string::npos) << o.out;
     const auto banner = o.html.find("<section id=\"physical\"");
     EXPECT_NE(banner, std::string::npos);

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "furuta/identification/board_clock.hpp"
+
 namespace furuta::identification {
 
 // A voltage-driven motor (other rigs): tau = ratio * efficiency * k_t (V - k_e omega_motor) / R.
@@ -45,6 +47,7 @@ struct CsvColumn {
 //   arm_time = "t_arm"   pendulum_time = "t_pend"   input_time = "t_cmd"   (in time_unit)
 //   input_rate_limit = 62.5   (the actuator slews towards each new input at most this fast, per s)
 //   supply = "v_bus"          (duty only: the supply [V], scaling the duty by it / nominal)
+//   arm_board_time = "arm_ticks"  pendulum_board_time = "enc_us"  (each board's own clock)
 // and, for input_kind = "voltage" only, the rig's DC motor:
 //   [motor]
 //   torque_constant_nm_per_a = 0.05   back_emf_v_s_per_rad = 0.05   resistance_ohm = 2.5
@@ -72,6 +75,9 @@ struct CsvImportSpec {
   // Optional columns (an empty name: not in the file): when each angle was read and when the input
   // took effect, on the time column's clock; the supply voltage behind a duty.
   CsvColumn arm_time, pendulum_time, input_time, supply;
+  // Optional: each angle's stamp on its board's own clock, in any unit (its rate is fitted); the
+  // angle's times are then mapped from it onto the host's (fit_board_clock).
+  CsvColumn arm_board_time, pendulum_board_time;
   // The input, after its scale, changes towards each new value at most this fast [unit/s] (a motor
   // board's ramp); 0: as input_between_samples says.
   double input_rate_limit_per_s = 0;
@@ -89,6 +95,9 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
 struct RecordedSeries {
   std::vector<double> q1_t_s, q1_rad, q2_t_s, q2_rad, input_t_s, input;
   std::vector<double> supply_v;  // every row's supply reading, when the spec names one
+  // Per angle: the board clock its times were mapped from (the spec's *_board_time), or nothing.
+  std::array<std::optional<BoardClock>, 2> board_clock;
+  std::vector<std::string> warnings;  // a board clock that did not keep time
   bool empty() const { return q1_t_s.empty(); }
 };
 

@@ -6,10 +6,12 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "furuta/config/rig_config.hpp"
+#include "furuta/identification/board_clock.hpp"
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/identification/preprocessing.hpp"
 #include "furuta/model/model.hpp"
@@ -30,6 +32,9 @@ struct OeObservation {
 // CSV's counts or stated resolution), or, when a CSV does not say, its smallest step between
 // samples, which an interpolating encoder or a filtered signal makes far too small.
 enum class AngleNoiseSource { encoder_resolution, smallest_step };
+// Where a joint's observation times came from: the host's stamps, the board's clock mapped onto
+// the host's (fit_board_clock), or some experiments each.
+enum class TimeStamps { host, board_clock, mixed };
 
 struct OeExperiment {
   std::string name;
@@ -58,9 +63,13 @@ struct OeExperiment {
   // Session logs: every supply reading of the 1065's reports [V] (the guaranteed identification's
   // drive, physical_inputs.hpp); empty for other recordings.
   std::vector<double> supply_readings_v;
+  // Per joint: the board's clock its observations' times were mapped from, or nothing where they
+  // are the host's stamps (no board time, or one that does not keep time).
+  std::array<std::optional<BoardClock>, 2> board_clock;
 };
 
-// From a session log: the angles of every report of both boards at its host time; the input rebuilt
+// From a session log: the angles of every report of both boards at its time, the board's own clock
+// mapped onto the host's (fit_board_clock) where it keeps time, else the host's; the input rebuilt
 // from every command written to the 1065 (session_log::motor_command_writes) and the board's ramp
 // towards it, scaled by the mean supply reading of the 1065's reports. `rig` gives the encoders'
 // geometry, the motor's nominal voltage and the braking before the first command (the log's
@@ -133,6 +142,10 @@ struct OutputErrorResult {
   std::array<double, 2> angle_noise_rad = {0, 0};
   std::array<AngleNoiseSource, 2> angle_noise_source = {AngleNoiseSource::encoder_resolution,
                                                         AngleNoiseSource::encoder_resolution};
+  // Per joint, whose times the observations carry, and where the board's clock was used, how late
+  // the host's stamps were beside it (the mean and the largest over the experiments) [s].
+  std::array<TimeStamps, 2> time_stamps = {TimeStamps::host, TimeStamps::host};
+  std::array<double, 2> host_delay_mean_s = {0, 0}, host_delay_max_s = {0, 0};
   std::size_t segments = 0;
   std::size_t observations = 0;
   int iterations = 0;

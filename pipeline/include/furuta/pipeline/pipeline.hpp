@@ -21,6 +21,7 @@
 
 #include "furuta/config/rig_config.hpp"
 #include "furuta/identification/csv_import.hpp"
+#include "furuta/identification/diagnosis.hpp"
 #include "furuta/identification/guaranteed.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/identification/output_error.hpp"
@@ -110,6 +111,9 @@ struct Batch {
   // CSV recordings: each angle's resolution [rad] (arm, pendulum) as the import spec gives it
   // (counts, or arm_resolution / pendulum_resolution); 0 where it does not say.
   std::array<double, 2> encoder_resolution_rad = {0, 0};
+  // CSV recordings in counts: each angle's counts per revolution as the import spec gives them
+  // (session logs: the configuration's encoders); 0 otherwise.
+  std::array<double, 2> counts_per_rev = {0, 0};
 };
 
 struct SiviaSettings {
@@ -130,6 +134,10 @@ struct SimulationSettings {
 struct OutputErrorSettings {
   bool run = false;
   identification::OutputErrorOptions options;
+  // The diagnosis by refitting candidate mistakes (identification/diagnosis.hpp): always runs
+  // when the fit is no rig's answer; `diagnose` runs it for every fit (`furuta identify
+  // --diagnose`: the check of a new recording's signs, zero and units).
+  bool diagnose = false;
 };
 
 // The windowed set inversion (identification/windowed_set.hpp) over the output-error estimate +-
@@ -283,6 +291,11 @@ struct OutputError {
   // names the cause).
   identification::PhysicalCheck physical;
   std::optional<HeldOutFreeRuns> held_out;
+  // The refits with each candidate recording mistake undone, when the fit needed them or they
+  // were asked for; and each angle's counts per revolution as configured (0: not in counts), for
+  // the named correction's suggestion.
+  std::optional<identification::Diagnosis> diagnosis;
+  std::array<double, 2> counts_per_rev = {0, 0};
 };
 
 // Something that happened that a reader should know of, beyond the numbers.

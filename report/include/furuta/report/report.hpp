@@ -75,6 +75,7 @@ struct OutputErrorSummary {
   std::size_t segments = 0;
   int iterations = 0;
   bool converged = false;
+  std::string time_stamps;  // time_stamps_text
   // The held-out recording run free with the LSMI and the refined parameters.
   std::string held_out_name;
   std::array<double, 2> lsmi_rmse_rad = {0, 0}, refined_rmse_rad = {0, 0};

@@ -27,6 +27,9 @@ std::string scenario_description(const validated::Scenario& scenario);
 // angle residuals and convergence.
 std::string format_table_one(const identification::Identification& id,
                              const identification::OutputErrorResult* refined = nullptr);
+// Whose clock the refinement's observation times came from, one sentence without a newline:
+// "times: the boards' clocks (the host's stamps were on average 0.50 ms, at most 1.00 ms later)".
+std::string time_stamps_text(const identification::OutputErrorResult& refined);
 
 // What --sivia's set rests on, said wherever the set is shown: the paper's method takes the data's
 // error bounds (velocities, accelerations, torque) from [sivia], which the data do not prove.

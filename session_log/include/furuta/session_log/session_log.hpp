@@ -78,6 +78,21 @@ struct MotorInputReport {
 // Every decodable report of the 1065, in time order (reports of equal time in the log's order).
 std::vector<MotorInputReport> motor_input_reports(const SessionLog& log);
 
+// Each report's time on its board's own clock, fed the samples' reports in log order: the 1065's
+// 8-bit report counter unwrapped (in reports), the 1047's packet ticks accumulated (in ticks; the
+// first report's are left out: they cover time before the host listened). A lost 1047 report
+// takes its ticks with it, so after one the 1047's times no longer keep time.
+class BoardTimeline {
+ public:
+  double motor_report(std::int16_t packet_counter);
+  double encoder_report(std::int32_t packet_ticks);
+
+ private:
+  std::optional<std::uint8_t> last_counter_;
+  double reports_ = 0;
+  std::optional<double> ticks_;
+};
+
 // The raw USB reports of one board, as a trace the replay backend can play (the device line from
 // the session start record).
 bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board);
