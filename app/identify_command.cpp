@@ -414,6 +414,11 @@ void print_identification(std::ostream& out, const pipeline::Run& run,
 
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err) {
+  if (options.diagnose && options.no_output_error) {
+    err << "furuta identify: --diagnose refits the output-error refinement: not with "
+           "--no-output-error\n";
+    return 2;
+  }
   const std::optional<pipeline::Batch> batch = checked_batch(options, err);
   if (!batch) return 2;
   // Before the fit, which may take long: a directory it may not replace is refused at once.

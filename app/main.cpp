@@ -155,15 +155,13 @@ int main(int argc, char** argv) {
       ->add_flag("--estimate-input-lag", identify.estimate_input_lag,
                  "Estimate the lag from the data (to calibrate the configuration's)")
       ->excludes(lag_option);
-  auto* no_oe =
-      identify_cmd->add_flag("--no-output-error", identify.no_output_error,
-                             "Skip the output-error refinement after the LSMI ([output_error])");
-  identify_cmd
-      ->add_flag("--diagnose", identify.diagnose,
-                 "Refit with each candidate recording mistake undone (an angle's sign, scale or "
-                 "zero, the input's sign or scale) and name the one the data support, whatever "
-                 "the fit (it runs by itself when the fit is no rig's answer)")
-      ->excludes(no_oe);
+  identify_cmd->add_flag("--no-output-error", identify.no_output_error,
+                         "Skip the output-error refinement after the LSMI ([output_error])");
+  identify_cmd->add_flag(
+      "--diagnose", identify.diagnose,
+      "Refit with each candidate recording mistake undone (an angle's sign, scale or zero, the "
+      "input's sign or scale) and name the one the data support, whatever the fit (it runs by "
+      "itself when the refinement's fit is no rig's answer; not with --no-output-error)");
   identify_cmd->add_flag("--sivia", identify.sivia,
                          "Guaranteed identification by SIVIA after the LSMI ([sivia] settings)");
   identify_cmd->add_flag(

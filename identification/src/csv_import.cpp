@@ -198,6 +198,9 @@ void read_units(Section& s, CsvImportSpec& spec) {
   spec.input_rate_limit_per_s = s.number(
       "input_rate_limit", 0.0, [](double v) { return v > 0 && std::isfinite(v); },
       "> 0 (the input's units per second, after input_scale)");
+  spec.input_scale_sd = s.number(
+      "input_scale_sd", 0.0, [](double v) { return v >= 0 && v < 1; },
+      "in [0, 1): the input scale's relative standard deviation (0.05: known to 5 %)");
   if (!spec.supply.name.empty() && spec.input_kind != InputKind::duty) {
     s.fail("supply", s.node("supply"),
            "only applies when input_kind = \"duty\" (the duty's torque scales with the supply)");
@@ -744,6 +747,7 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
   out.recorded = recorded_series(file, spec, channels, raw, row_line, slot);
   out.warnings = out.recorded.warnings;
   out.input_rate_limit_per_s = spec.input_rate_limit_per_s;
+  out.input_scale_sd = spec.input_scale_sd;
 
   out.input_kind = spec.input_kind;
   out.t_s.reserve(n);

@@ -770,6 +770,8 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
     // A logger's supply reading has no known step: the gain is held unless the readings vary.
     scale_duty_by_supply(e, r.supply_v, nominal_supply_v, 0.0);
   }
+  // A stated uncertainty of the input's scale adds to the supply's.
+  e.input_gain_sigma = std::hypot(e.input_gain_sigma, raw.input_scale_sd);
   return e;
 }
 

@@ -331,8 +331,8 @@ std::string physical_warning(const PhysicalCheck& check, RecordingSource source,
   for (std::size_t i = 1; i < check.candidates.size(); ++i) {
     w << ". " << where_to_look(check.candidates[i], source);
   }
-  w << " (" << (source == RecordingSource::csv ? "docs/csv-import.md" : "docs/model.md")
-    << " has a one-line check of a recording's signs)";
+  w << " (`furuta identify --diagnose` refits each candidate mistake: "
+    << (source == RecordingSource::csv ? "docs/csv-import.md" : "docs/model.md") << ")";
   return w.str();
 }
 

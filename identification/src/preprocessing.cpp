@@ -113,6 +113,14 @@ RawExperiment experiment_from_log(const session_log::SessionLog& log) {
                          " samples missing from the log");
   }
   if (!log.complete()) e.warnings.push_back(e.name + ": the session was cut short");
+  // A session the safety supervisor (or a fault) ended: its last samples are the stop's, and the
+  // excitation did not run as planned.
+  if (log.end && !log.end->end_reason.empty() && log.end->end_reason != "duration_reached" &&
+      log.end->end_reason != "stop_command") {
+    e.warnings.push_back(e.name + ": the session ended by " + log.end->end_reason + " after " +
+                         std::to_string(log.samples.size()) +
+                         " samples (the motor was stopped; the fit uses them all)");
+  }
   return e;
 }
 
@@ -128,6 +136,7 @@ RawExperiment experiment_from_csv(const ImportedSeries& series, const std::strin
   e.warnings = series.warnings;
   e.recorded = series.recorded;
   e.input_rate_limit_per_s = series.input_rate_limit_per_s;
+  e.input_scale_sd = series.input_scale_sd;
   return e;
 }
 

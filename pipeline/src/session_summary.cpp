@@ -31,6 +31,7 @@ SessionSummary summarize_session(const session_log::SessionLog& log, std::string
       s.fatal_faults.push_back(f.reason + (f.detail.empty() ? "" : " (" + f.detail + ")"));
   }
   s.complete = log.complete();
+  if (log.end) s.end_reason = log.end->end_reason;
   s.damaged_regions = log.read_stats.damaged_regions;
   s.truncated_tail = log.read_stats.truncated_tail;
   return s;

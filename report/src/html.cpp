@@ -116,12 +116,12 @@ void sessions_table(Html& h, const std::vector<SessionSummary>& sessions) {
          std::to_string(s.samples), std::to_string(s.missing_samples),
          std::to_string(s.motor_lost_reports) + " / " + std::to_string(s.encoder_lost_reports),
          std::to_string(s.overruns), std::to_string(s.faults),
-         s.complete ? "yes" : "no (cut short)"});
+         s.complete ? "yes" : "no (cut short)", s.end_reason.empty() ? "-" : s.end_reason});
   }
   h.table("sessions", "Sessions (from their logs)",
           {"log", "role", "label", "profile", "amplitude [duty]", "duration [s]", "period [ms]",
            "seed", "samples", "missing samples", "lost reports 1065 / 1047", "missed cycles",
-           "faults", "complete"},
+           "faults", "complete", "ended by"},
           rows);
 }
 

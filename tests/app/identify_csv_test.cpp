@@ -238,6 +238,20 @@ TEST_F(IdentifyCsv, WhereLsmiIsNotPhysicalTheRefinementStillRunsAndRecoversTheRi
   EXPECT_NEAR(oe["input_lag_s"].get<double>(), 5e-3, 0.3e-3);
 }
 
+// Each parameter of the refinement within 3 of its standard deviations of `truth`.
+void expect_within_3_sd(const nlohmann::json& oe, const model::Parameters<double>& truth,
+                        const std::string& what) {
+  EXPECT_TRUE(oe["converged"].get<bool>()) << what;
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const char* name = model::kParameterNames[k];
+    const double error = oe["estimate"][name].get<double>() - truth[k];
+    const double sd = oe["std_dev"][name].get<double>();
+    std::printf("[ measured ] %s: %s %+.3f %% (%.2f sd)\n", what.c_str(), name,
+                100 * error / truth[k], error / sd);
+    EXPECT_LT(std::abs(error), 3 * sd) << what << " " << name;
+  }
+}
+
 // A session of the simulated rig exported with `furuta log export-csv` and read back through an
 // import spec as docs/csv-import.md writes it for the project's own rig (each angle at its
 // report's time, the command as the board received it, the board's ramp, the supply): the
@@ -276,6 +290,77 @@ TEST_F(IdentifyCsv, ASessionExportedAndImportedBackIsIdentifiedWithinOnePercent)
     EXPECT_NEAR(estimate / truth[k], 1.0, 0.01) << name;
   }
   EXPECT_LT(oe["residual_sigma"].get<double>(), 10.0);  // no misfit
+
+  // The same recording from 3 s on: it starts in motion, the refinement fits its first state.
+  {
+    std::istringstream in(read(csv));
+    std::string line, cut;
+    std::getline(in, line);
+    cut = line + "\n";
+    while (std::getline(in, line)) {
+      if (std::stod(line.substr(line.find(',') + 1)) >= 3.0) cut += line + "\n";
+    }
+    write(dir_.path() / "in_motion.csv", cut);
+  }
+  options_.csvs = {dir_.path() / "in_motion.csv"};
+  ASSERT_EQ(run(), 0) << err_.str() << out_.str();
+  expect_within_3_sd(
+      nlohmann::json::parse(read(options_.output_dir / "results.json"))["output_error"], truth,
+      "started in motion");
+}
+
+// A controller's output as the input: every 10 ms a PD law on the quantised angles adds to the
+// excitation and the DAC holds it. The input then carries the angles' noise, which biases a fit
+// that treats the input as free of it (LSMI); the refinement simulates the input as recorded.
+TEST_F(IdentifyCsv, AClosedLoopInputIsIdentifiedWithinThreeSd) {
+  options_.no_output_error = false;
+  const auto law = [](double, double q1, double q2) { return -3.0 * q1 - 1.0 * q2; };
+  const furuta::testing::CsvEncoders encoders{4096, 4096};
+  options_.csvs = {furuta::testing::write_closed_loop_voltage_rig_csv(dir_.path() / "la.csv", 0.0,
+                                                                      law, encoders),
+                   furuta::testing::write_closed_loop_voltage_rig_csv(dir_.path() / "lb.csv", 1.3,
+                                                                      law, encoders)};
+  std::string spec = kSpec;
+  std::ostringstream keys;
+  keys << std::setprecision(17)
+       << "input_between_samples = \"held\"\narm_resolution = " << 2 * kPi / 4096
+       << "\npendulum_resolution = " << 2 * kPi / 4096 << "\n";
+  spec.insert(spec.find("\n[motor]"), keys.str());
+  write(spec_, spec);
+  ASSERT_EQ(run(), 0) << err_.str();
+  expect_within_3_sd(
+      nlohmann::json::parse(read(options_.output_dir / "results.json"))["output_error"], truth(),
+      "closed loop");
+}
+
+// An input whose scale is known to 5 % only (here recorded 3 % high): with input_scale_sd the
+// refinement fits the gain with that prior and the standard deviations carry it, so the truth lies
+// within them; without it the scale counts as exact and every inertia is off by many sd.
+TEST_F(IdentifyCsv, AnInputScaleKnownToFivePercentIsCarriedByTheStandardDeviations) {
+  options_.no_output_error = false;
+  furuta::testing::CsvColumns high;
+  high.volts = [](double v) { return 1.03 * v; };
+  options_.csvs = {furuta::testing::write_voltage_rig_csv(dir_.path() / "ga.csv", 0.0, 0.0, high),
+                   furuta::testing::write_voltage_rig_csv(dir_.path() / "gb.csv", 1.3, 0.0, high)};
+  std::string spec = kSpec;
+  write(spec_, spec);
+  ASSERT_EQ(run(), 0) << err_.str();
+  const auto mu1 = [&] {
+    const nlohmann::json oe =
+        nlohmann::json::parse(read(options_.output_dir / "results.json"))["output_error"];
+    return std::pair{oe["estimate"]["mu1"].get<double>(), oe["std_dev"]["mu1"].get<double>()};
+  };
+  const auto [exact, exact_sd] = mu1();
+  std::printf("[ measured ] input 3 %% high, scale taken as exact: mu1 %+.2f %% (%.1f sd)\n",
+              100 * (exact / truth().mu1 - 1), (exact - truth().mu1) / exact_sd);
+  EXPECT_GT(std::abs(exact - truth().mu1), 3 * exact_sd);
+
+  spec.insert(spec.find("\n[motor]"), "input_scale_sd = 0.05\n");
+  write(spec_, spec);
+  ASSERT_EQ(run(), 0) << err_.str();
+  expect_within_3_sd(
+      nlohmann::json::parse(read(options_.output_dir / "results.json"))["output_error"], truth(),
+      "input scale known to 5 %");
 }
 
 // The project's rig.toml with 1 ms of USB jitter on every report, written into `dir`.

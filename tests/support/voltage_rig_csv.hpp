@@ -75,4 +75,42 @@ inline std::filesystem::path write_voltage_rig_csv(
   return path;
 }
 
+// The same rig in closed loop: every 10 ms a controller reads the quantised angles and sets the
+// voltage, held until the next sample (a DAC); the row logs the voltage it set. `law(t, q1, q2)`
+// adds feedback to the six-sine excitation (phase as above), so the input is correlated with the
+// angles' noise, as on every rig that records a controller's output.
+inline std::filesystem::path write_closed_loop_voltage_rig_csv(
+    const std::filesystem::path& path, double phase,
+    const std::function<double(double, double, double)>& law, CsvEncoders encoders = {}) {
+  const auto quantised = [](double q, double counts_per_rev) {
+    if (counts_per_rev <= 0) return q;
+    const double step = 2 * std::numbers::pi / counts_per_rev;
+    return std::floor(q / step) * step;
+  };
+  std::ofstream out(path);
+  out << "t,q1,q2,volts\n" << std::setprecision(10);
+  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
+  model::PendulumState x;
+  const double h = 5e-4;
+  double v = 0;
+  for (int step = -4000; step < 20000; ++step) {
+    const double t = step * h;
+    if (step % 20 == 0) {
+      double excitation = 0;
+      for (std::size_t i = 0; i < hz.size(); ++i) {
+        excitation +=
+            std::sin(2 * std::numbers::pi * hz[i] * t + phase * static_cast<double>(i + 1));
+      }
+      const double q1 = quantised(x.q1, encoders.arm_counts_per_rev);
+      const double q2 = quantised(x.q2, encoders.pendulum_counts_per_rev);
+      v = 3.5 * excitation / std::sqrt(6.0) + law(t, q1, q2);
+      if (step >= 0) out << t << "," << q1 << "," << q2 << "," << v << "\n";
+    }
+    x = model::rk4_step(voltage_rig_truth(), x, h, [&](const model::PendulumState& s) {
+      return kVoltageRigTorquePerVolt * v - kVoltageRigBackEmfDamping * s.dq1;
+    });
+  }
+  return path;
+}
+
 }  // namespace furuta::testing

@@ -47,6 +47,7 @@ struct CsvColumn {
 //   arm_time = "t_arm"   pendulum_time = "t_pend"   input_time = "t_cmd"   (in time_unit)
 //   input_rate_limit = 62.5   (the actuator slews towards each new input at most this fast, per s)
 //   supply = "v_bus"          (duty only: the supply [V], scaling the duty by it / nominal)
+//   input_scale_sd = 0.05     (the input's scale known to 5 %: fitted, its sd carried)
 //   arm_board_time = "arm_ticks"  pendulum_board_time = "enc_us"  (each board's own clock)
 // and, for input_kind = "voltage" only, the rig's DC motor:
 //   [motor]
@@ -81,6 +82,10 @@ struct CsvImportSpec {
   // The input, after its scale, changes towards each new value at most this fast [unit/s] (a motor
   // board's ramp); 0: as input_between_samples says.
   double input_rate_limit_per_s = 0;
+  // How well the input's scale is known, as a relative standard deviation (a torque command of
+  // uncertain gain, a voltage read through a divider): the refinement fits the input's gain around
+  // 1 with it as its prior, so the standard deviations carry it. 0: the scale is exact.
+  double input_scale_sd = 0;
 };
 
 // Parses the [csv] and [motor] tables of an import spec file; errors name file, line and field
@@ -112,6 +117,7 @@ struct ImportedSeries {
       warnings;  // e.g. "irregular time stamps (max gap 23 ms): resampled to 10 ms"
   RecordedSeries recorded;
   double input_rate_limit_per_s = 0;  // the spec's
+  double input_scale_sd = 0;          // the spec's
 };
 
 class CsvImportError : public std::runtime_error {

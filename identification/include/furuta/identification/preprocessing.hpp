@@ -24,6 +24,7 @@ struct RawExperiment {
   // (ImportedSeries); empty for a session log, whose OeExperiment is read from its reports.
   RecordedSeries recorded;
   double input_rate_limit_per_s = 0;
+  double input_scale_sd = 0;  // the import spec's: the input gain's prior in the refinement
 };
 
 // The samples of a session log: q1, q2 as the daemon computed them, the duty the board applied

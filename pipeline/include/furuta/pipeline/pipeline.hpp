@@ -56,7 +56,8 @@ struct SessionSummary {
   std::size_t faults = 0;
   std::vector<std::string> fatal_faults;  // "reason (detail)"
   bool complete = false;                  // start and end records present
-  std::uint64_t damaged_regions = 0;      // skipped by the checked reader
+  std::string end_reason;             // the end record's ("arm_angle_limit", ...); "" without one
+  std::uint64_t damaged_regions = 0;  // skipped by the checked reader
   bool truncated_tail = false;
 };
 SessionSummary summarize_session(const session_log::SessionLog& log, std::string role);
