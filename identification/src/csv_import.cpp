@@ -295,9 +295,6 @@ CsvImportSpec load_csv_import_spec(const std::filesystem::path& path) {
 namespace {
 
 constexpr std::size_t kMinRows = 16;
-// A board clock whose line leaves most host stamps later than this does not keep time: a report
-// period of a slow board.
-constexpr double kMaxBoardClockDelay_s = 8e-3;
 constexpr double kIrregularTolerance = 0.01;  // of the median step
 // A grid much denser than the recording means a gap of many periods (files joined, logger paused):
 // interpolating across it would invent data.
@@ -550,12 +547,12 @@ void map_board_times(const std::string& file, const Channel& board_column,
     }
     board.push_back(board_raw[i]);
   }
-  clock = fit_board_clock(t, board, kMaxBoardClockDelay_s);
+  clock = fit_board_clock(t, board, kBoardClockMaxDelay_s);
   if (!clock) {
     warnings.push_back(board_column.label +
                        ": the board's clock does not keep time against the host's stamps (more "
                        "than a tenth of them lie over " +
-                       milliseconds(kMaxBoardClockDelay_s) + " off its line); the host's are used");
+                       milliseconds(kBoardClockMaxDelay_s) + " off its line); the host's are used");
     return;
   }
   for (std::size_t k = 0; k < t.size(); ++k) t[k] = clock->host_time(board[k]);

@@ -504,9 +504,6 @@ ceres::Solver::Options solver_options(int max_iterations, int threads) {
   return o;
 }
 
-// A board clock whose line leaves most host stamps later than this is not keeping time: one
-// report period of the boards.
-constexpr double kMaxBoardClockDelay_s = 8e-3;
 
 // A duty's torque scales with the supply: the experiment's supply_scale from every reading of it,
 // and the input gain's prior from how well they fix it. The mean, with a tenth cut at each end
@@ -662,7 +659,7 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
     const std::optional<BoardClock> clock =
         j == 1 && !pendulum_ticks_whole
             ? std::nullopt
-            : fit_board_clock(host_s[j], board[j], kMaxBoardClockDelay_s);
+            : fit_board_clock(host_s[j], board[j], kBoardClockMaxDelay_s);
     e.board_clock[j] = clock;
     for (std::size_t i = 0; i < host_s[j].size(); ++i) {
       e.observations.push_back(

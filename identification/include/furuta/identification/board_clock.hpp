@@ -24,6 +24,10 @@ struct BoardClock {
   double host_time(double board) const { return offset_s + rate * board; }
 };
 
+// The `max_delay_s` the refinement's readers pass: one report period of a slow board (8 ms); a
+// board clock whose line leaves most host stamps later than that is not keeping time.
+inline constexpr double kBoardClockMaxDelay_s = 8e-3;
+
 // The line from the least-delayed receptions: the smallest host - rate * board in each of a few
 // stretches of board time, a straight line through them by least squares, moved down until no
 // reading lies below it. Nothing when there are fewer than 16 readings, the board's times do not
