@@ -504,7 +504,6 @@ ceres::Solver::Options solver_options(int max_iterations, int threads) {
   return o;
 }
 
-
 // A duty's torque scales with the supply: the experiment's supply_scale from every reading of it,
 // and the input gain's prior from how well they fix it. The mean, with a tenth cut at each end
 // against glitches, resolves the supply below the reading's step when the reading is noisy;
