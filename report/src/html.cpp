@@ -1,4 +1,5 @@
 // report.html: render_html, one function per section of the page.
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -106,6 +107,15 @@ void contents(Html& h) {
   h.raw("</ol>\n</nav>\n");
 }
 
+// How a session ended: its end record's reason in words ("duration reached", "arm angle limit"),
+// or that the log has none.
+std::string ended(const SessionSummary& s) {
+  if (!s.complete) return "cut short (no end record)";
+  std::string reason = s.end_reason.empty() ? std::string("yes") : s.end_reason;
+  std::replace(reason.begin(), reason.end(), '_', ' ');
+  return reason;
+}
+
 // The sessions, from their logs.
 void sessions_table(Html& h, const std::vector<SessionSummary>& sessions) {
   std::vector<std::vector<std::string>> rows;
@@ -115,13 +125,12 @@ void sessions_table(Html& h, const std::vector<SessionSummary>& sessions) {
          dash_fixed(s.duration_s, 1), dash_fixed(s.period_s * 1e3, 1), std::to_string(s.seed),
          std::to_string(s.samples), std::to_string(s.missing_samples),
          std::to_string(s.motor_lost_reports) + " / " + std::to_string(s.encoder_lost_reports),
-         std::to_string(s.overruns), std::to_string(s.faults),
-         s.complete ? "yes" : "no (cut short)", s.end_reason.empty() ? "-" : s.end_reason});
+         std::to_string(s.overruns), std::to_string(s.faults), ended(s)});
   }
   h.table("sessions", "Sessions (from their logs)",
           {"log", "role", "label", "profile", "amplitude [duty]", "duration [s]", "period [ms]",
            "seed", "samples", "missing samples", "lost reports 1065 / 1047", "missed cycles",
-           "faults", "complete", "ended by"},
+           "faults", "ended"},
           rows);
 }
 
