@@ -19,7 +19,7 @@
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
-namespace furuta::app {
+namespace furuta::app::diagnosis_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -190,4 +190,4 @@ TEST_F(Diagnosis, InputFiveTimesTooLow) {
 }
 
 }  // namespace
-}  // namespace furuta::app
+}  // namespace furuta::app::diagnosis_test
