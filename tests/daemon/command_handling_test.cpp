@@ -196,16 +196,23 @@ rig_command_t status_request() {
   return testing::simple_command(rig_command_t::KIND_STATUS_REQUEST);
 }
 
-// Asks for the status until `ready` holds: the logger thread fills some of its fields (the session
-// name, the last fault) a moment after the loop's event. A hang guard, not a timing check.
+// Asks for the status until `ready` holds: the io thread fills some of its fields (the session
+// name, how the last session ended) a moment after the loop's event. The loop's clock stands
+// still meanwhile and the daemon answers a limited number of status requests per second of that
+// clock, so the asks are spaced out (at most about 200); a hang guard of 20 s in all, not a
+// timing check.
 template <class Ready>
 rig_status_t ask_until(CommandRig& rig, Ready ready) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  auto pause = std::chrono::milliseconds(1);
   rig_status_t status;
-  for (int i = 0; i < 2000; ++i) {
+  do {
     status = rig.ask(status_request());
-    if (ready(status)) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+    if (ready(status)) return status;
+    std::this_thread::sleep_for(pause);
+    pause = std::min(2 * pause, std::chrono::milliseconds(100));
+  } while (std::chrono::steady_clock::now() < give_up);
+  ADD_FAILURE() << "the status did not show what the test waits for within 20 s";
   return status;
 }
 
