@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
   identify_cmd->add_flag(
       "--guaranteed", identify.guaranteed,
       "Guaranteed set by windowed set inversion around the output-error estimate ([guaranteed]; "
-      "minutes)");
+      "a CSV's bounds from its import spec's [guaranteed]; minutes)");
   identify_cmd->add_option("--threads", identify.threads, "SIVIA threads (0: all cores)")
       ->check(CLI::Range(0, 1024));
 

@@ -201,6 +201,9 @@ void read_units(Section& s, CsvImportSpec& spec) {
   spec.input_scale_sd = s.number(
       "input_scale_sd", 0.0, [](double v) { return v >= 0 && v < 1; },
       "in [0, 1): the input scale's relative standard deviation (0.05: known to 5 %)");
+  if (const std::optional<double> v = s.optional_number("input_at_start")) {
+    spec.input_at_start = *v * spec.input.scale;
+  }
   if (!spec.supply.name.empty() && spec.input_kind != InputKind::duty) {
     s.fail("supply", s.node("supply"),
            "only applies when input_kind = \"duty\" (the duty's torque scales with the supply)");
@@ -240,6 +243,95 @@ std::optional<VoltageMotor> read_motor_table(Section& top, Section& csv, InputKi
       "efficiency", 1.0, [](double v) { return v > 0 && v <= 1; }, "in (0, 1]");
   m.reject_unknown_keys();
   return motor;
+}
+
+// The [guaranteed] table: the recording's bounds for the windowed set inversion, each stated (a
+// bound is a claim about the logger, so none is defaulted). Angles in the spec's angle unit and
+// column scale, like the angles themselves.
+std::optional<RecordingBounds> read_bounds_table(Section& top, const CsvImportSpec& spec,
+                                                 const std::string& source_name) {
+  if (!top.has("guaranteed")) return std::nullopt;
+  Section g = top.child("guaranteed");
+  if (spec.input_kind != InputKind::duty) {
+    top.fail("guaranteed", top.node("guaranteed"),
+           "only applies when csv.input_kind = \"duty\": the guaranteed set is found in the "
+           "parameters scaled by the drive's gain (eq. 4), which a duty has");
+  }
+  const auto at = [&](const std::string& key) {
+    return source_name + ":" + std::to_string(g.node(key)->source().begin.line) + " guaranteed." +
+           key;
+  };
+  const auto angle_per_unit = [&](std::size_t joint) {
+    const double scale = std::abs(joint == 0 ? spec.arm_angle.scale : spec.pendulum_angle.scale);
+    switch (spec.angle_unit) {
+      case AngleUnit::deg:
+        return scale * std::numbers::pi / 180.0;
+      case AngleUnit::counts:
+        return scale * 2.0 * std::numbers::pi /
+               (joint == 0 ? spec.arm_counts_per_rev : spec.pendulum_counts_per_rev);
+      case AngleUnit::rad:
+        break;
+    }
+    return scale;
+  };
+  const auto positive_finite = [](double v) { return v > 0 && std::isfinite(v); };
+  const auto angle = [&](const char* key, const char* quantity, std::size_t joint,
+                         const char* what) {
+    const double v =
+        g.required_number(key, what, positive_finite, "> 0 (in csv.angle_unit)") *
+        angle_per_unit(joint);
+    return PhysicalInput{quantity, Interval(-v, v), "rad", InputSource::import_spec, at(key)};
+  };
+  RecordingBounds b;
+  b.arm_angle_error =
+      angle("arm_angle_error", "arm_angle_error", 0,
+            "the most an arm reading is off the true angle, in angle_unit (half a count)");
+  b.pendulum_angle_error =
+      angle("pendulum_angle_error", "pendulum_angle_error", 1,
+            "the most a pendulum reading is off the true angle, in angle_unit (half a count)");
+  b.pendulum_zero = angle(
+      "pendulum_zero_error", "pendulum_zero", 1,
+      "the most the hanging pendulum's true angle is off its zero at the start, in angle_unit");
+  if (!g.has("lag_ms")) {
+    g.fail("lag_ms", nullptr,
+           "missing: [lo, hi] in ms, each reading's time minus its state's, against the input's "
+           "times");
+  }
+  const std::array<double, 2> lag = g.numbers<2>(
+      "lag_ms", {0, 0}, [](double v) { return std::abs(v) <= 1000; }, "within +-1000 ms");
+  if (!(lag[0] <= lag[1])) g.fail("lag_ms", g.node("lag_ms"), "must be [lo, hi] with lo <= hi");
+  b.lag = {"lag", Interval(lag[0], lag[1]) / Interval(1000.0), "s", InputSource::import_spec,
+           at("lag_ms")};
+  b.arm_rest_speed_rad_s = g.required_number(
+      "arm_rest_speed_rad_s", "the most the arm's speed is at the first command [rad/s]",
+      [](double v) { return v >= 0 && v <= 10; }, "in [0, 10]");
+  if (!spec.supply.name.empty()) {
+    if (g.has("supply_v")) {
+      g.fail("supply_v", g.node("supply_v"),
+             "not with csv.supply: the supply comes from its readings (give supply_error_v)");
+    }
+    const double e = g.required_number(
+        "supply_error_v", "the most a supply reading is off the supply [V] (half its step)",
+        [](double v) { return v >= 0 && v < 100; }, "in [0, 100)");
+    b.supply_error = {"supply_error", Interval(-e, e), "V", InputSource::import_spec,
+                      at("supply_error_v")};
+  } else {
+    if (g.has("supply_error_v")) {
+      g.fail("supply_error_v", g.node("supply_error_v"),
+             "only applies with a csv.supply column; without one give supply_v = [lo, hi]");
+    }
+    if (!g.has("supply_v")) {
+      g.fail("supply_v", nullptr,
+             "missing: [lo, hi] in V, the supply during the recordings (no csv.supply column)");
+    }
+    const std::array<double, 2> v = g.numbers<2>(
+        "supply_v", {0, 0}, [](double x) { return x > 0 && x < 1000; }, "volts in (0, 1000)");
+    if (!(v[0] <= v[1])) g.fail("supply_v", g.node("supply_v"), "must be [lo, hi] with lo <= hi");
+    b.supply = PhysicalInput{"supply", Interval(v[0], v[1]), "V", InputSource::import_spec,
+                             at("supply_v")};
+  }
+  g.reject_unknown_keys();
+  return b;
 }
 
 // The document's top level: [csv] is required; other tables may hold other readers' settings, but
@@ -282,6 +374,7 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
   spec.time_unit_at = source_name + ":" + std::to_string(s.node("time_unit")->source().begin.line);
   s.reject_unknown_keys();
   spec.voltage_motor = read_motor_table(top, s, spec.input_kind);
+  spec.bounds = read_bounds_table(top, spec, source_name);
   return spec;
 }
 
@@ -742,6 +835,7 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
   }
   ImportedSeries out;
   out.recorded = recorded_series(file, spec, channels, raw, row_line, slot);
+  out.recorded.input_at_start = spec.input_at_start;
   out.warnings = out.recorded.warnings;
   out.input_rate_limit_per_s = spec.input_rate_limit_per_s;
   out.input_scale_sd = spec.input_scale_sd;
@@ -759,7 +853,9 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
     out.t_s.push_back(t);
     out.q1_rad.push_back(reading_at(r.q1_t_s, r.q1_rad, t, false));
     out.q2_rad.push_back(reading_at(r.q2_t_s, r.q2_rad, t, false));
-    out.input.push_back(reading_at(r.input_t_s, r.input, t, !spec.input_time.name.empty()));
+    out.input.push_back(r.input_at_start && t < r.input_t_s.front()
+                            ? *r.input_at_start
+                            : reading_at(r.input_t_s, r.input, t, !spec.input_time.name.empty()));
   }
 
   std::vector<double> steps(n - 1);

@@ -736,13 +736,18 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
   const std::size_t m = r.input_t_s.size();
   if (raw.input_rate_limit_per_s > 0) {
     // Braking at zero: a recorded duty of 0 is taken as eq. 4 at zero duty (the board braking).
-    RampedInput ramp(e, std::min(r.input_t_s.front(), e.observations.front().t_s), r.input.front(),
-                     1.0);
+    RampedInput ramp(e, std::min(r.input_t_s.front(), e.observations.front().t_s),
+                     r.input_at_start.value_or(r.input.front()), 1.0);
     for (std::size_t i = 0; i < m; ++i) {
       ramp.command(r.input_t_s[i], r.input[i], raw.input_rate_limit_per_s, 1.0);
     }
     ramp.finish(e.observations.back().t_s);
   } else {
+    if (r.input_at_start) {
+      // Held up to (just before) the first recorded input.
+      e.input_t_s.push_back(std::nextafter(r.input_t_s.front(), -1e300));
+      e.input.push_back(*r.input_at_start);
+    }
     for (std::size_t i = 0; i < m; ++i) {
       if (between == InputBetweenSamples::held && i > 0) {
         // A step: the previous value up to (just before) this sample.
@@ -755,10 +760,11 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
     e.braking_fraction.assign(e.input.size(), 1.0);
     if (between == InputBetweenSamples::cubic && m >= 2) {
       // Catmull-Rom slopes: the centred difference inside, the one-sided one at the ends.
-      e.input_slope.resize(m);
+      // The held start, when there is one, is flat.
+      if (r.input_at_start) e.input_slope.push_back(0.0);
       for (std::size_t i = 0; i < m; ++i) {
         const std::size_t lo = i == 0 ? 0 : i - 1, hi = i + 1 == m ? i : i + 1;
-        e.input_slope[i] = (r.input[hi] - r.input[lo]) / (r.input_t_s[hi] - r.input_t_s[lo]);
+        e.input_slope.push_back((r.input[hi] - r.input[lo]) / (r.input_t_s[hi] - r.input_t_s[lo]));
       }
     }
   }

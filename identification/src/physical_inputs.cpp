@@ -29,15 +29,48 @@ Interval plus_minus(double centre, double relative) {
 
 }  // namespace
 
+RecordingBounds session_log_bounds(const config::RigConfig& rig) {
+  RecordingBounds b;
+  const Interval two_pi = Interval(2.0) * Interval::pi();
+  const Interval arm_count = two_pi / Interval(rig.arm_encoder.counts_per_joint_rev());
+  const Interval pendulum_count = two_pi / Interval(rig.pendulum_encoder.counts_per_joint_rev());
+  b.arm_angle_error = {"arm_angle_error", arm_count * Interval(-0.5, 0.5), "rad",
+                       InputSource::encoder_counts,
+                       "[encoders.arm] counts_per_rev x [motor] motor_ratio x gear_ratio: half a "
+                       "count"};
+  b.pendulum_angle_error = {"pendulum_angle_error", pendulum_count * Interval(-0.5, 0.5), "rad",
+                            InputSource::encoder_counts,
+                            "[encoders.pendulum] counts_per_rev: half a count"};
+  b.pendulum_zero = {"pendulum_zero",
+                     pendulum_count * Interval(-kRestCheckCounts - 0.5, kRestCheckCounts + 0.5),
+                     "rad", InputSource::rest_check,
+                     "[daemon] rest_check_s: the count stayed within 2 counts before the start, "
+                     "plus half a count"};
+  const config::GuaranteedConfig& gc = rig.guaranteed;
+  b.lag = {"lag", Interval(gc.lag_ms[0], gc.lag_ms[1]) / Interval(1000.0), "s",
+           InputSource::configured, "[guaranteed] lag_ms"};
+  b.supply_error = {"supply_error", Interval(-0.5, 0.5) * Interval(kSupplyStep_v), "V",
+                    InputSource::supply_readings,
+                    "the 1065 reads its supply in steps of 80/2048 V: half a step"};
+  b.arm_rest_speed_rad_s = gc.arm_rest_speed_rad_s;
+  return b;
+}
+
 PhysicalInputs physical_inputs(const config::RigConfig& rig,
                                std::span<const double> supply_readings_v) {
+  return physical_inputs(rig, supply_readings_v, session_log_bounds(rig));
+}
+
+PhysicalInputs physical_inputs(const config::RigConfig& rig,
+                               std::span<const double> supply_readings_v,
+                               const RecordingBounds& bounds) {
   if (!rig.nominal) {
     throw std::invalid_argument(
         "physical inputs: the configuration has no [nominal] section (the CAD values the "
         "parameters' prior is centred on)");
   }
-  if (supply_readings_v.empty()) {
-    throw std::invalid_argument("physical inputs: no supply readings in the session");
+  if (supply_readings_v.empty() && !bounds.supply) {
+    throw std::invalid_argument("physical inputs: no supply readings in the recordings");
   }
   PhysicalInputs in;
   const config::GuaranteedConfig& gc = rig.guaranteed;
@@ -47,40 +80,38 @@ PhysicalInputs physical_inputs(const config::RigConfig& rig,
         {std::move(quantity), value, std::move(unit), source, std::move(setting)});
   };
 
-  const Interval two_pi = Interval(2.0) * Interval::pi();
-  const Interval arm_count = two_pi / Interval(rig.arm_encoder.counts_per_joint_rev());
-  const Interval pendulum_count = two_pi / Interval(rig.pendulum_encoder.counts_per_joint_rev());
-  in.arm_angle_error_rad = arm_count * Interval(-0.5, 0.5);
-  in.pendulum_angle_error_rad = pendulum_count * Interval(-0.5, 0.5);
-  add("arm_angle_error", in.arm_angle_error_rad, "rad", InputSource::encoder_counts,
-      "[encoders.arm] counts_per_rev x [motor] motor_ratio x gear_ratio: half a count");
-  add("pendulum_angle_error", in.pendulum_angle_error_rad, "rad", InputSource::encoder_counts,
-      "[encoders.pendulum] counts_per_rev: half a count");
-  in.pendulum_zero_rad = pendulum_count * Interval(-kRestCheckCounts - 0.5, kRestCheckCounts + 0.5);
-  add("pendulum_zero", in.pendulum_zero_rad, "rad", InputSource::rest_check,
-      "[daemon] rest_check_s: the count stayed within 2 counts before the start, plus half a "
-      "count");
-
+  in.arm_angle_error_rad = bounds.arm_angle_error.value;
+  in.pendulum_angle_error_rad = bounds.pendulum_angle_error.value;
+  in.pendulum_zero_rad = bounds.pendulum_zero.value;
+  in.lag_s = bounds.lag.value;
+  for (const PhysicalInput* b : {&bounds.arm_angle_error, &bounds.pendulum_angle_error,
+                                 &bounds.pendulum_zero}) {
+    in.provenance.push_back(*b);
+  }
   in.duty_error = Interval(-0.5 * kDutyStep, 0.5 * kDutyStep);
   add("duty_error", in.duty_error, "1", InputSource::duty_steps,
       "the 1065 echoes its applied duty in steps of 1/255: half a step");
-  in.lag_s = Interval(gc.lag_ms[0], gc.lag_ms[1]) / Interval(1000.0);
-  add("lag", in.lag_s, "s", InputSource::configured, "[guaranteed] lag_ms");
+  in.provenance.push_back(bounds.lag);
 
-  double lowest = supply_readings_v.front(), highest = supply_readings_v.front();
-  for (double v : supply_readings_v) {
-    if (!(std::isfinite(v) && v > 0)) {
-      throw std::invalid_argument("physical inputs: a supply reading of " + std::to_string(v) +
-                                  " V is not a voltage");
+  if (supply_readings_v.empty()) {
+    in.supply_v = bounds.supply->value;
+    in.provenance.push_back(*bounds.supply);
+  } else {
+    double lowest = supply_readings_v.front(), highest = supply_readings_v.front();
+    for (double v : supply_readings_v) {
+      if (!(std::isfinite(v) && v > 0)) {
+        throw std::invalid_argument("physical inputs: a supply reading of " + std::to_string(v) +
+                                    " V is not a voltage");
+      }
+      lowest = std::min(lowest, v);
+      highest = std::max(highest, v);
     }
-    lowest = std::min(lowest, v);
-    highest = std::max(highest, v);
+    // A constant supply read with an error in supply_error lies within the readings' range, widened
+    // by that error.
+    in.supply_v = Interval(lowest, highest) - bounds.supply_error.value;
+    add("supply", in.supply_v, "V", bounds.supply_error.source,
+        "the recordings' supply readings: their range widened by " + bounds.supply_error.setting);
   }
-  // A constant supply read with noise of both signs lies within the readings' range, widened by
-  // the half step each reading was rounded to.
-  in.supply_v = Interval(lowest, highest) + Interval(-0.5, 0.5) * Interval(kSupplyStep_v);
-  add("supply", in.supply_v, "V", InputSource::supply_readings,
-      "the session's supply readings: their range +- half a step of 80/2048 V");
 
   const model::MotorData& m = rig.motor;
   const std::array<double, 4>& tol = gc.motor_tolerance_pct;

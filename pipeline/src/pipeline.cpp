@@ -367,7 +367,6 @@ Settings settings_for(const config::RigConfig& rig) {
   s.windowed.search_sd = rig.guaranteed.search_sd;
   s.windowed.options.window_s = rig.guaranteed.window_s;
   s.windowed.options.windows = static_cast<std::size_t>(rig.guaranteed.windows);
-  s.windowed.options.arm_rest_speed_rad_s = rig.guaranteed.arm_rest_speed_rad_s;
   return s;
 }
 
@@ -430,16 +429,25 @@ std::optional<WindowedGuaranteed> run_windowed(const WindowedSettings& settings,
     supply.insert(supply.end(), experiments.back().supply_readings_v.begin(),
                   experiments.back().supply_readings_v.end());
   }
-  if (supply.empty()) {
+  const bool logs = batch.kind == InputKind::session_logs;
+  if (!logs && !batch.recording_bounds) {
     warn(
-        "skipped: the recordings carry no supply readings (the drive's gain needs them; CSV "
-        "recordings do not have them)");
+        "skipped: a CSV recording's bounds (encoders, zero, lag, supply) are its import spec's "
+        "[guaranteed] table, and the spec has none");
     return std::nullopt;
   }
+  const identification::RecordingBounds bounds =
+      logs ? identification::session_log_bounds(batch.rig) : *batch.recording_bounds;
+  if (supply.empty() && !bounds.supply) {
+    warn("skipped: the recordings carry no supply readings (the drive's gain needs them)");
+    return std::nullopt;
+  }
+  identification::WindowedSetOptions options = settings.options;
+  options.arm_rest_speed_rad_s = bounds.arm_rest_speed_rad_s;
   WindowedGuaranteed out;
   const identification::OutputErrorResult& oe = run.output_error->result;
   try {
-    out.inputs = identification::physical_inputs(batch.rig, supply);
+    out.inputs = identification::physical_inputs(batch.rig, supply, bounds);
     // The estimate's scale: the nominal motor at the sessions' supply, times the fitted gains.
     double scale = 0;
     for (std::size_t i = 0; i < experiments.size(); ++i) {
@@ -467,7 +475,7 @@ std::optional<WindowedGuaranteed> run_windowed(const WindowedSettings& settings,
       if (progress != nullptr) progress->windows(done, total);
     };
     out.result =
-        identification::invert_recordings(experiments, out.inputs, search, settings.options, step);
+        identification::invert_recordings(experiments, out.inputs, search, options, step);
   } catch (const std::invalid_argument& e) {
     if (progress != nullptr) progress->windows_done();
     warn(std::string("skipped: ") + e.what());

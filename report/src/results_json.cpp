@@ -306,6 +306,8 @@ const char* input_source_name(identification::InputSource s) {
       return "configured";
     case identification::InputSource::cad:
       return "cad";
+    case identification::InputSource::import_spec:
+      return "import_spec";
   }
   return "configured";
 }

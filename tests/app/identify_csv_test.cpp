@@ -20,6 +20,7 @@
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/identification/physical_inputs.hpp"
 #include "furuta/model/model.hpp"
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
@@ -252,16 +253,10 @@ void expect_within_3_sd(const nlohmann::json& oe, const model::Parameters<double
   }
 }
 
-// A session of the simulated rig exported with `furuta log export-csv` and read back through an
-// import spec as docs/csv-import.md writes it for the project's own rig (each angle at its
-// report's time, the command as the board received it, the board's ramp, the supply): the
-// refinement converges within 1 % of the truth, as it does from the log itself.
-TEST_F(IdentifyCsv, ASessionExportedAndImportedBackIsIdentifiedWithinOnePercent) {
-  const fs::path log = furuta::testing::simulated_session_log(dir_.path() / "logs", "rt", 1);
-  ASSERT_FALSE(log.empty());
-  const fs::path csv = dir_.path() / "session.csv";
-  ASSERT_EQ(run_log_export_csv_command(log, csv, out_, err_), 0) << err_.str();
-  const config::RigConfig rig = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+// The import spec of `furuta log export-csv`'s columns as docs/csv-import.md gives it for the
+// project's own rig: each angle at its report's time, the command as the board received it, the
+// board's ramp, the supply.
+std::string own_export_spec(const config::RigConfig& rig) {
   std::ostringstream spec;
   spec << std::setprecision(17) << "[csv]\n"
        << "time = \"t_s\"\ntime_unit = \"s\"\n"
@@ -273,7 +268,20 @@ TEST_F(IdentifyCsv, ASessionExportedAndImportedBackIsIdentifiedWithinOnePercent)
        << "supply = \"supply_v\"\n"
        << "arm_resolution = " << 2 * kPi / rig.arm_encoder.counts_per_joint_rev() << "\n"
        << "pendulum_resolution = " << 2 * kPi / rig.pendulum_encoder.counts_per_joint_rev() << "\n";
-  write(spec_, spec.str());
+  return spec.str();
+}
+
+// A session of the simulated rig exported with `furuta log export-csv` and read back through an
+// import spec as docs/csv-import.md writes it for the project's own rig (each angle at its
+// report's time, the command as the board received it, the board's ramp, the supply): the
+// refinement converges within 1 % of the truth, as it does from the log itself.
+TEST_F(IdentifyCsv, ASessionExportedAndImportedBackIsIdentifiedWithinOnePercent) {
+  const fs::path log = furuta::testing::simulated_session_log(dir_.path() / "logs", "rt", 1);
+  ASSERT_FALSE(log.empty());
+  const fs::path csv = dir_.path() / "session.csv";
+  ASSERT_EQ(run_log_export_csv_command(log, csv, out_, err_), 0) << err_.str();
+  const config::RigConfig rig = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  write(spec_, own_export_spec(rig));
   options_.csvs = {csv};
   options_.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
   options_.no_output_error = false;
@@ -307,6 +315,79 @@ TEST_F(IdentifyCsv, ASessionExportedAndImportedBackIsIdentifiedWithinOnePercent)
   expect_within_3_sd(
       nlohmann::json::parse(read(options_.output_dir / "results.json"))["output_error"], truth,
       "started in motion");
+}
+
+// A session exported as CSV runs through the windowed set as its log does, with the daemon's bounds
+// stated in the import spec's [guaranteed] table (one window per recording: [guaranteed] windows =
+// 1): the set keeps the simulated truth and is about as narrow as the log's.
+TEST_F(IdentifyCsv, AnExportedSessionRunsThroughTheGuaranteedSetAsItsLogDoes) {
+  const fs::path log = furuta::testing::simulated_session_log(dir_.path() / "logs", "g", 1);
+  ASSERT_FALSE(log.empty());
+  const fs::path csv = dir_.path() / "session.csv";
+  ASSERT_EQ(run_log_export_csv_command(log, csv, out_, err_), 0) << err_.str();
+  std::string toml = read(FURUTA_SOURCE_DIR "/config/rig.toml");
+  const auto windows = toml.find("\nwindows = 8 ");
+  ASSERT_NE(windows, std::string::npos) << "config/rig.toml: no `windows = 8` in [guaranteed]";
+  toml.replace(windows, 12, "\nwindows = 1");
+  const fs::path config = write(dir_.path() / "one-window.toml", toml);
+  const config::RigConfig rig = config::load_rig_config(config);
+
+  IdentifyCommandOptions from_log;
+  from_log.logs = {log};
+  from_log.config_path = config;
+  from_log.output_dir = dir_.path() / "from_log";
+  from_log.guaranteed = true;
+  ASSERT_EQ(run_identify_command(from_log, out_, err_), 0) << err_.str();
+  const nlohmann::json log_set =
+      nlohmann::json::parse(read(from_log.output_dir / "results.json"))["guaranteed"];
+  ASSERT_EQ(log_set["verdict"], "contracted") << log_set["finding"];
+
+  // The daemon's bounds, as the CSV's logger states them.
+  const double arm_count = 2 * kPi / rig.arm_encoder.counts_per_joint_rev();
+  const double pendulum_count = 2 * kPi / rig.pendulum_encoder.counts_per_joint_rev();
+  std::ostringstream bounds;
+  bounds << std::setprecision(17) << "input_at_start = 0\n\n[guaranteed]\n"
+         << "arm_angle_error = " << arm_count / 2 << "\n"
+         << "pendulum_angle_error = " << pendulum_count / 2 << "\n"
+         << "pendulum_zero_error = " << 2.5 * pendulum_count << "\n"
+         << "lag_ms = [" << rig.guaranteed.lag_ms[0] << ", " << rig.guaranteed.lag_ms[1] << "]\n"
+         << "arm_rest_speed_rad_s = " << rig.guaranteed.arm_rest_speed_rad_s << "\n"
+         << "supply_error_v = " << 0.5 * 80.0 / 2048.0 << "\n";
+  const std::string spec = own_export_spec(rig);
+  options_.csvs = {csv};
+  options_.config_path = config;
+  options_.no_output_error = false;
+  options_.guaranteed = true;
+  write(spec_, spec);
+  EXPECT_EQ(run(), 2);
+  EXPECT_NE(err_.str().find("has no [guaranteed] table"), std::string::npos) << err_.str();
+  write(spec_, spec + bounds.str());
+  ASSERT_EQ(run(), 0) << err_.str() << out_.str();
+  const nlohmann::json csv_set =
+      nlohmann::json::parse(read(options_.output_dir / "results.json"))["guaranteed"];
+  ASSERT_EQ(csv_set["verdict"], "contracted") << csv_set["finding"];
+
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const char* name = identification::kScaledParameterNames[k];
+    const double truth = log_set["truth_scaled"][name].get<double>();
+    const nlohmann::json& c = csv_set["set_scaled"][name];
+    const nlohmann::json& l = log_set["set_scaled"][name];
+    const double csv_width = c[1].get<double>() - c[0].get<double>();
+    const double log_width = l[1].get<double>() - l[0].get<double>();
+    std::printf("[ measured ] %s: CSV half-width %.3g %%, log %.3g %% (of the truth)\n", name,
+                50 * csv_width / truth, 50 * log_width / truth);
+    EXPECT_LE(c[0].get<double>(), truth) << name;
+    EXPECT_GE(c[1].get<double>(), truth) << name;
+    EXPECT_LT(csv_width, 2 * log_width) << name;
+  }
+  std::size_t from_spec = 0;
+  for (const nlohmann::json& input : csv_set["physical_inputs"]) {
+    if (input["source"] != "import_spec") continue;
+    ++from_spec;
+    EXPECT_NE(input["setting"].get<std::string>().find(spec_.string() + ":"), std::string::npos)
+        << input["setting"];
+  }
+  EXPECT_EQ(from_spec, 5U);  // each angle's error, the pendulum's zero, the lag, the supply
 }
 
 // A controller's output as the input: every 10 ms a PD law on the quantised angles adds to the

@@ -298,6 +298,105 @@ TEST(CsvImportSpec, OwnTimesRateLimitAndSupplyAreChecked) {
   EXPECT_THAT(spec_error(torque).what(), HasSubstr("csv.supply: only applies when input_kind"));
 }
 
+// A recording's bounds for the guaranteed set: in the angle unit and column scale like the
+// angles, each with the spec's file, line and key as its provenance.
+TEST(CsvImportSpec, TheGuaranteedTableStatesTheRecordingsBounds) {
+  const std::string table =
+      "[guaranteed]\n"
+      "arm_angle_error = 0.5\n"
+      "pendulum_angle_error = 0.5\n"
+      "pendulum_zero_error = 2.5\n"
+      "lag_ms = [0.5, 3]\n"
+      "arm_rest_speed_rad_s = 0.02\n";
+  std::string counts = spec_text(
+      "arm_counts_per_rev = 1000\npendulum_counts_per_rev = 4000\narm_angle_scale = -2\n"
+      "supply = \"v\"\n");
+  counts.replace(counts.find("\"rad\""), 5, "\"counts\"");
+  const CsvImportSpec spec =
+      parse_csv_import_spec(counts + table + "supply_error_v = 0.02\n", "spec.toml");
+  ASSERT_TRUE(spec.bounds.has_value());
+  const RecordingBounds& b = *spec.bounds;
+  EXPECT_DOUBLE_EQ(b.arm_angle_error.value.hi(), 0.5 * 2 * 2 * kPi / 1000);
+  EXPECT_DOUBLE_EQ(b.arm_angle_error.value.lo(), -b.arm_angle_error.value.hi());
+  EXPECT_DOUBLE_EQ(b.pendulum_angle_error.value.hi(), 0.5 * 2 * kPi / 4000);
+  EXPECT_DOUBLE_EQ(b.pendulum_zero.value.hi(), 2.5 * 2 * kPi / 4000);
+  EXPECT_TRUE(b.lag.value.contains(0.0005));
+  EXPECT_TRUE(b.lag.value.contains(0.003));
+  EXPECT_FALSE(b.lag.value.contains(0.0));
+  EXPECT_EQ(b.arm_rest_speed_rad_s, 0.02);
+  EXPECT_DOUBLE_EQ(b.supply_error.value.hi(), 0.02);
+  EXPECT_FALSE(b.supply.has_value());
+  EXPECT_EQ(b.lag.source, InputSource::import_spec);
+  EXPECT_EQ(b.lag.setting, "spec.toml:18 guaranteed.lag_ms");
+
+  // Without a supply column the supply itself is stated; degrees are degrees.
+  std::string degrees = spec_text();
+  degrees.replace(degrees.find("\"rad\""), 5, "\"deg\"");
+  const CsvImportSpec d =
+      parse_csv_import_spec(degrees + table + "supply_v = [11.5, 12.5]\n", "spec.toml");
+  EXPECT_DOUBLE_EQ(d.bounds->arm_angle_error.value.hi(), 0.5 * kDeg);
+  ASSERT_TRUE(d.bounds->supply.has_value());
+  EXPECT_EQ(d.bounds->supply->value.lo(), 11.5);
+  EXPECT_FALSE(parse_csv_import_spec(spec_text(), "spec.toml").bounds.has_value());
+}
+
+TEST(CsvImportSpec, GuaranteedTableMistakesAreLocated) {
+  const std::string base = spec_text() +
+                           "[guaranteed]\n"
+                           "arm_angle_error = 0.001\n"
+                           "pendulum_angle_error = 0.001\n"
+                           "pendulum_zero_error = 0.004\n";
+  EXPECT_THAT(spec_error(base + "arm_rest_speed_rad_s = 0\nsupply_v = [12, 12]\n").what(),
+              HasSubstr("spec.toml:10: guaranteed.lag_ms: missing: [lo, hi] in ms"));
+  EXPECT_THAT(
+      spec_error(base + "lag_ms = [2, 1]\narm_rest_speed_rad_s = 0\nsupply_v = [12, 12]\n")
+          .what(),
+      HasSubstr("spec.toml:14: guaranteed.lag_ms: must be [lo, hi] with lo <= hi"));
+  EXPECT_THAT(spec_error(base + "lag_ms = [0, 2]\narm_rest_speed_rad_s = 0\n").what(),
+              HasSubstr("guaranteed.supply_v: missing: [lo, hi] in V"));
+  EXPECT_THAT(spec_error(base + "lag_ms = [0, 2]\narm_rest_speed_rad_s = 0\n"
+                                "supply_v = [12, 12]\nsupply_error_v = 0.02\n")
+                  .what(),
+              HasSubstr("guaranteed.supply_error_v: only applies with a csv.supply column"));
+  EXPECT_THAT(spec_error(base + "lag_ms = [0, 2]\narm_rest_speed_rad_s = 0\n"
+                                "supply_v = [12, 12]\npendulum_zero = 1\n")
+                  .what(),
+              HasSubstr("guaranteed.pendulum_zero: unknown key"));
+  std::string zero_error = base;
+  zero_error.replace(zero_error.find("0.004"), 5, "0");
+  EXPECT_THAT(spec_error(zero_error).what(),
+              HasSubstr("spec.toml:13: guaranteed.pendulum_zero_error: must be > 0"));
+  std::string torque = base + "lag_ms = [0, 2]\narm_rest_speed_rad_s = 0\nsupply_v = [12, 12]\n";
+  torque.replace(torque.find("\"duty\""), 6, "\"torque\"");
+  EXPECT_THAT(spec_error(torque).what(),
+              HasSubstr("spec.toml:10: guaranteed: only applies when csv.input_kind = \"duty\""));
+}
+
+// A logger that stamps its first command with the command's own time says what was in force
+// before it: the row grid and the refinement's input both start from it.
+TEST(CsvImport, TheInputAtStartHoldsBeforeTheFirstInputTime) {
+  testing::TempDir dir;
+  std::ostringstream csv;
+  csv << "t,theta,t_theta,alpha,u,t_u\n";
+  for (int k = 0; k < 16; ++k) {
+    csv << 0.01 * k << ",0," << 0.01 * k - 0.005 << ",0," << (k < 8 ? 0.5 : -0.5) << ","
+        << 0.01 * k + 0.02 << "\n";
+  }
+  const std::filesystem::path path = write_file(dir, "start.csv", csv.str());
+  const std::string columns = "arm_time = \"t_theta\"\ninput_time = \"t_u\"\ninput_scale = 2\n";
+  const ImportedSeries held = import_csv(
+      path, parse_csv_import_spec(spec_text(columns + "input_at_start = 0.1\n"), "spec.toml"));
+  ASSERT_TRUE(held.recorded.input_at_start.has_value());
+  EXPECT_EQ(*held.recorded.input_at_start, 0.2);  // scaled like the column
+  EXPECT_EQ(held.input[0], 0.2);
+  EXPECT_EQ(held.input[1], 0.2);
+  EXPECT_EQ(held.input[2], 1.0);
+  const ImportedSeries as_first =
+      import_csv(path, parse_csv_import_spec(spec_text(columns), "spec.toml"));
+  EXPECT_FALSE(as_first.recorded.input_at_start.has_value());
+  EXPECT_EQ(as_first.input[0], 1.0);
+}
+
 TEST(CsvImport, AGapOfManyPeriodsIsNotInterpolatedAcross) {
   testing::TempDir dir;
   std::ostringstream csv;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "furuta/identification/board_clock.hpp"
+#include "furuta/identification/physical_inputs.hpp"
 
 namespace furuta::identification {
 
@@ -49,10 +50,16 @@ struct CsvColumn {
 //   supply = "v_bus"          (duty only: the supply [V], scaling the duty by it / nominal)
 //   input_scale_sd = 0.05     (the input's scale known to 5 %: fitted, its sd carried)
 //   arm_board_time = "arm_ticks"  pendulum_board_time = "enc_us"  (each board's own clock)
+//   input_at_start = 0        (the input before its first time: a start at rest)
 // and, for input_kind = "voltage" only, the rig's DC motor:
 //   [motor]
 //   torque_constant_nm_per_a = 0.05   back_emf_v_s_per_rad = 0.05   resistance_ohm = 2.5
 //   gear_ratio = 5 (default 1)        efficiency = 0.9 (default 1, in (0, 1])
+// and, for a guaranteed identification (duty input only), the recording's bounds
+// (docs/csv-import.md, "Guaranteed identification"):
+//   [guaranteed]
+//   arm_angle_error = 0.5  pendulum_angle_error = 0.5  pendulum_zero_error = 2.5  (angle_unit)
+//   lag_ms = [0, 2]   arm_rest_speed_rad_s = 0.01   supply_error_v = 0.02 | supply_v = [11.9, 12.1]
 struct CsvImportSpec {
   char delimiter = ',';
   bool has_header = true;
@@ -86,9 +93,15 @@ struct CsvImportSpec {
   // uncertain gain, a voltage read through a divider): the refinement fits the input's gain around
   // 1 with it as its prior, so the standard deviations carry it. 0: the scale is exact.
   double input_scale_sd = 0;
+  // The input in force before its first recorded time (after input_scale): a recording that
+  // starts at rest before its first command. Unset: the first value, held back.
+  std::optional<double> input_at_start;
+  // The [guaranteed] table, in radians, seconds and volts, each with the spec's file, line and key
+  // as its provenance: what `furuta identify --guaranteed` takes from the recording.
+  std::optional<RecordingBounds> bounds;
 };
 
-// Parses the [csv] and [motor] tables of an import spec file; errors name file, line and field
+// Parses the [csv], [motor] and [guaranteed] tables of an import spec file; errors name file, line and field
 // (ConfigError).
 CsvImportSpec load_csv_import_spec(const std::filesystem::path& path);
 CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& source_name);
@@ -100,6 +113,7 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
 struct RecordedSeries {
   std::vector<double> q1_t_s, q1_rad, q2_t_s, q2_rad, input_t_s, input;
   std::vector<double> supply_v;  // every row's supply reading, when the spec names one
+  std::optional<double> input_at_start;  // the spec's: the input before its first time
   // Per angle: the board clock its times were mapped from (the spec's *_board_time), or nothing.
   std::array<std::optional<BoardClock>, 2> board_clock;
   std::vector<std::string> warnings;  // a board clock that did not keep time

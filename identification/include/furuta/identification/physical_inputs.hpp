@@ -1,5 +1,5 @@
 #pragma once
-// The physical inputs of a guaranteed identification (issue 20): what the encoders, the board, the
+// The physical inputs of a guaranteed identification: what the encoders, the board, the
 // clocks, the motor's data sheet and the rig's CAD bound, as intervals, each with where it came
 // from. Every other bound a guaranteed method uses is derived from these and the model
 // (docs/guaranteed-bounds.md).
@@ -10,6 +10,7 @@
 // The rig's parameters follow from theta with g's and k_w's intervals: so no guaranteed set is
 // narrower than the drive's own tolerance.
 
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -31,6 +32,7 @@ enum class InputSource {
   data_sheet,       // [motor]'s figures with [guaranteed] motor_tolerance_pct
   configured,       // a [guaranteed] setting (a bound no recording gives)
   cad,              // [nominal] (CAD values) with [guaranteed] prior_percent
+  import_spec,      // a CSV import spec's [guaranteed] table: what another logger states
 };
 
 // One input and its provenance, for the report and results.json.
@@ -54,6 +56,24 @@ struct DriveData {
   Interval back_emf_damping_nm_s() const;  // k_w
 };
 
+// What the recording's own logger bounds: for a session log the daemon (encoder counts, its rest
+// check, the 1065's supply readings) and [guaranteed] lag_ms; for a CSV its import spec's
+// [guaranteed] table. Each value is the interval its error lies in.
+struct RecordingBounds {
+  PhysicalInput arm_angle_error;       // rad: true angle minus reading
+  PhysicalInput pendulum_angle_error;  // rad: the same, without the zero
+  PhysicalInput pendulum_zero;         // rad: the pendulum's true angle where it read 0, at rest
+  PhysicalInput lag;                   // s: a reading's time minus its state's, against the input's
+  PhysicalInput supply_error;          // V: a supply reading minus the supply
+  // The supply itself, for a recording without supply readings; unused when there are readings.
+  std::optional<PhysicalInput> supply;
+  double arm_rest_speed_rad_s = 0;  // |dq1| at the first command, the rig at rest before it
+};
+
+// A session log's bounds: the configuration's encoders (half a count), the daemon's rest check,
+// [guaranteed] lag_ms and arm_rest_speed_rad_s, the 1065's supply step.
+RecordingBounds session_log_bounds(const config::RigConfig& rig);
+
 struct PhysicalInputs {
   Interval arm_angle_error_rad;       // true angle minus reading, after the joint's zero
   Interval pendulum_angle_error_rad;  // the same, without the zero
@@ -71,6 +91,12 @@ struct PhysicalInputs {
 // with a reading that is not a finite positive voltage.
 PhysicalInputs physical_inputs(const config::RigConfig& rig,
                                std::span<const double> supply_readings_v);
+// The same with the recording's bounds stated (a CSV's import spec): the drive and the prior from
+// `rig`, the rest from `bounds`. Without supply readings the supply is bounds.supply; without
+// either it throws std::invalid_argument.
+PhysicalInputs physical_inputs(const config::RigConfig& rig,
+                               std::span<const double> supply_readings_v,
+                               const RecordingBounds& bounds);
 
 // The scaled parameters' names, in model::kParameterNames' order: mu_k / g, b = (fv1 + k_w) / g,
 // fv2 / g.

@@ -115,6 +115,9 @@ struct Batch {
   // CSV recordings in counts: each angle's counts per revolution as the import spec gives them
   // (session logs: the configuration's encoders); 0 otherwise.
   std::array<double, 2> counts_per_rev = {0, 0};
+  // CSV recordings: their bounds for the guaranteed set (the import spec's [guaranteed]); session
+  // logs take identification::session_log_bounds(rig).
+  std::optional<identification::RecordingBounds> recording_bounds;
 };
 
 struct SiviaSettings {
