@@ -1,7 +1,9 @@
 #include "furuta/identification/diagnosis.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
@@ -117,73 +119,78 @@ const char* mistake_name(Mistake mistake) {
   return "unknown";
 }
 
+namespace {
+
+// A mistake undone, as what it does to each quantity: an arm angle, a pendulum angle, an input
+// value; the angles' noise scales with their angle.
+struct Correction {
+  std::function<double(double)> arm = [](double q) { return q; };
+  std::function<double(double)> pendulum = [](double q) { return q; };
+  double input_divisor = 1;
+  std::array<double, 2> noise_divisor = {1, 1};
+};
+
+Correction correction(Mistake mistake, double value) {
+  Correction c;
+  const auto scaled = [value](double q) { return q / value; };
+  switch (mistake) {
+    case Mistake::none:
+      break;
+    case Mistake::arm_scale:
+      c.arm = scaled;
+      c.noise_divisor[0] = std::abs(value);
+      break;
+    case Mistake::pendulum_scale:
+      c.pendulum = scaled;
+      c.noise_divisor[1] = std::abs(value);
+      break;
+    case Mistake::angle_unit:
+      c.arm = c.pendulum = scaled;
+      c.noise_divisor = {std::abs(value), std::abs(value)};
+      break;
+    case Mistake::pendulum_zero:
+      c.pendulum = [value](double q) { return q - value; };
+      break;
+    case Mistake::pendulum_zero_and_sign:
+      c.pendulum = [value](double q) { return value - q; };
+      break;
+    case Mistake::input_scale:
+      c.input_divisor = value;
+      break;
+  }
+  return c;
+}
+
+void map_each(const std::function<double(double)>& f, std::vector<double>& values) {
+  for (double& v : values) v = f(v);
+}
+
+}  // namespace
+
 std::vector<OeExperiment> corrected(const std::vector<OeExperiment>& experiments, Mistake mistake,
                                     double value) {
+  const Correction c = correction(mistake, value);
   std::vector<OeExperiment> out = experiments;
   for (OeExperiment& e : out) {
-    const auto scale_joint = [&](int joint) {
-      for (OeObservation& o : e.observations) {
-        if (o.joint == joint) o.angle_rad /= value;
-      }
-      e.angle_sigma_rad[static_cast<std::size_t>(joint)] /= std::abs(value);
-    };
-    switch (mistake) {
-      case Mistake::none:
-        break;
-      case Mistake::arm_scale:
-        scale_joint(0);
-        break;
-      case Mistake::pendulum_scale:
-        scale_joint(1);
-        break;
-      case Mistake::angle_unit:
-        scale_joint(0);
-        scale_joint(1);
-        break;
-      case Mistake::pendulum_zero:
-        for (OeObservation& o : e.observations) {
-          if (o.joint == 1) o.angle_rad -= value;
-        }
-        break;
-      case Mistake::pendulum_zero_and_sign:
-        for (OeObservation& o : e.observations) {
-          if (o.joint == 1) o.angle_rad = value - o.angle_rad;
-        }
-        break;
-      case Mistake::input_scale:
-        for (double& u : e.input) u /= value;
-        for (double& s : e.input_slope) s /= value;
-        break;
-    }
+    for (OeObservation& o : e.observations)
+      o.angle_rad = (o.joint == 0 ? c.arm : c.pendulum)(o.angle_rad);
+    for (std::size_t j = 0; j < 2; ++j) e.angle_sigma_rad[j] /= c.noise_divisor[j];
+    for (double& u : e.input) u /= c.input_divisor;
+    for (double& s : e.input_slope) s /= c.input_divisor;
   }
   return out;
 }
 
 RawExperiment corrected_raw(const RawExperiment& experiment, Mistake mistake, double value) {
+  const Correction c = correction(mistake, value);
   RawExperiment e = experiment;
-  switch (mistake) {
-    case Mistake::none:
-      break;
-    case Mistake::arm_scale:
-      for (double& q : e.q1) q /= value;
-      break;
-    case Mistake::pendulum_scale:
-      for (double& q : e.q2) q /= value;
-      break;
-    case Mistake::angle_unit:
-      for (double& q : e.q1) q /= value;
-      for (double& q : e.q2) q /= value;
-      break;
-    case Mistake::pendulum_zero:
-      for (double& q : e.q2) q -= value;
-      break;
-    case Mistake::pendulum_zero_and_sign:
-      for (double& q : e.q2) q = value - q;
-      break;
-    case Mistake::input_scale:
-      for (double& u : e.input) u /= value;
-      break;
-  }
+  map_each(c.arm, e.q1);
+  map_each(c.pendulum, e.q2);
+  for (double& u : e.input) u /= c.input_divisor;
+  map_each(c.arm, e.recorded.q1_rad);
+  map_each(c.pendulum, e.recorded.q2_rad);
+  for (double& u : e.recorded.input) u /= c.input_divisor;
+  if (e.recorded.input_at_start) *e.recorded.input_at_start /= c.input_divisor;
   return e;
 }
 

@@ -34,6 +34,24 @@ struct CsvEncoders {
   double pendulum_counts_per_rev = 0;
 };
 
+// An incremental encoder's reading of q: the floor of its count (none with 0 counts).
+inline double quantised_angle(double q, double counts_per_rev) {
+  if (counts_per_rev <= 0) return q;
+  const double step = 2 * std::numbers::pi / counts_per_rev;
+  return std::floor(q / step) * step;
+}
+
+// The voltage rig's excitation at t [V]: six sines from 0.23 to 2.69 Hz, 3.5 V RMS, each phase
+// `phase` times its index.
+inline double six_sine_volts(double t, double phase) {
+  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
+  double sum = 0;
+  for (std::size_t i = 0; i < hz.size(); ++i) {
+    sum += std::sin(2 * std::numbers::pi * hz[i] * t + phase * static_cast<double>(i + 1));
+  }
+  return 3.5 * sum / std::sqrt(6.0);
+}
+
 // 10 s at 10 ms of a six-sine voltage (3.5 V), RK4 at 0.5 ms after 2 s of settling, in radians from
 // hanging down, as columns t,q1,q2,volts (the rig's parameters p, the voltage rig's by default).
 // The volts column may be written late by input_delay_s (a logger that stamps the input after the
@@ -43,28 +61,16 @@ inline std::filesystem::path write_voltage_rig_csv(
     const std::filesystem::path& path, double phase, double input_delay_s = 0,
     const CsvColumns& columns = {}, int digits = 10, CsvEncoders encoders = {},
     const model::Parameters<double>& p = voltage_rig_truth()) {
-  const auto quantised = [](double q, double counts_per_rev) {
-    if (counts_per_rev <= 0) return q;
-    const double step = 2 * std::numbers::pi / counts_per_rev;
-    return std::floor(q / step) * step;
-  };
   std::ofstream out(path);
   out << "t,q1,q2,volts\n" << std::setprecision(digits);
-  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
-  const auto volts = [&](double t) {
-    double sum = 0;
-    for (std::size_t i = 0; i < hz.size(); ++i) {
-      sum += std::sin(2 * std::numbers::pi * hz[i] * t + phase * static_cast<double>(i + 1));
-    }
-    return 3.5 * sum / std::sqrt(6.0);
-  };
+  const auto volts = [phase](double t) { return six_sine_volts(t, phase); };
   model::PendulumState x;
   const double h = 5e-4;
   for (int step = -4000; step < 20000; ++step) {
     const double t = step * h;
     if (step >= 0 && step % 20 == 0) {
-      out << t << "," << columns.q1(quantised(x.q1, encoders.arm_counts_per_rev)) << ","
-          << columns.q2(quantised(x.q2, encoders.pendulum_counts_per_rev)) << ","
+      out << t << "," << columns.q1(quantised_angle(x.q1, encoders.arm_counts_per_rev)) << ","
+          << columns.q2(quantised_angle(x.q2, encoders.pendulum_counts_per_rev)) << ","
           << columns.volts(volts(t - input_delay_s)) << "\n";
     }
     const double v = volts(t + h / 2);
@@ -82,28 +88,17 @@ inline std::filesystem::path write_voltage_rig_csv(
 inline std::filesystem::path write_closed_loop_voltage_rig_csv(
     const std::filesystem::path& path, double phase,
     const std::function<double(double, double, double)>& law, CsvEncoders encoders = {}) {
-  const auto quantised = [](double q, double counts_per_rev) {
-    if (counts_per_rev <= 0) return q;
-    const double step = 2 * std::numbers::pi / counts_per_rev;
-    return std::floor(q / step) * step;
-  };
   std::ofstream out(path);
   out << "t,q1,q2,volts\n" << std::setprecision(10);
-  constexpr std::array<double, 6> hz = {0.23, 0.47, 0.83, 1.27, 1.91, 2.69};
   model::PendulumState x;
   const double h = 5e-4;
   double v = 0;
   for (int step = -4000; step < 20000; ++step) {
     const double t = step * h;
     if (step % 20 == 0) {
-      double excitation = 0;
-      for (std::size_t i = 0; i < hz.size(); ++i) {
-        excitation +=
-            std::sin(2 * std::numbers::pi * hz[i] * t + phase * static_cast<double>(i + 1));
-      }
-      const double q1 = quantised(x.q1, encoders.arm_counts_per_rev);
-      const double q2 = quantised(x.q2, encoders.pendulum_counts_per_rev);
-      v = 3.5 * excitation / std::sqrt(6.0) + law(t, q1, q2);
+      const double q1 = quantised_angle(x.q1, encoders.arm_counts_per_rev);
+      const double q2 = quantised_angle(x.q2, encoders.pendulum_counts_per_rev);
+      v = six_sine_volts(t, phase) + law(t, q1, q2);
       if (step >= 0) out << t << "," << q1 << "," << q2 << "," << v << "\n";
     }
     x = model::rk4_step(voltage_rig_truth(), x, h, [&](const model::PendulumState& s) {
