@@ -414,8 +414,8 @@ std::optional<LeadingCovariance> leading_covariance(
   return out;
 }
 
-// The angle noise the fit assumed, per joint: the largest over the experiments, and from the
-// smallest step when any experiment's was.
+// The angle noise the fit assumed, per joint: the largest over the experiments, and estimated from
+// the readings when any experiment's was.
 void assumed_angle_noise(OutputErrorResult& result, const std::vector<OeExperiment>& experiments) {
   result.angle_noise_rad = {0, 0};
   result.angle_noise_source = {AngleNoiseSource::encoder_resolution,
@@ -423,8 +423,8 @@ void assumed_angle_noise(OutputErrorResult& result, const std::vector<OeExperime
   for (const OeExperiment& e : experiments) {
     for (int j = 0; j < 2; ++j) {
       result.angle_noise_rad[j] = std::max(result.angle_noise_rad[j], e.angle_sigma_rad[j]);
-      if (e.angle_noise_source[j] == AngleNoiseSource::smallest_step) {
-        result.angle_noise_source[j] = AngleNoiseSource::smallest_step;
+      if (e.angle_noise_source[j] == AngleNoiseSource::estimated_from_readings) {
+        result.angle_noise_source[j] = AngleNoiseSource::estimated_from_readings;
       }
     }
   }
@@ -459,14 +459,14 @@ void misfit_warnings(OutputErrorResult& result, const OutputErrorOptions& option
     s << std::setprecision(3) << v;
     return s.str();
   };
-  const auto from_steps = [&](int j) {
-    return result.angle_noise_source[j] == AngleNoiseSource::smallest_step;
+  const auto estimated = [&](int j) {
+    return result.angle_noise_source[j] == AngleNoiseSource::estimated_from_readings;
   };
   const auto noise = [&](int j) {
     return g(result.angle_noise_rad[j]) + " rad (" +
-           (from_steps(j) ? "its smallest step between samples / sqrt(12): the recording states "
-                            "no resolution"
-                          : "the encoder's resolution / sqrt(12)") +
+           (estimated(j) ? "estimated from its readings' scatter: the recording states no "
+                           "resolution"
+                         : "the encoder's resolution / sqrt(12)") +
            ")";
   };
   if (result.residual_sigma > options.misfit_sigma) {
@@ -478,9 +478,9 @@ void misfit_warnings(OutputErrorResult& result, const OutputErrorOptions& option
         "): the model does not describe these data as recorded; likely causes: an angle's or "
         "the input's unit, sign, scale or zero, time stamps that are late or jittered, dynamics "
         "the model lacks" +
-        (from_steps(0) || from_steps(1)
-             ? ", or an angle noise too small (state arm_resolution and pendulum_resolution in "
-               "the import spec)"
+        (estimated(0) || estimated(1)
+             ? ", or an angle noise the readings understate (state arm_resolution and "
+               "pendulum_resolution in the import spec)"
              : "") +
         "; the standard deviations are scaled by it");
   }
@@ -698,6 +698,31 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
     e.warnings.push_back(e.name + ": no motor commands in the log; the input is the first echo");
   }
   return e;
+}
+
+double angle_noise_from_readings(std::span<const double> q) {
+  double step = HUGE_VAL;
+  for (std::size_t i = 1; i < q.size(); ++i) {
+    const double d = std::abs(q[i] - q[i - 1]);
+    if (d > 0) step = std::min(step, d);
+  }
+  if (!std::isfinite(step)) return 0.0;  // no reading ever changed: nothing to say
+  const double floor = step / std::sqrt(12.0);
+  if (q.size() < 5) return floor;
+  std::vector<double> d4(q.size() - 4);
+  for (std::size_t i = 0; i + 4 < q.size(); ++i) {
+    d4[i] = q[i] - 4 * q[i + 1] + 6 * q[i + 2] - 4 * q[i + 3] + q[i + 4];
+  }
+  const auto median = [](std::vector<double>& v) {
+    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    return *mid;
+  };
+  const double centre = median(d4);
+  for (double& v : d4) v = std::abs(v - centre);
+  // 1.4826 MAD is a normal sample's standard deviation.
+  const double spread = 1.4826 * median(d4) / std::sqrt(70.0);
+  return std::max(spread, floor);
 }
 
 OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,

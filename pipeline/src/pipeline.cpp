@@ -151,19 +151,6 @@ identification::PhysicalCheck check_physical(identification::Identification& id,
   return combined;
 }
 
-// A CSV's angle noise for the output-error weights: one step of its quantisation / sqrt(12), the
-// step taken as the smallest change between consecutive samples (an encoder's count; for data
-// without quantisation, the smallest change seen, which only scales the weights: the standard
-// deviations are rescaled by the residuals' own sigma).
-double smallest_step(const std::vector<double>& q) {
-  double step = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 1; i < q.size(); ++i) {
-    const double d = std::abs(q[i] - q[i - 1]);
-    if (d > 1e-12) step = std::min(step, d);
-  }
-  return std::isfinite(step) ? step : 1e-3;
-}
-
 // The index of the better of several fits of the same data: a converged one before one that is
 // not, then the smaller residual sigma.
 std::size_t better_fit(const std::vector<identification::OutputErrorResult>& fits) {
@@ -186,14 +173,23 @@ identification::OeExperiment oe_experiment(const Recording& r, const Batch& batc
   if (r.oe) return *r.oe;
   const identification::RawExperiment& e = r.experiment;
   // The angle noise from each encoder's resolution as the import spec states it; where it says
-  // nothing, from the smallest step between samples, and the misfit warning says so.
+  // nothing, estimated from the readings themselves, and the misfit warning says so.
   std::array<double, 2> sigma{};
   std::array<identification::AngleNoiseSource, 2> source{};
   for (std::size_t j = 0; j < 2; ++j) {
     const double stated = batch.encoder_resolution_rad[j];
-    source[j] = stated > 0 ? identification::AngleNoiseSource::encoder_resolution
-                           : identification::AngleNoiseSource::smallest_step;
-    sigma[j] = (stated > 0 ? stated : smallest_step(j == 0 ? e.q1 : e.q2)) / std::sqrt(12.0);
+    if (stated > 0) {
+      source[j] = identification::AngleNoiseSource::encoder_resolution;
+      sigma[j] = stated / std::sqrt(12.0);
+      continue;
+    }
+    const bool own = !e.recorded.empty();
+    const std::vector<double>& q =
+        j == 0 ? (own ? e.recorded.q1_rad : e.q1) : (own ? e.recorded.q2_rad : e.q2);
+    source[j] = identification::AngleNoiseSource::estimated_from_readings;
+    sigma[j] = identification::angle_noise_from_readings(q);
+    // Readings that never change carry no noise to estimate; any positive weight fits them.
+    if (!(sigma[j] > 0)) sigma[j] = 1e-3;
   }
   // As the import spec says (docs/csv-import.md, input_between_samples; linear unless it says).
   identification::OeExperiment out = identification::oe_experiment_from_raw(
@@ -474,8 +470,7 @@ std::optional<WindowedGuaranteed> run_windowed(const WindowedSettings& settings,
     const auto step = [progress](std::size_t done, std::size_t total) {
       if (progress != nullptr) progress->windows(done, total);
     };
-    out.result =
-        identification::invert_recordings(experiments, out.inputs, search, options, step);
+    out.result = identification::invert_recordings(experiments, out.inputs, search, options, step);
   } catch (const std::invalid_argument& e) {
     if (progress != nullptr) progress->windows_done();
     warn(std::string("skipped: ") + e.what());

@@ -198,8 +198,9 @@ Json simulation_json(const pipeline::Simulation& s) {
 }
 
 const char* noise_source_name(identification::AngleNoiseSource source) {
-  return source == identification::AngleNoiseSource::smallest_step ? "smallest_step"
-                                                                   : "encoder_resolution";
+  return source == identification::AngleNoiseSource::estimated_from_readings
+             ? "estimated_from_readings"
+             : "encoder_resolution";
 }
 
 const char* time_stamps_name(identification::TimeStamps stamps) {

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -331,6 +332,35 @@ TEST(OutputError, RefusesAnExperimentWithoutAngles) {
   OeExperiment e;
   e.name = "empty";
   EXPECT_THROW(refine_output_error({e}, model::paper_run1(), {}), std::invalid_argument);
+}
+
+// The noise of readings that state no resolution, from the readings: white noise on a swing with
+// input switches (a bang-bang arm's kinks), a quantised swing (its count / sqrt(12)), and readings
+// that never change (nothing to estimate).
+TEST(AngleNoiseFromReadings, FindsWhiteNoiseAndQuantisationUnderTheMotion) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 2e-4);
+  std::vector<double> noisy, counted, still(100, 0.25);
+  const double count = 2 * std::numbers::pi / 4096;
+  for (int k = 0; k < 1000; ++k) {
+    const double t = 0.01 * k;
+    // A swing of 0.8 rad at 1.2 Hz and a triangle wave (a kink every 0.6 s).
+    const double phase = std::fmod(t, 1.2);
+    const double motion =
+        0.8 * std::sin(2 * std::numbers::pi * 1.2 * t) + (phase < 0.6 ? phase : 1.2 - phase);
+    noisy.push_back(motion + noise(rng));
+    counted.push_back(std::floor(motion / count) * count);
+  }
+  EXPECT_NEAR(angle_noise_from_readings(noisy), 2e-4, 3e-5);
+  const double quantised = angle_noise_from_readings(counted);
+  std::printf("[ measured ] quantised: %.3g rad against a count / sqrt(12) of %.3g\n", quantised,
+              count / std::sqrt(12.0));
+  EXPECT_GE(quantised, count / std::sqrt(12.0));
+  EXPECT_LT(quantised, 1.5 * count / std::sqrt(12.0));
+  EXPECT_EQ(angle_noise_from_readings(still), 0.0);
+  // Too few readings for a fourth difference: the floor, one step / sqrt(12).
+  EXPECT_DOUBLE_EQ(angle_noise_from_readings(std::vector<double>{0.0, 0.1, 0.3}),
+                   0.1 / std::sqrt(12.0));
 }
 
 }  // namespace

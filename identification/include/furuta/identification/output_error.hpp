@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -29,9 +30,9 @@ struct OeObservation {
 // One experiment as the output-error fit needs it: the angles at their own times and the input
 // the actuator applied, as a piecewise-linear function of time on the same clock.
 // Where an angle's assumed noise came from: the encoder's resolution (a log's configuration, a
-// CSV's counts or stated resolution), or, when a CSV does not say, its smallest step between
-// samples, which an interpolating encoder or a filtered signal makes far too small.
-enum class AngleNoiseSource { encoder_resolution, smallest_step };
+// CSV's counts or stated resolution), or, when a CSV does not say, its readings' own scatter
+// (angle_noise_from_readings).
+enum class AngleNoiseSource { encoder_resolution, estimated_from_readings };
 // Where a joint's observation times came from: the host's stamps, the board's clock mapped onto
 // the host's (fit_board_clock), or some experiments each.
 enum class TimeStamps { host, board_clock, mixed };
@@ -89,6 +90,14 @@ OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double,
                                     const VoltageMotor& voltage_motor = {},
                                     double nominal_supply_v = 0);
 
+// An angle's noise [rad] from its own readings, for a recording that states no resolution: the
+// spread of their fourth differences, which remove a smooth motion up to its third derivative and
+// multiply white noise's variance by 70 (1 + 16 + 36 + 16 + 1), taken robustly (the median
+// absolute deviation, so that the few samples around a switch of the input do not count); never
+// below one smallest step between readings / sqrt(12), since an encoder's readings scatter at
+// least by its count. Readings in time order at about one rate; fewer than 5 give that floor.
+double angle_noise_from_readings(std::span<const double> q_rad);
+
 struct OutputErrorOptions {
   // Multiple shooting: each experiment is cut into segments of about this length, each with its
   // own initial state. 0.25 s, a third of a pendulum period (0.84 s): short enough that an LSMI
@@ -138,7 +147,7 @@ struct OutputErrorResult {
   double continuity_rms = 0;  // the weighted continuity defects' RMS (<< 1: continuous)
   double residual_sigma = 0;  // estimated sigma of the weighted angle residuals (1: as assumed)
   // The angle noise assumed per joint (the largest over the experiments) and where it came from
-  // (smallest_step when any experiment's did).
+  // (estimated_from_readings when any experiment's was).
   std::array<double, 2> angle_noise_rad = {0, 0};
   std::array<AngleNoiseSource, 2> angle_noise_source = {AngleNoiseSource::encoder_resolution,
                                                         AngleNoiseSource::encoder_resolution};
