@@ -254,8 +254,8 @@ std::optional<RecordingBounds> read_bounds_table(Section& top, const CsvImportSp
   Section g = top.child("guaranteed");
   if (spec.input_kind != InputKind::duty) {
     top.fail("guaranteed", top.node("guaranteed"),
-           "only applies when csv.input_kind = \"duty\": the guaranteed set is found in the "
-           "parameters scaled by the drive's gain (eq. 4), which a duty has");
+             "only applies when csv.input_kind = \"duty\": the guaranteed set is found in the "
+             "parameters scaled by the drive's gain (eq. 4), which a duty has");
   }
   const auto at = [&](const std::string& key) {
     return source_name + ":" + std::to_string(g.node(key)->source().begin.line) + " guaranteed." +
@@ -277,9 +277,8 @@ std::optional<RecordingBounds> read_bounds_table(Section& top, const CsvImportSp
   const auto positive_finite = [](double v) { return v > 0 && std::isfinite(v); };
   const auto angle = [&](const char* key, const char* quantity, std::size_t joint,
                          const char* what) {
-    const double v =
-        g.required_number(key, what, positive_finite, "> 0 (in csv.angle_unit)") *
-        angle_per_unit(joint);
+    const double v = g.required_number(key, what, positive_finite, "> 0 (in csv.angle_unit)") *
+                     angle_per_unit(joint);
     return PhysicalInput{quantity, Interval(-v, v), "rad", InputSource::import_spec, at(key)};
   };
   RecordingBounds b;

@@ -84,8 +84,8 @@ PhysicalInputs physical_inputs(const config::RigConfig& rig,
   in.pendulum_angle_error_rad = bounds.pendulum_angle_error.value;
   in.pendulum_zero_rad = bounds.pendulum_zero.value;
   in.lag_s = bounds.lag.value;
-  for (const PhysicalInput* b : {&bounds.arm_angle_error, &bounds.pendulum_angle_error,
-                                 &bounds.pendulum_zero}) {
+  for (const PhysicalInput* b :
+       {&bounds.arm_angle_error, &bounds.pendulum_angle_error, &bounds.pendulum_zero}) {
     in.provenance.push_back(*b);
   }
   in.duty_error = Interval(-0.5 * kDutyStep, 0.5 * kDutyStep);

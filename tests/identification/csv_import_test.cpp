@@ -349,8 +349,7 @@ TEST(CsvImportSpec, GuaranteedTableMistakesAreLocated) {
   EXPECT_THAT(spec_error(base + "arm_rest_speed_rad_s = 0\nsupply_v = [12, 12]\n").what(),
               HasSubstr("spec.toml:10: guaranteed.lag_ms: missing: [lo, hi] in ms"));
   EXPECT_THAT(
-      spec_error(base + "lag_ms = [2, 1]\narm_rest_speed_rad_s = 0\nsupply_v = [12, 12]\n")
-          .what(),
+      spec_error(base + "lag_ms = [2, 1]\narm_rest_speed_rad_s = 0\nsupply_v = [12, 12]\n").what(),
       HasSubstr("spec.toml:14: guaranteed.lag_ms: must be [lo, hi] with lo <= hi"));
   EXPECT_THAT(spec_error(base + "lag_ms = [0, 2]\narm_rest_speed_rad_s = 0\n").what(),
               HasSubstr("guaranteed.supply_v: missing: [lo, hi] in V"));

@@ -101,8 +101,8 @@ struct CsvImportSpec {
   std::optional<RecordingBounds> bounds;
 };
 
-// Parses the [csv], [motor] and [guaranteed] tables of an import spec file; errors name file, line and field
-// (ConfigError).
+// Parses the [csv], [motor] and [guaranteed] tables of an import spec file; errors name file, line
+// and field (ConfigError).
 CsvImportSpec load_csv_import_spec(const std::filesystem::path& path);
 CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& source_name);
 
@@ -112,7 +112,7 @@ CsvImportSpec parse_csv_import_spec(const std::string& text, const std::string& 
 // row) and is kept once. The output-error refinement takes every reading at its own time.
 struct RecordedSeries {
   std::vector<double> q1_t_s, q1_rad, q2_t_s, q2_rad, input_t_s, input;
-  std::vector<double> supply_v;  // every row's supply reading, when the spec names one
+  std::vector<double> supply_v;          // every row's supply reading, when the spec names one
   std::optional<double> input_at_start;  // the spec's: the input before its first time
   // Per angle: the board clock its times were mapped from (the spec's *_board_time), or nothing.
   std::array<std::optional<BoardClock>, 2> board_clock;
