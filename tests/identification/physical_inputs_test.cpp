@@ -1,4 +1,4 @@
-// The physical inputs of the guaranteed identification (issue 20): every input encloses what the
+// The physical inputs of the guaranteed identification: every input encloses what the
 // simulated rig really does, the scaled parameters map both ways, and each input says where it
 // came from.
 #include "furuta/identification/physical_inputs.hpp"
@@ -184,6 +184,39 @@ TEST(PhysicalInputs, WhatCannotBeBoundedIsRefusedWithTheReason) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("[nominal]"), std::string::npos) << e.what();
   }
+}
+
+// A recording's own bounds (a CSV's import spec) replace the daemon's: each is taken as stated,
+// with its provenance; without supply readings the stated supply is the supply, and the drive's
+// gain follows it.
+TEST(PhysicalInputs, ARecordingsStatedBoundsReplaceTheDaemons) {
+  const config::RigConfig rig = shipped_rig();
+  RecordingBounds b = session_log_bounds(rig);
+  const auto stated = [](const char* quantity, double lo, double hi, const char* unit) {
+    return PhysicalInput{quantity, Interval(lo, hi), unit, InputSource::import_spec,
+                         "spec.toml:9 guaranteed.x"};
+  };
+  b.arm_angle_error = stated("arm_angle_error", -1e-3, 1e-3, "rad");
+  b.lag = stated("lag", 0.5e-3, 4e-3, "s");
+  b.supply = stated("supply", 11.0, 13.0, "V");
+  const PhysicalInputs in = physical_inputs(rig, {}, b);
+  EXPECT_EQ(in.arm_angle_error_rad.hi(), 1e-3);
+  EXPECT_EQ(in.lag_s.lo(), 0.5e-3);
+  EXPECT_EQ(in.supply_v.lo(), 11.0);
+  EXPECT_EQ(in.pendulum_zero_rad.hi(), session_log_bounds(rig).pendulum_zero.value.hi());
+  const PhysicalInputs from_readings = physical_inputs(rig, supply_readings(rig, 100));
+  EXPECT_GT(in.drive.gain_nm().width(), 2 * from_readings.drive.gain_nm().width());
+  std::size_t from_spec = 0;
+  for (const PhysicalInput& p : in.provenance) {
+    if (p.source == InputSource::import_spec) ++from_spec;
+  }
+  EXPECT_EQ(from_spec, 3U);
+  // With readings the stated supply is not used: the readings' range, widened by their error.
+  const std::vector<double> readings = {12.0, 12.1};
+  const PhysicalInputs read = physical_inputs(rig, readings, b);
+  EXPECT_NEAR(read.supply_v.lo(), 12.0 - 40.0 / 2048.0, 1e-12);
+  b.supply.reset();
+  EXPECT_THROW((void)physical_inputs(rig, {}, b), std::invalid_argument);
 }
 
 }  // namespace
