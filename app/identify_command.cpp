@@ -195,6 +195,13 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
                                                 std::ostream& err) {
   const identification::CsvImportSpec spec =
       identification::load_csv_import_spec(options.import_spec);
+  if (options.guaranteed && !spec.bounds) {
+    err << "furuta identify: --guaranteed: " << options.import_spec.string()
+        << " has no [guaranteed] table: a CSV recording's bounds (each angle's error, the "
+           "pendulum's zero, the lag, the supply) are stated there (docs/csv-import.md, "
+           "\"Guaranteed identification\")\n";
+    return std::nullopt;
+  }
   pipeline::Batch in;
   in.kind = pipeline::InputKind::csv_recordings;
   if (!options.config_path.empty()) {
@@ -229,13 +236,6 @@ std::optional<pipeline::Batch> inputs_from_csvs(const IdentifyCommandOptions& op
   }
   in.encoder_resolution_rad = spec.resolution_rad;
   in.recording_bounds = spec.bounds;
-  if (options.guaranteed && !spec.bounds) {
-    err << "furuta identify: --guaranteed: " << options.import_spec.string()
-        << " has no [guaranteed] table: a CSV recording's bounds (each angle's error, the "
-           "pendulum's zero, the lag, the supply) are stated there (docs/csv-import.md, "
-           "\"Guaranteed identification\")\n";
-    return std::nullopt;
-  }
 
   // The differentiator's stop band (twice the cut-off) must fit below every file's Nyquist
   // frequency; a recording slower than the rig's loop needs a lower cut-off than its default.

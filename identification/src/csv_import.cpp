@@ -67,6 +67,24 @@ bool positive(double v) {
   return v > 0;
 }
 
+// Radians per unit of an angle column (one count with angle_unit = "counts"), before its scale.
+double angle_factor(AngleUnit unit, double counts_per_rev) {
+  switch (unit) {
+    case AngleUnit::deg:
+      return std::numbers::pi / 180.0;
+    case AngleUnit::counts:
+      return 2.0 * std::numbers::pi / counts_per_rev;
+    case AngleUnit::rad:
+      break;
+  }
+  return 1.0;
+}
+
+double joint_angle_factor(const CsvImportSpec& spec, std::size_t joint) {
+  return angle_factor(spec.angle_unit,
+                      joint == 0 ? spec.arm_counts_per_rev : spec.pendulum_counts_per_rev);
+}
+
 CsvColumn read_column(Section& s, const std::string& key, bool has_header, bool has_scale,
                       const char* what) {
   CsvColumn c;
@@ -170,20 +188,18 @@ void read_units(Section& s, CsvImportSpec& spec) {
   }
   // The smallest change each angle can show, in the angle unit: the output-error refinement's
   // angle noise (one resolution / sqrt(12)). With counts it is one count, so stating it is refused.
-  const double per_unit = spec.angle_unit == AngleUnit::deg ? std::numbers::pi / 180.0 : 1.0;
   for (std::size_t j = 0; j < 2; ++j) {
     const char* key = j == 0 ? "arm_resolution" : "pendulum_resolution";
     const std::optional<double> r = s.optional_number(key);
     if (spec.angle_unit == AngleUnit::counts) {
       if (r)
         s.fail(key, s.node(key), "not with angle_unit = \"counts\": one count is the resolution");
-      spec.resolution_rad[j] = 2.0 * std::numbers::pi /
-                               (j == 0 ? spec.arm_counts_per_rev : spec.pendulum_counts_per_rev);
+      spec.resolution_rad[j] = joint_angle_factor(spec, j);
       continue;
     }
     if (!r) continue;
     if (!(*r > 0) || !std::isfinite(*r)) s.fail(key, s.node(key), "must be a number > 0");
-    spec.resolution_rad[j] = *r * per_unit;
+    spec.resolution_rad[j] = *r * joint_angle_factor(spec, j);
   }
   spec.pendulum_zero = s.required_choice<PendulumZero>(
       "pendulum_zero", {{"down", PendulumZero::down}, {"up", PendulumZero::up}});
@@ -262,17 +278,16 @@ std::optional<RecordingBounds> read_bounds_table(Section& top, const CsvImportSp
            key;
   };
   const auto angle_per_unit = [&](std::size_t joint) {
-    const double scale = std::abs(joint == 0 ? spec.arm_angle.scale : spec.pendulum_angle.scale);
-    switch (spec.angle_unit) {
-      case AngleUnit::deg:
-        return scale * std::numbers::pi / 180.0;
-      case AngleUnit::counts:
-        return scale * 2.0 * std::numbers::pi /
-               (joint == 0 ? spec.arm_counts_per_rev : spec.pendulum_counts_per_rev);
-      case AngleUnit::rad:
-        break;
-    }
-    return scale;
+    return joint_angle_factor(spec, joint) *
+           std::abs(joint == 0 ? spec.arm_angle.scale : spec.pendulum_angle.scale);
+  };
+  // A [lo, hi] pair, required, each entry `valid`.
+  const auto pair = [&](const char* key, const char* missing, const Section::NumberRule& valid,
+                        const char* rule) {
+    if (!g.has(key)) g.fail(key, nullptr, missing);
+    const std::array<double, 2> v = g.numbers<2>(key, {0, 0}, valid, rule);
+    if (!(v[0] <= v[1])) g.fail(key, g.node(key), "must be [lo, hi] with lo <= hi");
+    return Interval(v[0], v[1]);
   };
   const auto positive_finite = [](double v) { return v > 0 && std::isfinite(v); };
   const auto angle = [&](const char* key, const char* quantity, std::size_t joint,
@@ -291,16 +306,12 @@ std::optional<RecordingBounds> read_bounds_table(Section& top, const CsvImportSp
   b.pendulum_zero = angle(
       "pendulum_zero_error", "pendulum_zero", 1,
       "the most the hanging pendulum's true angle is off its zero at the start, in angle_unit");
-  if (!g.has("lag_ms")) {
-    g.fail("lag_ms", nullptr,
-           "missing: [lo, hi] in ms, each reading's time minus its state's, against the input's "
-           "times");
-  }
-  const std::array<double, 2> lag = g.numbers<2>(
-      "lag_ms", {0, 0}, [](double v) { return std::abs(v) <= 1000; }, "within +-1000 ms");
-  if (!(lag[0] <= lag[1])) g.fail("lag_ms", g.node("lag_ms"), "must be [lo, hi] with lo <= hi");
-  b.lag = {"lag", Interval(lag[0], lag[1]) / Interval(1000.0), "s", InputSource::import_spec,
-           at("lag_ms")};
+  const Interval lag_ms = pair(
+      "lag_ms",
+      "missing: [lo, hi] in ms, each reading's time minus its state's, "
+      "against the input's times",
+      [](double v) { return std::abs(v) <= 1000; }, "within +-1000 ms");
+  b.lag = {"lag", lag_ms / Interval(1000.0), "s", InputSource::import_spec, at("lag_ms")};
   b.arm_rest_speed_rad_s = g.required_number(
       "arm_rest_speed_rad_s", "the most the arm's speed is at the first command [rad/s]",
       [](double v) { return v >= 0 && v <= 10; }, "in [0, 10]");
@@ -319,15 +330,11 @@ std::optional<RecordingBounds> read_bounds_table(Section& top, const CsvImportSp
       g.fail("supply_error_v", g.node("supply_error_v"),
              "only applies with a csv.supply column; without one give supply_v = [lo, hi]");
     }
-    if (!g.has("supply_v")) {
-      g.fail("supply_v", nullptr,
-             "missing: [lo, hi] in V, the supply during the recordings (no csv.supply column)");
-    }
-    const std::array<double, 2> v = g.numbers<2>(
-        "supply_v", {0, 0}, [](double x) { return x > 0 && x < 1000; }, "volts in (0, 1000)");
-    if (!(v[0] <= v[1])) g.fail("supply_v", g.node("supply_v"), "must be [lo, hi] with lo <= hi");
-    b.supply = PhysicalInput{"supply", Interval(v[0], v[1]), "V", InputSource::import_spec,
-                             at("supply_v")};
+    const Interval supply = pair(
+        "supply_v",
+        "missing: [lo, hi] in V, the supply during the recordings (no csv.supply column)",
+        [](double x) { return x > 0 && x < 1000; }, "volts in (0, 1000)");
+    b.supply = PhysicalInput{"supply", supply, "V", InputSource::import_spec, at("supply_v")};
   }
   g.reject_unknown_keys();
   return b;
@@ -449,18 +456,6 @@ std::optional<double> parse_number(std::string_view cell) {
   const auto result = std::from_chars(cell.data(), end, value);
   if (result.ec != std::errc() || result.ptr != end || !std::isfinite(value)) return std::nullopt;
   return value;
-}
-
-double angle_factor(AngleUnit unit, double counts_per_rev) {
-  switch (unit) {
-    case AngleUnit::deg:
-      return std::numbers::pi / 180.0;
-    case AngleUnit::counts:
-      return 2.0 * std::numbers::pi / counts_per_rev;
-    case AngleUnit::rad:
-      break;
-  }
-  return 1.0;
 }
 
 // A spec built in code skips the TOML checks; the import still refuses one it cannot honour.
@@ -655,10 +650,8 @@ RecordedSeries recorded_series(const std::string& file, const CsvImportSpec& spe
                                const std::vector<Channel>& channels,
                                const std::vector<std::vector<double>>& raw,
                                const std::vector<int>& row_line, const Slot& slot) {
-  const double arm_factor =
-      angle_factor(spec.angle_unit, spec.arm_counts_per_rev) * spec.arm_angle.scale;
-  const double pendulum_factor =
-      angle_factor(spec.angle_unit, spec.pendulum_counts_per_rev) * spec.pendulum_angle.scale;
+  const double arm_factor = joint_angle_factor(spec, 0) * spec.arm_angle.scale;
+  const double pendulum_factor = joint_angle_factor(spec, 1) * spec.pendulum_angle.scale;
   // Upright-zero rigs report the angle from the top; the project's q2 is from hanging down. Not
   // wrapped: a pendulum that swings over keeps a continuous angle, which differentiation needs.
   const double pendulum_offset = spec.pendulum_zero == PendulumZero::up ? std::numbers::pi : 0.0;
