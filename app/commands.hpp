@@ -72,8 +72,8 @@ enum class RemoteKind { start, stop, estop, status };
 // e-stop and status are sent again until answered. start: 0 once the session runs, 1
 // refused (by the command's check, or by the loop: a session running, the pendulum swinging, the
 // logs directory), 2 no answer, or no verdict within wait_s. stop, estop: 0 once the session has
-// ended (or when none ran: said so), 2 when it still runs after wait_s. status: 0. Over LCM;
-// daemon_channel.hpp takes another channel.
+// ended (or when none ran: said so), 2 when it still runs after wait_s. status: 0. Every kind: 1
+// refused, 2 nothing answered. Over LCM; daemon_channel.hpp takes another channel.
 int run_remote_command(RemoteKind kind, const RemoteOptions& remote, const StartOptions& start,
                        std::ostream& out, std::ostream& err);
 
@@ -167,14 +167,17 @@ std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& op
 void print_identification(std::ostream& out, const pipeline::Run& run,
                           const std::filesystem::path& dir, bool table_one_printed = false);
 // run_identification, then every file (report::write_identification) and print_identification.
-// 0, or 2 for unusable inputs (a log not intact without use_intact_part, one too short to fit).
+// 0; 1 when the output-error refinement did not converge; 2 for unusable inputs (a log not intact
+// without use_intact_part, one too short for any method) or an output directory it may not use.
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err);
 
 // --- validation by guaranteed simulation (the paper's section IV.B) ---
 struct SimulateCommandOptions {
-  std::vector<int> scenarios;     // 1..4; empty: all four
-  std::filesystem::path results;  // a results.json of `furuta identify`: LSMI and SIVIA parameters
+  std::vector<int> scenarios;  // 1..4; empty: all four
+  // A results.json of `furuta identify`: LSMI and SIVIA parameters, or the refinement's where LSMI
+  // did not run.
+  std::filesystem::path results;
   bool truth =
       false;  // the simulated rig's truth as point parameters (the default without results)
   std::optional<double> relative_pct;  // with the truth: also the truth +- this % as intervals
@@ -182,7 +185,8 @@ struct SimulateCommandOptions {
   std::size_t pieces = 1;  // tubes per run: 1, or a power of two split at 0.5 s (tighter, slower)
   std::filesystem::path output_dir = "simulation";  // as IdentifyCommandOptions::output_dir
 };
-// Writes simulate.json, table3.txt and scenario_<n>_<parameters>.svg; prints Table III.
+// Writes simulate.json, table3.txt, tubes.json and scenario_<n>_<parameters>.svg; prints Table
+// III.
 // 0 on success (whatever the tubes reached: failures are reported in the table), 2 on bad input.
 int run_simulate_command(const SimulateCommandOptions& options, std::ostream& out,
                          std::ostream& err);

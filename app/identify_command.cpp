@@ -110,13 +110,22 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
     in.config_file = options.config_path;
   }
   const identification::IdentifyOptions identify = identify_options_for(in.rig, options);
-  const std::size_t min_samples = identification::minimum_samples(identify);
+  // The refinement needs no derivatives: with the CAD values to start from, a log too short for
+  // LSMI's filters is fitted by it alone (pipeline::run).
+  const bool refinement_alone =
+      !options.no_output_error && in.rig.output_error.enabled && in.rig.nominal.has_value();
+  const std::size_t min_samples = refinement_alone ? identification::kRefinementMinimumSamples
+                                                   : identification::minimum_samples(identify);
   // Each log as one recording, or as its intact parts; nothing when it cannot be used.
   const auto recordings = [&](const session_log::SessionLog& log, pipeline::Role role) {
     std::vector<pipeline::Recording> out;
     if (options.use_intact_part && !session_log::integrity_problems(log).empty()) {
-      pipeline::IntactParts parts =
-          pipeline::intact_part_recordings(log, role, min_samples, in.rig);
+      // Runs LSMI can take; only when there is none, the shorter ones the refinement can.
+      pipeline::IntactParts parts = pipeline::intact_part_recordings(
+          log, role, identification::minimum_samples(identify), in.rig);
+      if (parts.recordings.empty() && refinement_alone) {
+        parts = pipeline::intact_part_recordings(log, role, min_samples, in.rig);
+      }
       if (parts.recordings.empty()) {
         err << "furuta identify: " << parts.account << "\n";
         refused = true;
@@ -130,9 +139,21 @@ std::optional<pipeline::Batch> inputs_from_logs(const IdentifyCommandOptions& op
       return out;
     }
     out.push_back(pipeline::log_recording(log, role, in.rig));
-    const std::string too_short = identification::length_problem(out.back().experiment, identify);
-    if (!too_short.empty()) {
-      err << "furuta identify: " << log.path.string() << ": " << too_short << "\n";
+    const std::size_t samples = out.back().experiment.t_s.size();
+    if (samples < min_samples) {
+      err << "furuta identify: " << log.path.string() << ": "
+          << identification::length_problem(out.back().experiment, identify);
+      if (refinement_alone) {
+        err << "; the output-error refinement alone needs " << min_samples;
+      } else {
+        err << " (the output-error refinement, which needs no derivatives, would fit it alone, "
+            << (options.no_output_error        ? "but --no-output-error turns it off"
+                : !in.rig.output_error.enabled ? "but [output_error] turns it off"
+                                               : "but it starts from the CAD values and "
+                                                 "the configuration has no [nominal]")
+            << ")";
+      }
+      err << "\n";
       refused = true;
       out.clear();
     }
@@ -450,7 +471,10 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   // Done in part: the estimate asked for (the refinement's) is not had.
   if (run.output_error && !run.output_error->result.converged) {
     err << "furuta identify: done in part: the output-error refinement did not converge (its "
-           "warning says where it stopped); Table I shows LSMI alone\n";
+           "warning says where it stopped); "
+        << (run.identification.lsmi_ran() ? "Table I shows LSMI alone"
+                                          : "and LSMI did not run: no estimate")
+        << "\n";
     return 1;
   }
   return 0;

@@ -58,7 +58,9 @@ model::Parameters<double> parameters_from(const nlohmann::json& object, const st
 }
 
 struct ResultsParameters {
-  model::Parameters<double> lsmi;
+  // LSMI's point estimate, or for a recording too short for LSMI the refinement's (converged).
+  std::optional<model::Parameters<double>> lsmi;
+  std::optional<model::Parameters<double>> output_error;
   std::optional<model::Parameters<double>> truth;
   std::optional<model::Parameters<furuta::interval::Interval>> sivia;
   std::string note;  // why there is no SIVIA set, when there is none
@@ -115,20 +117,34 @@ ResultsParameters read_results(const std::filesystem::path& path) {
     throw ResultsFileError(std::string("not valid JSON: ") + e.what());
   }
   if (!j.is_object()) throw ResultsFileError("not a JSON object");
-  const auto combined = j.find("combined");
-  if (combined == j.end() || !combined->is_object() || !combined->contains("estimate")) {
-    throw ResultsFileError("combined.estimate: missing (not a results.json of furuta identify?)");
-  }
   ResultsParameters r;
-  r.lsmi = parameters_from((*combined)["estimate"], "combined.estimate");
+  const auto combined = j.find("combined");
+  if (combined != j.end()) {
+    if (!combined->is_object() || !combined->contains("estimate")) {
+      throw ResultsFileError("combined.estimate: missing");
+    }
+    r.lsmi = parameters_from((*combined)["estimate"], "combined.estimate");
+  }
+  const auto refined = j.find("output_error");
+  if (!r.lsmi && refined != j.end() && refined->is_object() && refined->value("converged", false)) {
+    if (!refined->contains("estimate")) throw ResultsFileError("output_error.estimate: missing");
+    r.output_error = parameters_from((*refined)["estimate"], "output_error.estimate");
+  }
+  if (!r.lsmi && !r.output_error) {
+    throw ResultsFileError(
+        "no estimate: neither combined.estimate (LSMI) nor a converged output_error.estimate (not "
+        "a results.json of furuta identify?)");
+  }
   if (j.contains("truth")) r.truth = parameters_from(j["truth"], "truth");
   const auto sivia = j.find("sivia");
   if (sivia == j.end()) {
-    r.note = "no SIVIA in it (furuta identify --sivia): LSMI parameters only";
+    r.note = "no SIVIA in it (furuta identify --sivia): point parameters only";
   } else if (!sivia->is_object()) {
     throw ResultsFileError("sivia: not an object");
+  } else if (sivia->contains("skipped")) {
+    r.note = "SIVIA did not run: point parameters only";
   } else if (sivia->value("empty", false)) {
-    r.note = "SIVIA found no consistent parameter: LSMI parameters only";
+    r.note = "SIVIA found no consistent parameter: point parameters only";
   } else {
     r.sivia = sivia_hull(*sivia);
   }
@@ -200,7 +216,10 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
              "come from " + report::measurement_source_text(source) + "\n";
     }
     if (r.sivia) sets.push_back({"SIVIA", *r.sivia});
-    sets.push_back(validated::point_parameters("LSMI", r.lsmi));
+    if (r.lsmi) sets.push_back(validated::point_parameters("LSMI", *r.lsmi));
+    if (r.output_error) {
+      sets.push_back(validated::point_parameters(pipeline::kOutputErrorSetName, *r.output_error));
+    }
     if (!r.note.empty()) note += options.results.string() + ": " + r.note + "\n";
   } else {
     if (options.relative_pct) {

@@ -63,11 +63,11 @@ std::string length_problem(const RawExperiment& e, const IdentifyOptions& option
   const std::size_t needed = minimum_samples(options);
   if (e.t_s.size() >= needed) return "";
   std::ostringstream text;
-  text << std::setprecision(3) << "too short to identify: " << e.t_s.size() << " samples";
+  text << std::setprecision(3) << "too short for LSMI: " << e.t_s.size() << " samples";
   if (e.sample_period_s > 0) {
     text << " (" << static_cast<double>(e.t_s.size()) * e.sample_period_s << " s)";
   }
-  text << "; the fit needs at least " << needed << " samples";
+  text << "; its fit needs at least " << needed << " samples";
   if (e.sample_period_s > 0) {
     text << " (" << static_cast<double>(needed) * e.sample_period_s << " s at "
          << e.sample_period_s * 1e3 << " ms)";
@@ -83,10 +83,14 @@ Identification identify(const std::vector<RawExperiment>& experiments,
                         const IdentifyOptions& options, const model::MotorData& motor,
                         const VoltageMotor& voltage_motor) {
   if (experiments.empty()) throw std::invalid_argument("identify: no experiment given");
-  for (const RawExperiment& e : experiments) check_length(e, options);
-  check_excited(experiments);
-  if (validation) check_length(*validation, options);
   Identification id;
+  for (const RawExperiment& e : experiments) {
+    if (!options.lsmi_optional) check_length(e, options);
+    const std::string problem = length_problem(e, options);
+    if (!problem.empty() && id.lsmi_ran()) id.lsmi_skipped = e.name + ": " + problem;
+  }
+  check_excited(experiments);
+  if (validation && !options.lsmi_optional) check_length(*validation, options);
   id.raw = experiments;
   LsmiOptions lsmi = options.lsmi;
   if (lsmi.trim_samples == 0) lsmi.trim_samples = edge_samples(options.preprocess);
@@ -97,6 +101,13 @@ Identification identify(const std::vector<RawExperiment>& experiments,
   std::vector<const JointSeries*> all;
   for (const JointSeries& s : id.processed) all.push_back(&s);
   id.input_lag_s = options.preprocess.input_lag_s;
+  if (!id.lsmi_ran()) {
+    id.warnings.push_back("LSMI did not run: " + id.lsmi_skipped);
+    if (validation) {
+      for (const auto& w : validation->warnings) id.warnings.push_back(w);
+    }
+    return id;
+  }
   if (options.estimate_input_lag) {
     // Golden-section search of the residual over the lag: the residual is smooth and has one
     // minimum within a sample period (measured on simulated sessions; see the README).
@@ -151,7 +162,12 @@ Identification identify(const std::vector<RawExperiment>& experiments,
     }
   }
   for (const auto& w : id.combined.warnings) id.warnings.push_back("all experiments: " + w);
-  if (validation) {
+  const std::string held_out_short = validation ? length_problem(*validation, options) : "";
+  if (validation && !held_out_short.empty()) {
+    for (const auto& w : validation->warnings) id.warnings.push_back(w);
+    id.warnings.push_back("held-out " + validation->name +
+                          ": no LSMI torque check: " + held_out_short);
+  } else if (validation) {
     for (const auto& w : validation->warnings) id.warnings.push_back(w);
     ValidationResult v;
     v.name = validation->name;

@@ -84,7 +84,9 @@ Simulation run_simulation(const SimulationSettings& settings, const Run& run, co
     sets.push_back(
         {"SIVIA", model::Parameters<interval::Interval>{h[0], h[1], h[2], h[3], h[4], h[5], h[6]}});
   }
-  sets.push_back(validated::point_parameters("LSMI", run.identification.combined.estimate));
+  if (run.identification.lsmi_ran()) {
+    sets.push_back(validated::point_parameters("LSMI", run.identification.combined.estimate));
+  }
   // A fit that did not converge is not an answer to simulate.
   if (run.output_error && run.output_error->result.converged) {
     sets.push_back(
@@ -137,6 +139,7 @@ identification::PhysicalCheck check_physical(identification::Identification& id,
     id.warnings.push_back(text);
     warnings.push_back({Warning::Stage::physical, text});
   };
+  if (!id.lsmi_ran()) return {};
   const PhysicalCheck combined =
       identification::check_physical(id.combined.estimate, id.combined.std_dev, id.nominal);
   add(physical_warning(combined, source, "the LSMI estimate of all experiments"));
@@ -235,10 +238,18 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
     const char* name;
     model::Parameters<double> parameters;
   };
-  std::vector<Start> starts = {{"the LSMI estimate", run.identification.combined.estimate}};
-  const bool lsmi_suspect =
-      run.physical.clear() || run.physical.cause != identification::LikelyCause::none;
+  std::vector<Start> starts;
+  const identification::Identification& id = run.identification;
+  if (id.lsmi_ran()) starts.push_back({"the LSMI estimate", id.combined.estimate});
+  const bool lsmi_suspect = !id.lsmi_ran() || run.physical.clear() ||
+                            run.physical.cause != identification::LikelyCause::none;
   if (lsmi_suspect && batch.nominal) starts.push_back({"the CAD values", *batch.nominal});
+  if (starts.empty()) {
+    warn(
+        "skipped: LSMI did not run and the configuration has no CAD values ([nominal]) to start "
+        "from");
+    return std::nullopt;
+  }
   std::vector<identification::OutputErrorResult> fits;
   try {
     for (const Start& start : starts) {
@@ -251,7 +262,9 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
   }
   const std::size_t best = better_fit(fits);
   out.result = fits[best];
-  if (starts.size() > 1) {
+  if (!id.lsmi_ran()) {
+    warn("started from the CAD values, since LSMI did not run");
+  } else if (starts.size() > 1) {
     std::ostringstream said;
     said << "LSMI is not physical (" << identification::cause_name(run.physical.cause)
          << "), so the refinement also started from " << starts[1].name << "; kept the fit from "
@@ -292,9 +305,10 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
         raws.push_back(identification::corrected_raw(r->experiment, mistake, value));
       }
       try {
-        return identification::identify(raws, std::nullopt, identify_options, batch.rig.motor,
-                                        batch.voltage_motor)
-            .combined.estimate;
+        const identification::Identification corrected = identification::identify(
+            raws, std::nullopt, identify_options, batch.rig.motor, batch.voltage_motor);
+        if (!corrected.lsmi_ran()) return batch.nominal;
+        return corrected.combined.estimate;
       } catch (const std::exception&) {
         return std::nullopt;
       }
@@ -321,7 +335,7 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
                                                out.result.q2_offset_rad, 1.0, settings.options);
     };
     try {
-      runs.lsmi = free_run(run.identification.combined.estimate);
+      if (id.lsmi_ran()) runs.lsmi = free_run(id.combined.estimate);
       runs.refined = free_run(out.result.estimate);
       out.held_out = std::move(runs);
     } catch (const std::invalid_argument& e) {
@@ -522,8 +536,12 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
     held_out = batch.held_out->experiment;
     if (batch.held_out->session) out.sessions.push_back(*batch.held_out->session);
   }
-  out.identification = identification::identify(experiments, held_out, settings.identify,
-                                                batch.rig.motor, batch.voltage_motor);
+  // The refinement needs no derivatives: with the CAD values to start from, a recording too short
+  // for LSMI's filters is fitted by it alone.
+  identification::IdentifyOptions identify = settings.identify;
+  identify.lsmi_optional = settings.output_error.run && batch.nominal.has_value();
+  out.identification = identification::identify(experiments, held_out, identify, batch.rig.motor,
+                                                batch.voltage_motor);
   if (batch.nominal) out.identification.nominal = *batch.nominal;
   if (batch.truth) out.identification.truth = *batch.truth;
   for (const auto& path : batch.files) {
@@ -536,11 +554,24 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
     out.output_error =
         run_output_error(settings.output_error, settings.identify, batch, out, progress);
   }
+  if (!out.identification.lsmi_ran() && !out.output_error) {
+    std::string why;
+    for (const Warning& w : out.warnings) {
+      if (w.stage == Warning::Stage::output_error) why = w.text;
+    }
+    throw std::invalid_argument("nothing identified: LSMI did not run (" +
+                                out.identification.lsmi_skipped + "), and " + why);
+  }
   if (progress != nullptr) {
     progress->fit_done(out.identification, out.output_error ? &out.output_error->result : nullptr);
   }
 
-  if (settings.sivia.run) {
+  if (settings.sivia.run && !out.identification.lsmi_ran()) {
+    out.warnings.push_back(
+        {Warning::Stage::sivia,
+         "SIVIA skipped: it starts from LSMI's estimate and bounds the derivatives LSMI's filters "
+         "form, and LSMI did not run"});
+  } else if (settings.sivia.run) {
     out.sivia = run_guaranteed(settings.sivia, out.identification, settings.identify, progress);
     const identification::GuaranteedResult& r = out.sivia->result;
     if (r.empty) out.warnings.push_back({Warning::Stage::sivia, "empty set: " + r.finding});

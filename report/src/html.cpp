@@ -183,8 +183,11 @@ void section_warnings(Html& h, const ReportInput& in) {
 void table_one(Html& h, const ReportInput& in) {
   const ColumnHeads heads = column_heads(in.experiment_names, 16);
   std::vector<std::string> header = {"parameter", "unit"};
-  for (const auto& head : heads.heads) header.push_back(head);
-  header.push_back("all experiments");
+  const bool lsmi = in.lsmi_skipped.empty();
+  if (lsmi) {
+    for (const auto& head : heads.heads) header.push_back(head);
+    header.push_back("all experiments");
+  }
   // A refinement that did not converge is no estimate: its column says so instead of numbers.
   const bool refined = in.output_error && in.output_error->converged;
   if (in.output_error) header.push_back(refined ? "output error" : "output error: not converged");
@@ -197,8 +200,10 @@ void table_one(Html& h, const ReportInput& in) {
     const auto cell = [i](const identification::LsmiResult& r) {
       return plus_minus(dash_sci(r.estimate[i], 4), dash_sci(r.std_dev[i], 1));
     };
-    for (const auto& r : in.per_experiment) row.push_back(cell(r));
-    row.push_back(cell(in.combined));
+    if (lsmi) {
+      for (const auto& r : in.per_experiment) row.push_back(cell(r));
+      row.push_back(cell(in.combined));
+    }
     if (in.output_error) {
       row.push_back(refined ? plus_minus(dash_sci(in.output_error->estimate[i], 4),
                                          dash_sci(in.output_error->std_dev[i], 1))
@@ -209,10 +214,11 @@ void table_one(Html& h, const ReportInput& in) {
     rows.push_back(std::move(row));
   }
   h.table("table-1",
-          refined ? "Table I: LSMI and output-error estimates \u00b1 one standard deviation"
-                  : "Table I: LSMI estimates \u00b1 one standard deviation",
+          !lsmi     ? "Table I: output-error estimates \u00b1 one standard deviation"
+          : refined ? "Table I: LSMI and output-error estimates \u00b1 one standard deviation"
+                    : "Table I: LSMI estimates \u00b1 one standard deviation",
           header, rows);
-  if (heads.legend) {
+  if (heads.legend && lsmi) {
     h.raw("<ul class=\"keys\" id=\"table-1-keys\">\n");
     for (std::size_t i = 0; i < in.experiment_names.size(); ++i) {
       h.raw("<li>");
@@ -247,6 +253,7 @@ void section_lsmi(Html& h, const ReportInput& in) {
       "together, each with its standard deviation (the residual's, through "
       "(W\u1d40W)\u207b\u00b9). "
       "The standard deviations measure noise, not bias.");
+  if (!in.lsmi_skipped.empty()) h.paragraph("LSMI did not run: " + in.lsmi_skipped + ".");
   table_one(h, in);
   if (in.output_error) {
     const OutputErrorSummary& oe = *in.output_error;
@@ -261,6 +268,10 @@ void section_lsmi(Html& h, const ReportInput& in) {
         dash_fixed(oe.input_lag_s * 1e3, 3) + " ms; " + oe.time_stamps +
         ". Its standard deviations are local (from the Jacobian at the optimum, robust to "
         "angle errors correlated within a segment) and take the model and the input as exact.");
+  }
+  if (!in.lsmi_skipped.empty()) {
+    h.raw("</section>\n");
+    return;
   }
   std::vector<std::vector<std::string>> diagnostics;
   for (std::size_t e = 0; e < in.per_experiment.size() && e < in.experiment_names.size(); ++e) {
@@ -317,6 +328,13 @@ void section_validation(Html& h, const ReportInput& in) {
                  ") and LSMI-predicted (red) motor torque [N m] over time t [s] on a session not "
                  "used for the fit; RMSE " +
                  dash_fixed(v.rmse_percent_of_range, 2) + " % of the range.");
+  } else if (!in.lsmi_skipped.empty()) {
+    h.paragraph("LSMI did not run: no torque validation.", "absent");
+  } else if (in.output_error && !in.output_error->held_out_name.empty()) {
+    h.paragraph("The held-out session " + in.output_error->held_out_name +
+                    " is too short for LSMI's filters: no torque validation (the warnings say "
+                    "how short).",
+                "absent");
   } else {
     h.paragraph(
         "No held-out session was given (furuta identify --validate LOG): no torque "
@@ -328,13 +346,15 @@ void section_validation(Html& h, const ReportInput& in) {
     const auto rmse = [](const std::array<double, 2>& r) {
       return "q1 " + dash_sci(r[0], 3) + " rad, q2 " + dash_sci(r[1], 3) + " rad";
     };
+    const bool lsmi = oe.lsmi_rmse_rad.has_value();
     h.figure("fig-free-run", oe.svg,
              "The held-out " + oe.held_out_name +
                  ": measured angles (black) against free runs of the model from the same input "
-                 "with the LSMI (red) and the output-error (blue) parameters, over time t [s]. "
-                 "Angle RMSE with LSMI: " +
-                 rmse(oe.lsmi_rmse_rad) + "; with output error: " + rmse(oe.refined_rmse_rad) +
-                 ".");
+                 "with the " +
+                 (lsmi ? "LSMI (red) and the " : "") +
+                 "output-error (blue) parameters, over time t [s]. Angle RMSE " +
+                 (lsmi ? "with LSMI: " + rmse(*oe.lsmi_rmse_rad) + "; " : "") +
+                 "with output error: " + rmse(oe.refined_rmse_rad) + ".");
   }
   h.raw("</section>\n");
 }
@@ -377,6 +397,8 @@ void section_sivia(Html& h, const ReportInput& in) {
              "Fig. 4: the SIVIA paving projected on the viscous frictions (fv1, fv2) [N m s]: "
              "inner boxes (every parameter consistent with the data), boundary boxes "
              "(undecided at epsilon) and outer boxes (proven inconsistent).");
+  } else if (!in.lsmi_skipped.empty()) {
+    h.paragraph("SIVIA starts from LSMI's estimate, and LSMI did not run: no paving.", "absent");
   } else {
     h.paragraph(
         "SIVIA was not run (furuta identify --sivia): no paving. The intervals above are "

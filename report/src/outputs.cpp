@@ -93,7 +93,8 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
   }
   if (run.output_error && run.output_error->held_out) {
     const pipeline::HeldOutFreeRuns& h = *run.output_error->held_out;
-    write_text_file(dir / "free_run.svg", svg_free_runs(h.name, h.lsmi, h.refined));
+    write_text_file(dir / "free_run.svg",
+                    svg_free_runs(h.name, h.lsmi ? &*h.lsmi : nullptr, h.refined));
   }
   const ReportInput page = report_page(run, software_version, signals, paving_svg);
   // The page's figure is the file's: drawn once.

@@ -35,6 +35,7 @@ ReportInput report_input(const identification::Identification& id) {
   for (const auto& s : id.processed) r.experiment_names.push_back(s.name);
   r.per_experiment = id.per_experiment;
   r.combined = id.combined;
+  r.lsmi_skipped = id.lsmi_skipped;
   r.nominal = id.nominal;
   r.truth = id.truth;
   r.input_lag_s = id.input_lag_s;
@@ -150,9 +151,9 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
     if (run.output_error->held_out) {
       const pipeline::HeldOutFreeRuns& h = *run.output_error->held_out;
       oe.held_out_name = h.name;
-      oe.lsmi_rmse_rad = h.lsmi.rmse_rad;
+      if (h.lsmi) oe.lsmi_rmse_rad = h.lsmi->rmse_rad;
       oe.refined_rmse_rad = h.refined.rmse_rad;
-      oe.svg = svg_free_runs(h.name, h.lsmi, h.refined);
+      oe.svg = svg_free_runs(h.name, h.lsmi ? &*h.lsmi : nullptr, h.refined);
     }
     page.output_error = std::move(oe);
   }
@@ -180,8 +181,11 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
   page.signals_bands = run.data_bounds
                            ? "the bands are the data error bounds of [sivia] (SIVIA's data boxes)"
                            : "the band is the pendulum encoder's quantisation";
-  page.table_two = table_two(id.combined.estimate, run.settings.sivia.config,
-                             run.sivia ? &run.sivia->result : nullptr);
+  // SIVIA starts from LSMI's mu's: without LSMI it has no prior.
+  if (id.lsmi_ran()) {
+    page.table_two = table_two(id.combined.estimate, run.settings.sivia.config,
+                               run.sivia ? &run.sivia->result : nullptr);
+  }
   if (run.sivia) {
     page.sivia = sivia_summary(run.sivia->result, paving_svg);
     for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {

@@ -48,13 +48,18 @@ Json results_json(const identification::Identification& id,
   }
   j["experiments"] = Json::array();
   for (std::size_t i = 0; i < id.processed.size(); ++i) {
-    j["experiments"].push_back(Json{{"name", id.processed[i].name},
-                                    {"samples", id.processed[i].size()},
-                                    {"sample_period_s", id.processed[i].sample_period_s},
-                                    {"lsmi", lsmi_json(id.per_experiment[i])}});
+    Json experiment = {{"name", id.processed[i].name},
+                       {"samples", id.processed[i].size()},
+                       {"sample_period_s", id.processed[i].sample_period_s}};
+    if (i < id.per_experiment.size()) experiment["lsmi"] = lsmi_json(id.per_experiment[i]);
+    j["experiments"].push_back(std::move(experiment));
   }
-  j["combined"] = lsmi_json(id.combined);
-  j["input_lag_s"] = id.input_lag_s;
+  if (id.lsmi_ran()) {
+    j["combined"] = lsmi_json(id.combined);
+    j["input_lag_s"] = id.input_lag_s;
+  } else {
+    j["lsmi_skipped"] = id.lsmi_skipped;
+  }
   if (id.nominal) j["nominal"] = parameters_json(*id.nominal);
   if (id.truth) j["truth"] = parameters_json(*id.truth);
   if (id.validation) {
@@ -273,8 +278,10 @@ Json output_error_json(const pipeline::OutputError& oe) {
   if (oe.diagnosis) j["diagnosis"] = diagnosis_json(*oe.diagnosis);
   if (oe.held_out) {
     j["held_out_free_run"] = Json{{"name", oe.held_out->name},
-                                  {"lsmi_rmse_rad", joints(oe.held_out->lsmi.rmse_rad)},
                                   {"refined_rmse_rad", joints(oe.held_out->refined.rmse_rad)}};
+    if (oe.held_out->lsmi) {
+      j["held_out_free_run"]["lsmi_rmse_rad"] = joints(oe.held_out->lsmi->rmse_rad);
+    }
   }
   return j;
 }
@@ -423,6 +430,13 @@ Json results_json(const pipeline::Run& run, const std::string& software_version)
       }
       more["sivia"]["excludes_output_error"] = excluded;
     }
+  }
+  if (!run.sivia && run.settings.sivia.run) {
+    std::string why;
+    for (const pipeline::Warning& w : run.warnings) {
+      if (w.stage == pipeline::Warning::Stage::sivia) why = w.text;
+    }
+    more["sivia"] = Json{{"skipped", why}};
   }
   if (run.windowed) {
     more["guaranteed"] = windowed_json(*run.windowed, run.windowed_excludes_output_error);

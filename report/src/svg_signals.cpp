@@ -191,7 +191,7 @@ std::string svg_torque_validation(const identification::ValidationResult& v) {
   return svg_document(W, H, body);
 }
 
-std::string svg_free_runs(const std::string& name, const identification::FreeRun& lsmi,
+std::string svg_free_runs(const std::string& name, const identification::FreeRun* lsmi,
                           const identification::FreeRun& refined) {
   const double W = 900, left = 72, top = 58, plot_h = 150, row = 212;
   // The observations interleave the joints; both runs have the held-out recording's, in order.
@@ -199,31 +199,31 @@ std::string svg_free_runs(const std::string& name, const identification::FreeRun
     std::vector<double> t_s, measured, lsmi, refined;
   };
   std::array<Joint, 2> joints;
-  for (std::size_t i = 0; i < lsmi.t_s.size() && i < refined.simulated.size(); ++i) {
-    Joint& j = joints.at(static_cast<std::size_t>(lsmi.joint[i] == 0 ? 0 : 1));
-    j.t_s.push_back(lsmi.t_s[i]);
-    j.measured.push_back(lsmi.measured[i]);
-    j.lsmi.push_back(lsmi.simulated[i]);
+  for (std::size_t i = 0; i < refined.t_s.size() && i < refined.simulated.size(); ++i) {
+    Joint& j = joints.at(static_cast<std::size_t>(refined.joint[i] == 0 ? 0 : 1));
+    j.t_s.push_back(refined.t_s[i]);
+    j.measured.push_back(refined.measured[i]);
+    if (lsmi != nullptr && i < lsmi->simulated.size()) j.lsmi.push_back(lsmi->simulated[i]);
     j.refined.push_back(refined.simulated[i]);
   }
-  std::string body = "<text x=\"" + std::to_string(static_cast<int>(left)) +
-                     "\" y=\"22\" font-size=\"14\">" +
-                     text::xml_escape("held-out " + name +
-                                      ": measured angles vs free runs with LSMI and output-error "
-                                      "parameters") +
-                     "</text>\n";
+  std::string body =
+      "<text x=\"" + std::to_string(static_cast<int>(left)) + "\" y=\"22\" font-size=\"14\">" +
+      text::xml_escape("held-out " + name + ": measured angles vs free runs with " +
+                       (lsmi != nullptr ? "LSMI and " : "") + "output-error parameters") +
+      "</text>\n";
   const char* names[2] = {"arm angle q1", "pendulum angle q2"};
   const char* axes[2] = {"q1 [rad]", "q2 [rad]"};
   for (std::size_t k = 0; k < 2; ++k) {
     std::ostringstream title;
-    title << names[k] << ", RMSE LSMI " << std::setprecision(3) << lsmi.rmse_rad[k]
-          << " rad, output error " << refined.rmse_rad[k] << " rad";
+    title << names[k] << ", RMSE " << std::setprecision(3);
+    if (lsmi != nullptr) title << "LSMI " << lsmi->rmse_rad[k] << " rad, ";
+    title << "output error " << refined.rmse_rad[k] << " rad";
     const Joint& j = joints[k];
+    std::vector<Trace> traces = {{&j.measured, "#222", "measured"}};
+    if (lsmi != nullptr) traces.push_back({&j.lsmi, "#b03a2e", "LSMI"});
+    traces.push_back({&j.refined, "#1f4e9c", "output error"});
     body += svg_panel(PlotArea{left, top + static_cast<double>(k) * row, W - left - 20, plot_h},
-                      title.str(), axes[k], j.t_s,
-                      {{&j.measured, "#222", "measured"},
-                       {&j.lsmi, "#b03a2e", "LSMI"},
-                       {&j.refined, "#1f4e9c", "output error"}});
+                      title.str(), axes[k], j.t_s, traces);
   }
   return svg_document(W, top + row + plot_h + 42, body);
 }

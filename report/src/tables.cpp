@@ -29,14 +29,17 @@ std::string format_table_one(const identification::Identification& id,
   std::vector<std::string> names;
   for (const identification::JointSeries& s : id.processed) names.push_back(s.name);
   const ColumnHeads heads = column_heads(names, w - 2);
-  if (heads.legend) {
+  const bool lsmi = id.lsmi_ran();
+  if (heads.legend && lsmi) {
     for (std::size_t i = 0; i < names.size(); ++i) {
       out << heads.heads[i] << ": " << names[i] << "\n";
     }
   }
   out << std::left << std::setw(6) << "p" << std::setw(13) << "unit";
-  for (const std::string& head : heads.heads) out << std::setw(w) << head;
-  out << std::setw(w) << "all experiments";
+  if (lsmi) {
+    for (const std::string& head : heads.heads) out << std::setw(w) << head;
+    out << std::setw(w) << "all experiments";
+  }
   // A refinement that did not converge is no estimate: its column says so instead of numbers.
   const bool converged = refined != nullptr && refined->converged;
   if (refined != nullptr) out << std::setw(w) << (converged ? "output error" : "output error:");
@@ -49,8 +52,10 @@ std::string format_table_one(const identification::Identification& id,
     auto cell = [&](const identification::LsmiResult& r) {
       return sci(r.estimate[k], 4) + " +-" + sci(r.std_dev[k], 1);
     };
-    for (const identification::LsmiResult& r : id.per_experiment) out << std::setw(w) << cell(r);
-    out << std::setw(w) << cell(id.combined);
+    if (lsmi) {
+      for (const identification::LsmiResult& r : id.per_experiment) out << std::setw(w) << cell(r);
+      out << std::setw(w) << cell(id.combined);
+    }
     if (refined != nullptr) {
       out << std::setw(w)
           << (converged ? sci(refined->estimate[k], 4) + " +-" + sci(refined->std_dev[k], 1)
@@ -61,16 +66,18 @@ std::string format_table_one(const identification::Identification& id,
     if (id.truth) out << std::setw(13) << sci((*id.truth)[k], 4);
     out << "\n";
   }
-  out << std::left << std::setw(19) << "condition number";
-  for (const identification::LsmiResult& r : id.per_experiment)
-    out << std::setw(w) << sci(r.condition_number, 2);
-  out << std::setw(w) << sci(id.combined.condition_number, 2) << "\n";
-  out << std::left << std::setw(19) << "residual sigma N m";
-  for (const identification::LsmiResult& r : id.per_experiment)
-    out << std::setw(w) << sci(r.sigma, 2);
-  out << std::setw(w) << sci(id.combined.sigma, 2) << "\n";
-  out << "input lag (torque formed from the input this much earlier): " << std::fixed
-      << std::setprecision(3) << id.input_lag_s * 1e3 << " ms\n";
+  if (lsmi) {
+    out << std::left << std::setw(19) << "condition number";
+    for (const identification::LsmiResult& r : id.per_experiment)
+      out << std::setw(w) << sci(r.condition_number, 2);
+    out << std::setw(w) << sci(id.combined.condition_number, 2) << "\n";
+    out << std::left << std::setw(19) << "residual sigma N m";
+    for (const identification::LsmiResult& r : id.per_experiment)
+      out << std::setw(w) << sci(r.sigma, 2);
+    out << std::setw(w) << sci(id.combined.sigma, 2) << "\n";
+    out << "input lag (torque formed from the input this much earlier): " << std::fixed
+        << std::setprecision(3) << id.input_lag_s * 1e3 << " ms\n";
+  }
   if (refined != nullptr) {
     out << "output error: " << refined->segments << " segments, " << refined->iterations
         << " iterations, " << (refined->converged ? "converged" : "NOT converged")
@@ -327,9 +334,12 @@ std::string terminal_text(const pipeline::Run& run) {
 
 std::string held_out_free_run_text(const pipeline::HeldOutFreeRuns& runs) {
   std::ostringstream out;
-  out << "\nheld-out free run on " << runs.name << " (angle RMSE, q1 / q2): LSMI "
-      << sci(runs.lsmi.rmse_rad[0], 3) << " / " << sci(runs.lsmi.rmse_rad[1], 3)
-      << " rad, output error " << sci(runs.refined.rmse_rad[0], 3) << " / "
+  out << "\nheld-out free run on " << runs.name << " (angle RMSE, q1 / q2): ";
+  if (runs.lsmi) {
+    out << "LSMI " << sci(runs.lsmi->rmse_rad[0], 3) << " / " << sci(runs.lsmi->rmse_rad[1], 3)
+        << " rad, ";
+  }
+  out << "output error " << sci(runs.refined.rmse_rad[0], 3) << " / "
       << sci(runs.refined.rmse_rad[1], 3) << " rad\n";
   return out.str();
 }
@@ -352,7 +362,13 @@ std::string terminal_text_after_lsmi(const pipeline::Run& run) {
                                            run.output_error->counts_per_rev) +
             "\n";
   }
-  if (run.sivia) text += sivia_summary_text(run.sivia->result, run.identification.truth);
+  if (run.sivia) {
+    text += sivia_summary_text(run.sivia->result, run.identification.truth);
+  } else {
+    for (const pipeline::Warning& w : run.warnings) {
+      if (w.stage == pipeline::Warning::Stage::sivia) text += "warning: " + w.text + "\n";
+    }
+  }
   for (const pipeline::EstimateOutsideSet& e : run.sivia_excludes_output_error) {
     text += "warning: " + excluded_estimate_text(e) + "\n";
   }

@@ -6,12 +6,16 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <string>
 
 #include "commands.hpp"
+#include "furuta/config/rig_config.hpp"
+#include "furuta/model/parameters.hpp"
 #include "furuta/session_log/lcm_log.hpp"
+#include "furuta/session_log/session_log.hpp"
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
@@ -248,17 +252,71 @@ TEST_F(LogCommands, WithUseIntactPartADamagedHeldOutLogKeepsItsLongestRun) {
   EXPECT_TRUE(contains(warnings, "(held out: only the longest run is used)")) << warnings;
 }
 
-// Before: "LSMI: 0 equations for 7 parameters", naming neither the log nor what it lacks.
-TEST_F(LogCommands, IdentifyRefusesASessionTooShortNamingTheLogAndTheLengthNeeded) {
+// LSMI alone: "LSMI: 0 equations for 7 parameters" would name neither the log nor what it lacks.
+TEST_F(LogCommands, WithoutTheRefinementASessionTooShortIsRefusedNamingTheLengthNeeded) {
   IdentifyCommandOptions options;
   options.logs = {one_second_};
+  options.no_output_error = true;
   options.output_dir = dir_.path() / "out";
   EXPECT_EQ(run_identify_command(options, out_, err_), 2);
   const std::string text = err_.str();
   EXPECT_TRUE(contains(text, "furuta identify: " + one_second_.string() + ": too short")) << text;
   // The configuration's 31-tap differentiator: 39 samples at each end, 4 between for 7 parameters.
-  EXPECT_TRUE(contains(text, "the fit needs at least 82 samples (1.31 s at 16 ms)")) << text;
+  EXPECT_TRUE(contains(text, "its fit needs at least 82 samples (1.31 s at 16 ms)")) << text;
+  EXPECT_TRUE(contains(text, "but --no-output-error turns it off")) << text;
   EXPECT_FALSE(contains(text, "equations")) << text;
+  EXPECT_FALSE(fs::exists(options.output_dir));
+}
+
+// The refinement needs no derivatives: a session too short for LSMI's filters is fitted by it
+// alone from the CAD values, and nothing LSMI would have given is shown as a result.
+TEST_F(LogCommands, ASessionTooShortForLsmiIsFittedByTheRefinementAlone) {
+  IdentifyCommandOptions options;
+  options.logs = {one_second_};
+  options.validate = short_;
+  options.sivia = true;
+  options.output_dir = dir_.path() / "out";
+  ASSERT_EQ(run_identify_command(options, out_, err_), 0) << out_.str() << err_.str();
+  const std::string text = out_.str();
+  EXPECT_TRUE(contains(text, "warning: LSMI did not run: ")) << text;
+  EXPECT_TRUE(contains(text, "too short for LSMI: 6")) << text;
+  EXPECT_TRUE(contains(text, "SIVIA skipped")) << text;
+  EXPECT_FALSE(contains(text, "all experiments")) << text;
+  EXPECT_TRUE(contains(text, "(angle RMSE, q1 / q2): output error ")) << text;
+
+  const nlohmann::json results =
+      nlohmann::json::parse(read_file(options.output_dir / "results.json"));
+  EXPECT_FALSE(results.contains("combined"));
+  EXPECT_TRUE(contains(results["sivia"]["skipped"].get<std::string>(), "LSMI did not run"));
+  EXPECT_TRUE(contains(results["lsmi_skipped"].get<std::string>(), "too short for LSMI"));
+  const nlohmann::json& oe = results["output_error"];
+  ASSERT_TRUE(oe["converged"].get<bool>()) << oe.dump();
+  EXPECT_FALSE(oe["held_out_free_run"].contains("lsmi_rmse_rad"));
+  const config::RigConfig rig = config::parse_rig_config(
+      session_log::load_session_log(one_second_).start->rig_config_toml, "one-second");
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const char* name = model::kParameterNames[k];
+    const double truth = rig.simulation.parameters[k];
+    const double sd = oe["std_dev"][name].get<double>();
+    EXPECT_NEAR(oe["estimate"][name].get<double>(), truth, 3 * sd) << name;
+    // One second of bang-bang pins each parameter down, if less than ten.
+    EXPECT_LT(sd, 0.01 * std::abs(truth)) << name;
+  }
+  const std::string report = read_file(options.output_dir / "report.html");
+  EXPECT_TRUE(contains(report, "Table I: output-error estimates")) << report.substr(0, 2000);
+  EXPECT_TRUE(contains(report, "LSMI did not run: no torque validation.")) << report.size();
+
+  // `furuta simulate` on it takes the refinement's estimate, the only one there is.
+  SimulateCommandOptions simulate;
+  simulate.results = options.output_dir / "results.json";
+  simulate.scenarios = {1};
+  simulate.seconds = 0.2;
+  simulate.output_dir = dir_.path() / "simulation";
+  std::ostringstream simulated, simulate_err;
+  ASSERT_EQ(run_simulate_command(simulate, simulated, simulate_err), 0) << simulate_err.str();
+  EXPECT_TRUE(contains(simulated.str(), "(a)  output error")) << simulated.str();
+  EXPECT_TRUE(contains(simulated.str(), "SIVIA did not run: point parameters only"))
+      << simulated.str();
 }
 
 }  // namespace

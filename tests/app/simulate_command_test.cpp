@@ -282,7 +282,8 @@ TEST(SimulateCommand, ABrokenResultsFileNamesTheField) {
     return err.str();
   };
   EXPECT_NE(error_for("{\"combined\": ").find("results.json: not valid JSON"), std::string::npos);
-  EXPECT_NE(error_for("{\"inputs\": []}").find("combined.estimate: missing"), std::string::npos);
+  EXPECT_NE(error_for("{\"inputs\": []}").find("no estimate: neither combined.estimate (LSMI) nor"),
+            std::string::npos);
   std::string no_mu3 = results_json(false);
   no_mu3.replace(no_mu3.find("\"mu3\""), 5, "\"mu9\"");
   EXPECT_NE(error_for(no_mu3).find("combined.estimate.mu3: missing"), std::string::npos);

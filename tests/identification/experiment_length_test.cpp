@@ -43,7 +43,7 @@ TEST(ExperimentLength, AShortFittedOrHeldOutExperimentIsRefusedByName) {
     FAIL() << "a 62-sample experiment was fitted";
   } catch (const std::invalid_argument& e) {
     EXPECT_EQ(std::string(e.what()),
-              "one-second: too short to identify: 62 samples (0.992 s); the fit needs at least 82 "
+              "one-second: too short for LSMI: 62 samples (0.992 s); its fit needs at least 82 "
               "samples (1.31 s at 16 ms): 39 at each end for the filters' transient and 4 between "
               "for 7 parameters");
   }
@@ -51,10 +51,42 @@ TEST(ExperimentLength, AShortFittedOrHeldOutExperimentIsRefusedByName) {
     identify({experiment("long", 400)}, experiment("held-out", 81), options, motor);
     FAIL() << "an 81-sample held-out experiment was used";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("held-out: too short to identify: 81 samples"),
+    EXPECT_NE(std::string(e.what()).find("held-out: too short for LSMI: 81 samples"),
               std::string::npos)
         << e.what();
   }
+}
+
+// For a caller whose own estimator needs no derivatives: LSMI is left out, with the reason, and
+// nothing it would have given (columns, held-out torque fit) looks like a result.
+TEST(ExperimentLength, WithLsmiOptionalAShortExperimentLeavesLsmiOutAndSaysWhy) {
+  IdentifyOptions options;
+  options.lsmi_optional = true;
+  const model::MotorData motor;
+  const Identification id = identify({experiment("long", 400), experiment("one-second", 62)},
+                                     experiment("held-out", 400), options, motor);
+  EXPECT_FALSE(id.lsmi_ran());
+  EXPECT_EQ(id.lsmi_skipped.rfind("one-second: too short for LSMI: 62 samples", 0), 0u)
+      << id.lsmi_skipped;
+  EXPECT_TRUE(id.per_experiment.empty());
+  EXPECT_FALSE(id.validation.has_value());
+  EXPECT_EQ(id.processed.size(), 2u);  // the signals are still shown
+  EXPECT_EQ(
+      std::count(id.warnings.begin(), id.warnings.end(), "LSMI did not run: " + id.lsmi_skipped),
+      1);
+
+  // Long enough for LSMI, a short held-out one only loses its torque check.
+  const Identification held =
+      identify({experiment("long", 400)}, experiment("held-out", 81), options, motor);
+  EXPECT_TRUE(held.lsmi_ran());
+  EXPECT_FALSE(held.validation.has_value());
+  EXPECT_EQ(std::count_if(held.warnings.begin(), held.warnings.end(),
+                          [](const std::string& w) {
+                            return w.starts_with(
+                                "held-out held-out: no LSMI torque check: too "
+                                "short for LSMI: 81 samples");
+                          }),
+            1);
 }
 
 // A held-out session long enough to use but short of two pendulum periods after trimming: its

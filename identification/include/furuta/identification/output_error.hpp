@@ -170,6 +170,11 @@ OutputErrorResult refine_output_error(const std::vector<OeExperiment>& experimen
                                       const model::MotorData& motor,
                                       const OutputErrorOptions& options = {});
 
+// The fewest samples a recording needs for the refinement alone: more angle readings (two a
+// sample) than one segment's unknowns (its starting state, the parameters, the lag, the pendulum's
+// zero and the input's gain). A fit from a few samples more has wide sd, and its sd say so.
+inline constexpr std::size_t kRefinementMinimumSamples = (4 + model::kParameterCount + 3) / 2 + 1;
+
 // A free-run simulation of a whole experiment (no re-shooting): the initial state is fitted to the
 // first `options.segment_s` with the parameters held, then the model runs to the end.
 struct FreeRun {

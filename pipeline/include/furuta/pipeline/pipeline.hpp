@@ -277,7 +277,8 @@ struct Simulation {
 // the parameters) and an input gain of 1.
 struct HeldOutFreeRuns {
   std::string name;
-  identification::FreeRun lsmi, refined;
+  std::optional<identification::FreeRun> lsmi;  // none when LSMI did not run
+  identification::FreeRun refined;
 };
 
 // Its parameter set's name in the scenarios (Table III) and Table I.

@@ -78,7 +78,8 @@ struct OutputErrorSummary {
   std::string time_stamps;  // time_stamps_text
   // The held-out recording run free with the LSMI and the refined parameters.
   std::string held_out_name;
-  std::array<double, 2> lsmi_rmse_rad = {0, 0}, refined_rmse_rad = {0, 0};
+  std::optional<std::array<double, 2>> lsmi_rmse_rad;  // none when LSMI did not run
+  std::array<double, 2> refined_rmse_rad = {0, 0};
   std::string svg;  // svg_free_runs; empty without a held-out recording
 };
 
@@ -110,6 +111,7 @@ struct ReportInput {
   std::vector<std::string> experiment_names;
   std::vector<identification::LsmiResult> per_experiment;
   identification::LsmiResult combined;
+  std::string lsmi_skipped;  // why LSMI did not run ("" when it did: the columns above)
   std::optional<model::Parameters<double>> nominal, truth;
   double input_lag_s = 0;
   std::optional<OutputErrorSummary> output_error;  // absent: not run

@@ -23,7 +23,7 @@ std::string svg_torque_validation(const identification::ValidationResult& valida
 
 // The held-out recording's measured q1 and q2 against free runs (no re-shooting) with the LSMI
 // and the output-error parameters, each run's angle RMSE in the panel titles.
-std::string svg_free_runs(const std::string& name, const identification::FreeRun& lsmi,
+std::string svg_free_runs(const std::string& name, const identification::FreeRun* lsmi,
                           const identification::FreeRun& refined);
 
 // Fig. 4: the paving projected on two parameters (default fv1, fv2): inner, boundary and outer
