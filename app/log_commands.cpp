@@ -16,7 +16,7 @@
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
-#include "furuta/firmware_bridge/codec_1065.hpp"
+#include "furuta/firmware_bridge/board_roles.hpp"
 #include "furuta/rig_usb_report_t.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -27,6 +27,18 @@ namespace {
 
 // The last command written to the 1065 as the log recorded it: on every way a session ends it must
 // be the zero command, so this is what to look at after a fault.
+// The motor board's adapter name as the log's carried configuration says (the default without one).
+std::string motor_board_of(const session_log::SessionLog& log) {
+  if (log.start) {
+    try {
+      return config::parse_rig_config(log.start->rig_config_toml, "").motor_board.model;
+    } catch (const std::exception&) {
+      // A configuration that does not load names no board: the default's, as the daemon's.
+    }
+  }
+  return config::RigConfig{}.motor_board.model;
+}
+
 std::string last_motor_command(const session_log::SessionLog& log) {
   const furuta::rig_usb_report_t* last = nullptr;
   for (const auto& r : log.usb_reports) {
@@ -37,12 +49,13 @@ std::string last_motor_command(const session_log::SessionLog& log) {
     }
   }
   if (!last) return "no command logged";
-  bridge::MotorOutput1065 output;
-  if (bridge::decode_output_1065(last->bytes, output) != bridge::CodecStatus::ok) {
+  const std::optional<bridge::MotorWrite> write =
+      bridge::make_motor_board(motor_board_of(log), {}, {})->read_write(last->bytes);
+  if (!write) {
     return "last command undecodable (" + std::to_string(last->bytes.size()) + " bytes)";
   }
   std::ostringstream text;
-  text << "last command duty " << output.duty_cycle() << ", braking " << output.braking_fraction();
+  text << "last command duty " << write->duty << ", braking " << write->braking_fraction;
   if (last->kind == furuta::rig_usb_report_t::KIND_ERROR)
     text << " (write failed: " << last->status << ")";
   return text.str();
@@ -138,7 +151,8 @@ int run_log_export_csv_command(const std::filesystem::path& path,
   csv << std::setprecision(10);
   const std::int64_t t0 = log.samples.empty() ? 0 : log.samples.front().monotonic_ns;
   const auto seconds = [t0](std::int64_t ns) { return static_cast<double>(ns - t0) * 1e-9; };
-  const std::vector<session_log::MotorCommandWrite> writes = session_log::motor_command_writes(log);
+  const std::vector<session_log::MotorCommandWrite> writes =
+      session_log::motor_command_writes(log, motor_board_of(log));
   std::size_t next_write = 0;
   std::optional<session_log::MotorCommandWrite> written;
   std::optional<std::int64_t> arm_ns, pendulum_ns;

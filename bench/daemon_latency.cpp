@@ -4,8 +4,9 @@
 //   daemon_latency --period-us 16000 --seconds 60 [--fifo] [--cpu C] [--lcm-url URL] [--json FILE]
 //
 // Reports wake-up latency p50/p99/p99.9/max, overruns and CPU time per cycle for both loops, and
-// the sample-to-subscriber latency over LCM (a subscriber on its own LCM instance and thread: the
-// time it receives a sample minus the sample's cycle deadline).
+// the sample-to-subscriber latency over LCM (a subscriber on its own LCM instance and thread): the
+// time it receives a sample minus the time the loop queued it (the hand-off and the transport),
+// and minus the sample's cycle deadline (the loop's wake-up and its cycle's work too).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <cstdio>
@@ -14,7 +15,9 @@
 #include <iomanip>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
+#include <sstream>
 #include <thread>
+#include <vector>
 
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
@@ -29,10 +32,18 @@ namespace {
 using namespace furuta;
 
 struct SubscriberLatency {
-  daemon::LatencyHistogram histogram;
+  explicit SubscriberLatency(std::size_t samples) : queued_ns(samples) {}
+  daemon::LatencyHistogram histogram;                // from the loop's queueing of the sample
+  daemon::LatencyHistogram from_deadline;            // from the sample's cycle deadline
+  std::vector<std::atomic<std::int64_t>> queued_ns;  // by seq, from the recorder's probe
   std::int64_t received = 0;
   void on_sample(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_sample_t* m) {
-    histogram.record(bridge::MonotonicClock{}.now_ns() - m->monotonic_ns);
+    const std::int64_t now = bridge::MonotonicClock{}.now_ns();
+    from_deadline.record(now - m->monotonic_ns);
+    const auto seq = static_cast<std::size_t>(m->seq);
+    if (seq < queued_ns.size() && queued_ns[seq].load() != 0) {
+      histogram.record(now - queued_ns[seq].load());
+    }
     ++received;
   }
 };
@@ -106,7 +117,8 @@ int main(int argc, char** argv) {
   const bool separate_subscriber = lcm_url.rfind("memq", 0) != 0;
   lcm::LCM subscriber_lcm(separate_subscriber ? lcm_url : "memq://");
   lcm::LCM& sub_lcm = separate_subscriber ? subscriber_lcm : daemon_lcm;
-  SubscriberLatency subscriber;
+  // One slot per cycle the session can have, with room for the cycles around it.
+  SubscriberLatency subscriber(static_cast<std::size_t>(seconds * 1e6 / period_us) + 64);
   sub_lcm.subscribe(session_log::kChannelSample, &SubscriberLatency::on_sample, &subscriber);
   std::atomic<bool> stop_subscriber{false};
   std::thread subscriber_thread;
@@ -122,6 +134,10 @@ int main(int argc, char** argv) {
   std::string stop_reason;
   {
     daemon::Daemon d(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, daemon_lcm);
+    d.recorder().on_publish([&subscriber](const daemon::RigSample& s) {
+      const auto seq = static_cast<std::size_t>(s.seq);
+      if (seq < subscriber.queued_ns.size()) subscriber.queued_ns[seq].store(s.queued_ns);
+    });
     furuta::rig_command_t start{};
     start.kind = furuta::rig_command_t::KIND_START_SESSION;
     start.profile = "bang_bang";
@@ -184,11 +200,17 @@ int main(int argc, char** argv) {
   std::cout << std::fixed << std::setprecision(2) << "ratio daemon/floor: p50 "
             << daemon_row.p50 / std::max(floor_row.p50, 1.0) << ", p99 "
             << daemon_row.p99 / std::max(floor_row.p99, 1.0) << "\n";
-  std::cout << std::setprecision(0) << "sample -> subscriber [us]: p50 "
-            << subscriber.histogram.quantile_us(0.5) << ", p99 "
-            << subscriber.histogram.quantile_us(0.99) << ", p99.9 "
-            << subscriber.histogram.quantile_us(0.999) << ", max " << subscriber.histogram.max_us()
-            << " (" << subscriber.received << " of " << samples_logged << " samples received)\n";
+  const auto quantiles = [](const daemon::LatencyHistogram& h) {
+    std::ostringstream q;
+    q << std::fixed << std::setprecision(0) << "p50 " << h.quantile_us(0.5) << ", p99 "
+      << h.quantile_us(0.99) << ", p99.9 " << h.quantile_us(0.999) << ", max " << h.max_us();
+    return q.str();
+  };
+  std::cout << "sample -> subscriber [us], from the loop queueing it: "
+            << quantiles(subscriber.histogram) << "\n"
+            << "sample -> subscriber [us], from its cycle's deadline: "
+            << quantiles(subscriber.from_deadline) << " (" << subscriber.received << " of "
+            << samples_logged << " samples received)\n";
   std::cout << "session ended: " << stop_reason << "\n";
 
   if (!json_path.empty()) {
@@ -202,7 +224,10 @@ int main(int argc, char** argv) {
          << ",\"cycles\":" << cycles << ",\"stop\":\"" << stop_reason
          << "\"},\"subscriber\":{\"p50_us\":" << subscriber.histogram.quantile_us(0.5)
          << ",\"p99_us\":" << subscriber.histogram.quantile_us(0.99)
+         << ",\"p999_us\":" << subscriber.histogram.quantile_us(0.999)
          << ",\"max_us\":" << subscriber.histogram.max_us()
+         << ",\"from_deadline_p50_us\":" << subscriber.from_deadline.quantile_us(0.5)
+         << ",\"from_deadline_p99_us\":" << subscriber.from_deadline.quantile_us(0.99)
          << ",\"received\":" << subscriber.received << ",\"published\":" << samples_logged
          << "}}\n";
   }

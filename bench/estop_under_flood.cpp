@@ -449,7 +449,8 @@ LoggedEnd read_logged_end(const std::filesystem::path& log_path, std::int64_t fr
     result.end_reason = log.end->end_reason;
     result.end_ns = log.end->monotonic_ns;
   }
-  for (const auto& write : furuta::session_log::motor_command_writes(log)) {
+  const std::string board = furuta::config::RigConfig{}.motor_board.model;
+  for (const auto& write : furuta::session_log::motor_command_writes(log, board)) {
     if (write.time_ns >= from_ns && write.duty == 0.0) {
       result.zero_write_ns = write.time_ns;
       break;

@@ -3,11 +3,13 @@
 // and identification's sections are read in daemon_sections.cpp and identification_sections.cpp.
 #include "furuta/config/rig_config.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
 
 #include "furuta/config/toml_section.hpp"
+#include "furuta/firmware_bridge/board_roles.hpp"
 #include "sections.hpp"
 
 namespace furuta::config {
@@ -61,8 +63,16 @@ void read_rig(Section rig, RigConfig& c) {
   rig.reject_unknown_keys();
 }
 
-BoardSelection read_board(Section& s) {
+BoardSelection read_board(Section& s, const std::string& model,
+                          const std::vector<std::string>& models) {
   BoardSelection b;
+  b.model = s.text("model", model);
+  if (std::find(models.begin(), models.end(), b.model) == models.end()) {
+    std::string known;
+    for (const std::string& m : models) known += (known.empty() ? "" : ", ") + m;
+    s.fail("model", s.node("model"),
+           "'" + b.model + "' is not a board this build has an adapter for (" + known + ")");
+  }
   const std::string serial = s.text("serial", "");
   if (!serial.empty()) b.serial = serial;
   b.allow_untested_firmware = s.boolean("allow_untested_firmware", false);
@@ -72,10 +82,11 @@ BoardSelection read_board(Section& s) {
 // [boards.motor] (the 1065) and [boards.encoder] (the 1047, and the pendulum's channel on it).
 void read_boards(Section boards, RigConfig& c) {
   Section motor = boards.child("motor");
-  c.motor_board = read_board(motor);
+  c.motor_board = read_board(motor, RigConfig{}.motor_board.model, bridge::motor_board_kinds());
   motor.reject_unknown_keys();
   Section encoder = boards.child("encoder");
-  c.encoder_board = read_board(encoder);
+  c.encoder_board =
+      read_board(encoder, RigConfig{}.encoder_board.model, bridge::encoder_board_kinds());
   c.pendulum_channel = static_cast<int>(encoder.integer(
       "pendulum_channel", 0, [](std::int64_t v) { return v >= 0 && v < 4; }, "0..3"));
   encoder.reject_unknown_keys();

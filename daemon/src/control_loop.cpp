@@ -1,18 +1,44 @@
 #include "furuta/daemon/control_loop.hpp"
 
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <exception>
+#include <system_error>
 #include <thread>
-
-#include "furuta/firmware_bridge/codec_1047.hpp"
-#include "furuta/firmware_bridge/codec_1065.hpp"
 
 namespace furuta::daemon {
 
 using bridge::TransportStatus;
+
+EventQueue::EventQueue(std::size_t capacity)
+    : boost::lockfree::spsc_queue<LoopEvent>(capacity), fd_(::eventfd(0, EFD_CLOEXEC)) {
+  if (fd_ < 0) throw std::system_error(errno, std::generic_category(), "eventfd");
+}
+
+EventQueue::~EventQueue() {
+  ::close(fd_);
+}
+
+void EventQueue::notify() noexcept {
+  const std::uint64_t one = 1;
+  // Only a counter at its maximum refuses; the consumer is then already due to wake.
+  [[maybe_unused]] const ssize_t written = ::write(fd_, &one, sizeof one);
+}
+
+void EventQueue::wait_for(std::chrono::milliseconds timeout) noexcept {
+  pollfd p{fd_, POLLIN, 0};
+  if (::poll(&p, 1, static_cast<int>(timeout.count())) > 0) {
+    std::uint64_t count = 0;
+    [[maybe_unused]] const ssize_t read = ::read(fd_, &count, sizeof count);
+  }
+}
 
 namespace {
 
@@ -31,14 +57,6 @@ std::int64_t wall_time_ns() noexcept {
   return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 
-// The largest 1065 duty step that is not above max_duty (0 for a NaN or negative limit).
-std::uint8_t max_duty_raw(double max_duty) {
-  if (!(max_duty > 0.0)) return 0;
-  if (max_duty >= 1.0) return 255;
-  // The slack keeps a limit that is an exact step (0.6 = 153/255) on that step despite rounding.
-  return static_cast<std::uint8_t>(std::floor(max_duty * 255.0 + 1e-9));
-}
-
 }  // namespace
 
 ControlLoop::ControlLoop(const LoopSettings& settings, BoardLink& motor, BoardLink& encoder,
@@ -48,12 +66,13 @@ ControlLoop::ControlLoop(const LoopSettings& settings, BoardLink& motor, BoardLi
       encoder_(encoder),
       clock_(clock),
       events_(events),
-      encoder_timing_(bridge::tick_seconds_1047(encoder.device_info().firmware_version)) {
+      motor_board_(
+          bridge::make_motor_board(settings.motor_board, motor.device_info(),
+                                   {settings.safety.max_duty, settings.acceleration_pct_per_s})),
+      encoder_board_(bridge::make_encoder_board(settings.encoder_board, encoder.device_info(),
+                                                settings.pendulum_channel)) {
   counters_.clock_ns.store(clock_.now_ns());
   if (settings_.period_ns <= 0) throw std::invalid_argument("period_ns must be > 0");
-  if (settings_.pendulum_channel < 0 || settings_.pendulum_channel > 3) {
-    throw std::invalid_argument("pendulum_channel must be 0..3");
-  }
 }
 
 bool ControlLoop::request_session(const SessionRequest& request) noexcept {
@@ -93,6 +112,7 @@ void ControlLoop::emit(LoopEvent::Kind kind) noexcept {
     if (!settings_.wait_when_queue_full) return;
     std::this_thread::yield();
   }
+  events_.notify();
 }
 
 void ControlLoop::emit_fault(const char* what, const char* detail, StopReason reason, bool fatal,
@@ -109,22 +129,10 @@ void ControlLoop::emit_fault(const char* what, const char* detail, StopReason re
 }
 
 bool ControlLoop::write_command(double duty, double braking_fraction, RawReport* record) {
-  bridge::MotorCommand1065 command;
-  command.duty_cycle = duty;
-  command.braking_fraction = braking_fraction;
-  command.acceleration_pct_per_s = settings_.acceleration_pct_per_s;
-  bridge::MotorOutput1065 output;
-  if (bridge::to_output_1065(command, output) != bridge::CodecStatus::ok) return false;
-  // |duty| travels in steps of 1/255 rounded to nearest, so a duty the supervisor passed at exactly
-  // max_duty (a command limit may equal it) could reach the board half a step above it. The wire
-  // never carries more than the limit: round down onto it instead.
-  output.duty_raw = std::min(output.duty_raw, max_duty_raw(settings_.safety.max_duty));
   std::array<std::uint8_t, bridge::kMaxReportBytes> bytes{};
   const std::size_t length = motor_.device_info().output_report_bytes;
-  if (length < bridge::k1065OutputReportMinBytes || length > bytes.size()) return false;
-  if (bridge::encode_output_1065(output, {bytes.data(), length}) != bridge::CodecStatus::ok) {
-    return false;
-  }
+  if (length > bytes.size()) return false;
+  if (!motor_board_->write({duty, braking_fraction}, {bytes.data(), length})) return false;
   const TransportStatus status = motor_.write({bytes.data(), length});
   if (record) {
     record->time_ns = clock_.now_ns();
@@ -150,22 +158,26 @@ void ControlLoop::mark_down(BoardLink& board, TransportStatus status) noexcept {
 }
 
 void ControlLoop::report_lost_boards(std::int64_t now_ns) noexcept {
+  char detail[kDetailChars];
   if (motor_down_ && !motor_down_reported_) {
     motor_down_reported_ = true;
-    emit_fault("disconnected", "1065 motor board lost; reconnecting", StopReason::none, false,
-               now_ns);
+    std::snprintf(detail, sizeof detail, "%s motor board lost; reconnecting",
+                  settings_.motor_board.c_str());
+    emit_fault("disconnected", detail, StopReason::none, false, now_ns);
   }
   if (encoder_down_ && !encoder_down_reported_) {
     encoder_down_reported_ = true;
-    emit_fault("disconnected", "1047 encoder board lost; reconnecting", StopReason::none, false,
-               now_ns);
+    std::snprintf(detail, sizeof detail, "%s encoder board lost; reconnecting",
+                  settings_.encoder_board.c_str());
+    emit_fault("disconnected", detail, StopReason::none, false, now_ns);
   }
 }
 
 bool ControlLoop::initialise_boards() {
-  std::array<std::uint8_t, bridge::k1047OutputReportBytes> enable{};
-  bridge::encode_output_1047(static_cast<std::uint8_t>(1u << settings_.pendulum_channel), enable);
-  const TransportStatus encoder_status = encoder_.write(enable);
+  std::array<std::uint8_t, bridge::kMaxReportBytes> enable{};
+  const std::size_t length = encoder_board_->enable(enable);
+  const TransportStatus encoder_status =
+      length == 0 ? TransportStatus::ok : encoder_.write({enable.data(), length});
   if (encoder_status != TransportStatus::ok) mark_down(encoder_, encoder_status);
   const bool motor_ok = write_command(0.0, settings_.stop_braking_fraction, nullptr);
   return encoder_status == TransportStatus::ok && motor_ok;
@@ -189,10 +201,12 @@ void ControlLoop::try_reconnect(std::int64_t now_ns) {
 
   // Both boards are new as far as the loop knows: the counters restart, the supply and flags are
   // unknown until their first report, and the pendulum must be seen at rest afresh before a start.
-  motor_counter_.reset();
-  encoder_timing_.reset();
+  motor_board_->restart();
+  encoder_board_->restart();
   have_supply_ = false;
   motor_flags_ = 0;
+  motor_over_temperature_ = false;
+  motor_under_voltage_ = false;
   encoder_flags_ = 0;
   cycles_without_motor_ = 0;
   cycles_without_encoder_ = 0;
@@ -222,40 +236,42 @@ void ControlLoop::drain_boards(RigSample& sample, std::int64_t& newest_arm_count
     if (status != TransportStatus::ok) mark_down(encoder_, status);
   }
 
-  int motor_fresh = 0;
+  // Each report is read once, here; a report that does not decode stays raw in the sample and the
+  // log and is not trusted for state.
+  sample.motor.count = 0;
   int motor_lost = 0;
   for (std::size_t i = 0; i < sample.motor_in.count; ++i) {
     const RawReport& raw = sample.motor_in.reports[i];
-    bridge::MotorReport1065 r;
-    if (raw.status != TransportStatus::ok ||
-        bridge::decode_input_1065({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
-      continue;  // kept raw in the sample and the log; not trusted for state
-    }
-    ++motor_fresh;
-    motor_lost += motor_counter_.observe(r.packet_counter);
-    newest_arm_counts = r.encoder_position;
-    applied_duty_ = r.applied_duty();
-    motor_current_a_ = r.motor_current_a();
-    supply_voltage_v_ = r.supply_voltage_v();
+    if (raw.status != TransportStatus::ok) continue;
+    const std::optional<bridge::MotorReading> r =
+        motor_board_->read({raw.bytes.data(), raw.length}, raw.time_ns);
+    if (!r) continue;
+    sample.motor.readings[sample.motor.count++] = *r;
+    motor_lost += r->lost_before;
+    newest_arm_counts = r->position_counts;
+    applied_duty_ = r->applied_duty;
+    motor_current_a_ = r->current_a;
+    supply_voltage_v_ = r->supply_v;
     have_supply_ = true;
-    motor_flags_ = r.status_flags;
+    motor_flags_ = r->status_flags;
+    motor_over_temperature_ = r->over_temperature;
+    motor_under_voltage_ = r->under_voltage;
   }
-  int encoder_fresh = 0;
+  sample.encoder.count = 0;
   int encoder_lost = 0;
-  const auto channel = static_cast<std::size_t>(settings_.pendulum_channel);
   for (std::size_t i = 0; i < sample.encoder_in.count; ++i) {
     const RawReport& raw = sample.encoder_in.reports[i];
-    bridge::EncoderReport1047 r;
-    if (raw.status != TransportStatus::ok ||
-        bridge::decode_input_1047({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
-      continue;
-    }
-    ++encoder_fresh;
-    const bridge::EncoderChannel1047& ch = r.channels[channel];
-    encoder_lost += encoder_timing_.observe(ch.packet_time_ticks, raw.time_ns);
-    pendulum_counts_ += ch.position_delta;
-    encoder_flags_ = ch.flags;
+    if (raw.status != TransportStatus::ok) continue;
+    const std::optional<bridge::EncoderReading> r =
+        encoder_board_->read({raw.bytes.data(), raw.length}, raw.time_ns);
+    if (!r) continue;
+    sample.encoder.readings[sample.encoder.count++] = *r;
+    encoder_lost += r->lost_before;
+    pendulum_counts_ += r->delta_counts;
+    encoder_flags_ = r->flags;
   }
+  const int motor_fresh = sample.motor.count;
+  const int encoder_fresh = sample.encoder.count;
   if (motor_fresh > 0) counters_.motor_reports_seen.store(true, std::memory_order_relaxed);
   if (encoder_fresh > 0) counters_.encoder_reports_seen.store(true, std::memory_order_relaxed);
   cycles_without_motor_ = motor_fresh > 0 ? 0 : cycles_without_motor_ + 1;
@@ -427,11 +443,17 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
 
   session_motor_lost_ += cycle_motor_lost_;
   session_encoder_lost_ += cycle_encoder_lost_;
-  if (cycle_motor_lost_ > 0)
-    emit_fault("lost_reports", "1065 packet counter gap", StopReason::none, false, deadline_ns);
-  if (cycle_encoder_lost_ > 0)
-    emit_fault("lost_reports", "1047 report timing gap: counts lost", StopReason::none, false,
-               deadline_ns);
+  char detail[kDetailChars];
+  if (cycle_motor_lost_ > 0) {
+    std::snprintf(detail, sizeof detail, "%s motor board: %d report(s) lost",
+                  settings_.motor_board.c_str(), cycle_motor_lost_);
+    emit_fault("lost_reports", detail, StopReason::none, false, deadline_ns);
+  }
+  if (cycle_encoder_lost_ > 0) {
+    std::snprintf(detail, sizeof detail, "%s encoder board: %d report(s) lost, their counts too",
+                  settings_.encoder_board.c_str(), cycle_encoder_lost_);
+    emit_fault("lost_reports", detail, StopReason::none, false, deadline_ns);
+  }
   session_overruns_ += missed;
   if (missed > 0) {
     sample.flags |= kSampleOverrun;
@@ -463,7 +485,8 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
     in.commanded_duty = duty;
     in.cycles_without_motor_report = cycles_without_motor_;
     in.cycles_without_encoder_report = cycles_without_encoder_;
-    in.motor_status_flags = motor_flags_;
+    in.motor_over_temperature = motor_over_temperature_;
+    in.motor_under_voltage = motor_under_voltage_;
     in.supply_voltage_v = supply_voltage_v_;
     in.have_supply_reading = have_supply_;
     watch_encoders(sample);
@@ -478,6 +501,7 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
     sample.commanded_duty = 0.0;
     write_command(0.0, settings_.stop_braking_fraction, &sample.motor_out);
     if (reason != StopReason::log_error) {
+      sample.queued_ns = clock_.now_ns();
       emit(LoopEvent::Kind::sample);
       ++seq_;
     }
@@ -489,6 +513,7 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
   }
   sample.commanded_duty = duty;
   write_command(duty, 0.0, &sample.motor_out);
+  sample.queued_ns = clock_.now_ns();
   emit(LoopEvent::Kind::sample);
   ++seq_;
 }

@@ -11,6 +11,10 @@ namespace furuta::daemon {
 
 namespace {
 
+// The longest the publisher/logger sleeps without an event: the bound on how late a due status or
+// log sync may be (the loop's events wake it at once).
+constexpr std::chrono::milliseconds kIoIdleWait{20};
+
 void copy_to(std::array<char, kNameChars>& to, const std::string& from) {
   copy_text(to, from.c_str());
 }
@@ -150,6 +154,7 @@ void Daemon::stop(StopReason reason) {
 void Daemon::wait() {
   if (loop_thread_.joinable()) loop_thread_.join();
   io_stop_.store(true);
+  events_.notify();
   if (io_thread_.joinable()) io_thread_.join();
   lcm_stop_.store(true);
   if (lcm_thread_.joinable()) lcm_thread_.join();
@@ -260,8 +265,8 @@ void Daemon::io_thread_main() {
       ready_.store(true);
     }
     if (io_stop_.load() && events_.read_available() == 0) break;
-    // The loop cannot wake this thread (that would be a syscall on its path): poll, briefly.
-    if (!any) std::this_thread::sleep_for(std::chrono::microseconds(500));
+    // Until the loop queues an event (it wakes this thread), or the next status or sync is due.
+    if (!any) events_.wait_for(kIoIdleWait);
   }
   publish_status();
 }

@@ -160,6 +160,8 @@ DaemonSettings daemon_settings_from_config(const config::RigConfig& config) {
   loop.arm_encoder = config.arm_encoder;
   loop.pendulum_encoder = config.pendulum_encoder;
   loop.pendulum_channel = config.pendulum_channel;
+  loop.motor_board = config.motor_board.model;
+  loop.encoder_board = config.encoder_board.model;
   loop.rest_check_s = config.daemon.rest_check_s;
   loop.reconnect_interval_ns = config.daemon.reconnect_interval_ms * 1'000'000;
   loop.acceleration_pct_per_s = config.excitation.board_acceleration_pct_per_s;
@@ -168,7 +170,6 @@ DaemonSettings daemon_settings_from_config(const config::RigConfig& config) {
   d.recorder.flush_interval = std::chrono::milliseconds(config.daemon.flush_interval_ms);
   d.recorder.rig_config_toml = config.source_text;
   d.recorder.software_version = kSoftwareVersion;
-  d.recorder.pendulum_channel = config.pendulum_channel;
 
   d.command_limits.max_amplitude_duty = config.limits.max_amplitude_duty;
   d.command_limits.max_duration_s = config.limits.max_duration_s;

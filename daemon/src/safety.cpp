@@ -7,7 +7,6 @@
 #include <stdexcept>
 
 #include "furuta/common/wire_text.hpp"
-#include "furuta/firmware_bridge/codec_1065.hpp"
 
 namespace furuta::daemon {
 namespace {
@@ -98,10 +97,8 @@ std::string check_start_session(const rig_command_t& command, const CommandLimit
 
 StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) noexcept {
   // Comparisons are written so that NaN fails them: an unknown value is never taken as safe.
-  if (input.motor_status_flags & bridge::k1065FlagOverTemperature) {
-    return StopReason::over_temperature;
-  }
-  if (input.motor_status_flags & bridge::k1065FlagUnderVoltage) return StopReason::under_voltage;
+  if (input.motor_over_temperature) return StopReason::over_temperature;
+  if (input.motor_under_voltage) return StopReason::under_voltage;
   if (input.have_supply_reading && !(input.supply_voltage_v >= limits.min_supply_v &&
                                      input.supply_voltage_v <= limits.max_supply_v)) {
     return StopReason::supply_out_of_range;

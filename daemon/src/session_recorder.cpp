@@ -1,9 +1,9 @@
 #include "furuta/daemon/session_recorder.hpp"
 
+#include <algorithm>
 #include <exception>
+#include <limits>
 
-#include "furuta/firmware_bridge/codec_1047.hpp"
-#include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/rig_fault_t.hpp"
 #include "furuta/rig_session_t.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -36,15 +36,17 @@ std::string describe_log_failure(session_log::LogWriteStatus status,
 
 }  // namespace
 
-furuta::rig_sample_t to_lcm_sample(const RigSample& s, const std::string& session,
-                                   int pendulum_channel) {
+furuta::rig_sample_t to_lcm_sample(const RigSample& s, const std::string& session) {
   furuta::rig_sample_t m{};
   m.seq = s.seq;
   m.monotonic_ns = s.monotonic_ns;
   m.wall_time_ns = s.wall_time_ns;
   m.session = session;
   m.arm_counts = s.arm_counts;
-  m.pendulum_counts = static_cast<std::int32_t>(s.pendulum_counts);
+  // The message's field is 32 bits: a count beyond it (hundreds of thousands of turns) saturates.
+  m.pendulum_counts = static_cast<std::int32_t>(
+      std::clamp<std::int64_t>(s.pendulum_counts, std::numeric_limits<std::int32_t>::min(),
+                               std::numeric_limits<std::int32_t>::max()));
   m.arm_angle_rad = s.arm_angle_rad;
   m.pendulum_angle_rad = s.pendulum_angle_rad;
   m.commanded_duty = s.commanded_duty;
@@ -53,27 +55,19 @@ furuta::rig_sample_t to_lcm_sample(const RigSample& s, const std::string& sessio
   m.supply_voltage_v = s.supply_voltage_v;
   m.motor_status_flags = s.motor_status_flags;
   m.encoder_flags = s.encoder_flags;
-  for (std::size_t i = 0; i < s.motor_in.count; ++i) {
-    const RawReport& raw = s.motor_in.reports[i];
-    bridge::MotorReport1065 r;
-    if (bridge::decode_input_1065({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
-      continue;  // the raw bytes are in RIG_USB; the sample lists decodable reports
-    }
-    m.motor_report_host_ns.push_back(raw.time_ns);
-    m.motor_packet_counter.push_back(r.packet_counter);
-    m.motor_encoder_time.push_back(r.encoder_time_raw);
+  // The raw bytes of every report are in RIG_USB; the sample lists the ones that decoded.
+  for (std::size_t i = 0; i < s.motor.count; ++i) {
+    const bridge::MotorReading& r = s.motor.readings[i];
+    m.motor_report_host_ns.push_back(r.host_ns);
+    m.motor_packet_counter.push_back(static_cast<std::int16_t>(r.report_counter));
+    m.motor_encoder_time.push_back(static_cast<std::int32_t>(r.board_time));
   }
   m.n_motor_reports = static_cast<std::int16_t>(m.motor_report_host_ns.size());
-  for (std::size_t i = 0; i < s.encoder_in.count; ++i) {
-    const RawReport& raw = s.encoder_in.reports[i];
-    bridge::EncoderReport1047 r;
-    if (bridge::decode_input_1047({raw.bytes.data(), raw.length}, r) != bridge::CodecStatus::ok) {
-      continue;
-    }
-    const auto& ch = r.channels[static_cast<std::size_t>(pendulum_channel)];
-    m.encoder_report_host_ns.push_back(raw.time_ns);
-    m.encoder_packet_ticks.push_back(static_cast<std::int32_t>(ch.packet_time_ticks));
-    m.encoder_delta_counts.push_back(ch.position_delta);
+  for (std::size_t i = 0; i < s.encoder.count; ++i) {
+    const bridge::EncoderReading& r = s.encoder.readings[i];
+    m.encoder_report_host_ns.push_back(r.host_ns);
+    m.encoder_packet_ticks.push_back(static_cast<std::int32_t>(r.board_ticks));
+    m.encoder_delta_counts.push_back(r.delta_counts);
   }
   m.n_encoder_reports = static_cast<std::int16_t>(m.encoder_report_host_ns.size());
   m.motor_lost_reports = s.motor_lost_reports;
@@ -196,7 +190,17 @@ void SessionRecorder::start_session(const SessionStartEvent& start) {
 
 void SessionRecorder::record_sample(const RigSample& s) {
   wake_latency_.record(s.wake_latency_ns);
-  // Raw reports first, in the order they crossed the wire: inputs, then this cycle's command.
+  // Subscribers first: a controller or a plot waits for the sample, the log does not.
+  sample_msg_ = to_lcm_sample(s, session_);
+  const int size = sample_msg_.getEncodedSize();
+  sample_buffer_.resize(static_cast<std::size_t>(size));
+  sample_msg_.encode(sample_buffer_.data(), 0, size);
+  if (publish_observer_) publish_observer_(s);
+  if (lcm_) {
+    lcm_->publish(session_log::kChannelSample, sample_buffer_.data(), static_cast<unsigned>(size));
+  }
+  // In the log, the raw reports come before their sample, in the order they crossed the wire:
+  // inputs, then this cycle's command.
   auto log_raw = [&](const RawReport& raw, std::int8_t board, std::int8_t kind) {
     log_raw_report(raw, board, kind);
   };
@@ -214,8 +218,7 @@ void SessionRecorder::record_sample(const RigSample& s) {
                 ? +furuta::rig_usb_report_t::KIND_OUTPUT
                 : +furuta::rig_usb_report_t::KIND_ERROR);
   }
-  sample_msg_ = to_lcm_sample(s, session_, settings_.pendulum_channel);
-  publish_and_log(session_log::kChannelSample, sample_msg_, s.monotonic_ns);
+  log_bytes(session_log::kChannelSample, sample_buffer_, s.monotonic_ns);
   ++samples_published_;
 }
 

@@ -169,7 +169,7 @@ State<T> axpy(const State<T>& x, const State<T>& d, const T& h) {
 // at every input breakpoint (at breakpoint + lag, so the cuts move with the lag and carry its
 // derivative) and each piece into equal substeps of at most max_step_s: RK4 is 4th order only
 // where the input is smooth, and across a kink in a 1 ms step it errs by a fraction of the kink's
-// duty change (a 16 ms chirp, with two kinks a cycle, was 0.8 counts RMS off on the arm).
+// duty change, at every kink (an input with many kinks, as a chirp, adds them up).
 template <class T>
 State<T> integrate(const OeExperiment& e, const model::MotorData& motor,
                    const model::Parameters<T>& p, const T& lag, const T& gain, State<T> x,
@@ -597,7 +597,7 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
   // first, and its angles are those of the newest; the older 1047 reports' angles follow from their
   // deltas, the older 1065 reports' from their positions in the raw reports of the log.
   const std::vector<session_log::MotorInputReport> arm_positions =
-      session_log::motor_input_reports(log);
+      session_log::motor_input_reports(log, rig.motor_board.model);
   std::size_t cursor = 0;
   const auto position_at = [&](std::int64_t host_ns) -> const session_log::MotorInputReport* {
     while (cursor < arm_positions.size() && arm_positions[cursor].time_ns < host_ns) ++cursor;
@@ -675,14 +675,13 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
 
   // The board ramps its applied duty towards the newest command at the command's rate, from the
   // moment the command is written (docs/model.md; firmware_bridge's simulated rig does the same).
-  const std::vector<session_log::MotorCommandWrite> writes = session_log::motor_command_writes(log);
+  const std::vector<session_log::MotorCommandWrite> writes =
+      session_log::motor_command_writes(log, rig.motor_board.model);
   RampedInput ramp(
       e, std::min(e.observations.front().t_s, writes.empty() ? 0.0 : seconds(writes[0].time_ns)),
       log.samples.front().applied_duty, rig.safety.stop_braking_fraction);
   for (const auto& w : writes) {
-    // Raw acceleration 0 is never sent; taken as the slowest ramp the wire can express.
-    ramp.command(seconds(w.time_ns), w.duty,
-                 std::max(w.acceleration_pct_per_s, 6250.0 / 255.0) / 100.0, w.braking_fraction);
+    ramp.command(seconds(w.time_ns), w.duty, w.acceleration_pct_per_s / 100.0, w.braking_fraction);
   }
   ramp.finish(e.observations.back().t_s);
 

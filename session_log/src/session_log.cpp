@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string_view>
 
-#include "furuta/firmware_bridge/codec_1065.hpp"
+#include "furuta/firmware_bridge/board_roles.hpp"
 
 namespace furuta::session_log {
 
@@ -116,32 +116,37 @@ double BoardTimeline::encoder_report(std::int32_t packet_ticks) {
   return *ticks_;
 }
 
-std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log) {
+std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log,
+                                                    std::string_view motor_board) {
+  const auto board = bridge::make_motor_board(motor_board, {}, {});
   std::vector<MotorCommandWrite> out;
   for (const furuta::rig_usb_report_t& r : log.usb_reports) {
     if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
         r.kind != furuta::rig_usb_report_t::KIND_OUTPUT) {
       continue;
     }
-    bridge::MotorOutput1065 o;
-    if (bridge::decode_output_1065(r.bytes, o) != bridge::CodecStatus::ok) continue;
-    out.push_back({r.time_ns, o.duty_cycle(), o.acceleration_pct_per_s(), o.braking_fraction()});
+    const std::optional<bridge::MotorWrite> w = board->read_write(r.bytes);
+    if (!w) continue;
+    out.push_back({r.time_ns, w->duty, w->acceleration_pct_per_s, w->braking_fraction});
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const auto& a, const auto& b) { return a.time_ns < b.time_ns; });
   return out;
 }
 
-std::vector<MotorInputReport> motor_input_reports(const SessionLog& log) {
+std::vector<MotorInputReport> motor_input_reports(const SessionLog& log,
+                                                  std::string_view motor_board) {
+  const auto board = bridge::make_motor_board(motor_board, {}, {});
   std::vector<MotorInputReport> out;
   for (const furuta::rig_usb_report_t& r : log.usb_reports) {
     if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
         r.kind != furuta::rig_usb_report_t::KIND_INPUT) {
       continue;
     }
-    bridge::MotorReport1065 m;
-    if (bridge::decode_input_1065(r.bytes, m) != bridge::CodecStatus::ok) continue;
-    out.push_back({r.time_ns, m.encoder_position, m.applied_duty(), m.supply_voltage_v()});
+    const std::optional<bridge::MotorReading> m = board->read(r.bytes, r.time_ns);
+    if (!m) continue;
+    out.push_back(
+        {r.time_ns, static_cast<std::int32_t>(m->position_counts), m->applied_duty, m->supply_v});
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const auto& a, const auto& b) { return a.time_ns < b.time_ns; });

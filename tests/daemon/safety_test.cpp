@@ -23,7 +23,6 @@ SafetyInput healthy() {
   input.commanded_duty = 0.3;
   input.cycles_without_motor_report = 0;
   input.cycles_without_encoder_report = 1;
-  input.motor_status_flags = 0;
   input.supply_voltage_v = 12.0;
   input.have_supply_reading = true;
   return input;
@@ -38,17 +37,13 @@ TEST(Safety, AHealthyCyclePasses) {
   EXPECT_EQ(check(SafetyInput{}), StopReason::none);  // before the first report
 }
 
-TEST(Safety, BoardFlagsStopTheSession) {
+TEST(Safety, BoardProtectionsStopTheSession) {
   SafetyInput input = healthy();
-  input.motor_status_flags = 0x01;
+  input.motor_over_temperature = true;
   EXPECT_EQ(check(input), StopReason::over_temperature);
-  input.motor_status_flags = 0x02;
+  input.motor_over_temperature = false;
+  input.motor_under_voltage = true;
   EXPECT_EQ(check(input), StopReason::under_voltage);
-  // Every other status bit is information, not a fault.
-  for (std::uint8_t flag : {0x04, 0x08, 0x10, 0x20, 0x40, 0x80, 0xFC}) {
-    input.motor_status_flags = flag;
-    EXPECT_EQ(check(input), StopReason::none) << static_cast<int>(flag);
-  }
 }
 
 TEST(Safety, SupplyIsCheckedOnlyOnceThereIsAReadingAndItsLimitsAreAllowed) {
@@ -170,8 +165,8 @@ TEST(Safety, StuckEncodersAtTheirThresholds) {
 TEST(Safety, WhenSeveralRulesAreBrokenTheFirstInOrderIsReported) {
   // In the documented order; breaking rules i.. must report rule i.
   const std::vector<std::pair<StopReason, std::function<void(SafetyInput&)>>> rules = {
-      {StopReason::over_temperature, [](SafetyInput& s) { s.motor_status_flags |= 0x01; }},
-      {StopReason::under_voltage, [](SafetyInput& s) { s.motor_status_flags |= 0x02; }},
+      {StopReason::over_temperature, [](SafetyInput& s) { s.motor_over_temperature = true; }},
+      {StopReason::under_voltage, [](SafetyInput& s) { s.motor_under_voltage = true; }},
       {StopReason::supply_out_of_range, [](SafetyInput& s) { s.supply_voltage_v = 5.0; }},
       {StopReason::stale_motor_reports, [](SafetyInput& s) { s.cycles_without_motor_report = 9; }},
       {StopReason::stale_encoder_reports,

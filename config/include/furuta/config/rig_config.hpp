@@ -19,6 +19,9 @@ namespace furuta::config {
 enum class UsbBackend : std::uint8_t { simulated, hidapi, libusb };
 
 struct BoardSelection {
+  // The board's adapter (bridge::make_motor_board, make_encoder_board): "1065", "1047", or one
+  // registered.
+  std::string model;
   std::optional<std::string> serial;  // none: the first board of that product
   // Open a board whose firmware version is outside what the codecs know (bridge::known_firmware),
   // with a warning, instead of refusing it.
@@ -187,8 +190,8 @@ struct ExcitationConfig {
 struct RigConfig {
   std::string name;
   UsbBackend backend = UsbBackend::simulated;
-  BoardSelection motor_board;    // 1065
-  BoardSelection encoder_board;  // 1047
+  BoardSelection motor_board{.model = "1065", .serial = {}, .allow_untested_firmware = false};
+  BoardSelection encoder_board{.model = "1047", .serial = {}, .allow_untested_firmware = false};
   int pendulum_channel = 0;
   bridge::EncoderGeometry arm_encoder;  // gear_ratio = motor.total_ratio()
   bridge::EncoderGeometry pendulum_encoder;

@@ -2,7 +2,8 @@
 // The real-time loop: one cycle every period on absolute deadlines; each cycle drains both boards,
 // builds a sample, runs the safety rules, computes the next command from the excitation and writes
 // it, and hands the sample to the publisher/logger through a lock-free queue. After start-up the
-// loop thread neither allocates nor locks; its only system calls are USB I/O and the sleep.
+// loop thread neither allocates nor locks; its only system calls are USB I/O, the sleep, and the
+// queue's wake-up of the publisher.
 //
 // Every way out of a session (its end, a stop or e-stop, a fault, a signal, an exception) writes a
 // zero, braking command as the last thing sent to the motor.
@@ -10,31 +11,55 @@
 #include <array>
 #include <atomic>
 #include <boost/lockfree/spsc_queue.hpp>
+#include <chrono>
 #include <cstdint>
+#include <memory>
+#include <string>
 
 #include "furuta/daemon/board_link.hpp"
 #include "furuta/daemon/excitation.hpp"
 #include "furuta/daemon/loop_events.hpp"
 #include "furuta/daemon/realtime.hpp"
 #include "furuta/daemon/safety.hpp"
+#include "furuta/firmware_bridge/board_roles.hpp"
 #include "furuta/firmware_bridge/clock.hpp"
 #include "furuta/firmware_bridge/encoder_geometry.hpp"
-#include "furuta/firmware_bridge/lost_reports.hpp"
 
 namespace furuta::daemon {
 
-using EventQueue = boost::lockfree::spsc_queue<LoopEvent>;
+// The loop's events to the publisher/logger: a lock-free single-producer queue with a wake-up, so
+// the consumer sleeps until there is something to take instead of polling. notify() writes an
+// eventfd (no lock, no allocation); a wake-up is never lost, since the consumer clears it before it
+// drains the queue.
+class EventQueue : public boost::lockfree::spsc_queue<LoopEvent> {
+ public:
+  explicit EventQueue(std::size_t capacity);
+  ~EventQueue();
+  EventQueue(const EventQueue&) = delete;
+  EventQueue& operator=(const EventQueue&) = delete;
+
+  // Producer, or whoever asks the consumer to look (a stop): wakes a wait_for.
+  void notify() noexcept;
+  // Consumer: returns once notified since the last return, or after `timeout`.
+  void wait_for(std::chrono::milliseconds timeout) noexcept;
+
+ private:
+  int fd_ = -1;
+};
 
 struct LoopSettings {
   std::int64_t period_ns = 16'000'000;
   SafetyLimits safety;
   bridge::EncoderGeometry arm_encoder;  // counts_per_rev of the motor shaft, gear ratio Nm*Ng
   bridge::EncoderGeometry pendulum_encoder;
+  // The boards' adapters by their configuration names (bridge::make_motor_board, ...).
+  std::string motor_board = "1065";
+  std::string encoder_board = "1047";
   int pendulum_channel = 0;
   double stop_braking_fraction = 1.0;  // braking applied with the zero command on every stop
-  // The 1065's duty ramp (%/s; 6250 = full scale, 0 to 100 % in 16 ms). A gentler ramp keeps the
+  // The motor board's duty ramp (% of full duty per s; 0: its fastest). A gentler ramp keeps the
   // duty's edges slower than the sampling, which the identification needs (docs: identification).
-  double acceleration_pct_per_s = 6250.0;
+  double acceleration_pct_per_s = 0.0;
   double rest_check_s = 1.0;  // the pendulum must not have moved for this long to start
   // How long a start request waits for the pendulum to come to rest before it is refused
   // (0: refused at once, as the daemon does; a one-shot run waits).
@@ -147,8 +172,9 @@ class ControlLoop {
 
   // Loop-thread state (no other thread touches it).
   LoopEvent event_;  // built in place, then copied into the queue
-  bridge::PacketCounterTracker1065 motor_counter_;
-  bridge::ReportTimingTracker1047 encoder_timing_;
+  // The boards' adapters: each report is decoded once, by them, with their loss detection.
+  std::unique_ptr<bridge::MotorBoard> motor_board_;
+  std::unique_ptr<bridge::EncoderBoard> encoder_board_;
   bool running_ = false;
   SessionRequest pending_;  // a start request waiting for the pendulum to rest
   bool have_pending_ = false;
@@ -172,6 +198,8 @@ class ControlLoop {
   double supply_voltage_v_ = 0;
   bool have_supply_ = false;
   std::uint8_t motor_flags_ = 0;
+  bool motor_over_temperature_ = false;
+  bool motor_under_voltage_ = false;
   std::uint8_t encoder_flags_ = 0;
   int cycles_without_motor_ = 0;
   int cycles_without_encoder_ = 0;

@@ -7,7 +7,9 @@
 
 #include "furuta/daemon/excitation.hpp"
 #include "furuta/daemon/safety.hpp"
+#include "furuta/firmware_bridge/board_roles.hpp"
 #include "furuta/firmware_bridge/transport.hpp"
+#include "furuta/rig_sample_t.hpp"
 
 namespace furuta::daemon {
 
@@ -30,16 +32,25 @@ struct BoardReports {
   std::array<RawReport, kMaxReportsPerCycle> reports{};
 };
 
-inline constexpr std::int32_t kSampleMotorStale = 1;
-inline constexpr std::int32_t kSampleEncoderStale = 2;
-inline constexpr std::int32_t kSampleMotorLost = 4;
-inline constexpr std::int32_t kSampleEncoderLost = 8;
-inline constexpr std::int32_t kSampleOverrun = 16;
+// The reports of one cycle that decoded, each read once by the board's adapter where it arrived.
+template <typename Reading>
+struct BoardReadings {
+  std::uint8_t count = 0;
+  std::array<Reading, kMaxReportsPerCycle> readings{};
+};
+
+// The sample's flags are the message's (rig_sample_t.lcm): one definition.
+inline constexpr std::int32_t kSampleMotorStale = furuta::rig_sample_t::FLAG_MOTOR_STALE;
+inline constexpr std::int32_t kSampleEncoderStale = furuta::rig_sample_t::FLAG_ENCODER_STALE;
+inline constexpr std::int32_t kSampleMotorLost = furuta::rig_sample_t::FLAG_MOTOR_LOST;
+inline constexpr std::int32_t kSampleEncoderLost = furuta::rig_sample_t::FLAG_ENCODER_LOST;
+inline constexpr std::int32_t kSampleOverrun = furuta::rig_sample_t::FLAG_OVERRUN;
 
 struct RigSample {
   std::int64_t seq = 0;
   std::int64_t monotonic_ns = 0;  // the cycle's deadline (its wake-up is monotonic_ns + latency)
   std::int64_t wake_latency_ns = 0;
+  std::int64_t queued_ns = 0;  // when the loop queued it for the publisher, on the loop's clock
   std::int64_t wall_time_ns = 0;
   std::int32_t arm_counts = 0;       // relative to the session start
   std::int64_t pendulum_counts = 0;  // relative to the zero (hanging at rest at the start)
@@ -51,8 +62,10 @@ struct RigSample {
   double supply_voltage_v = 0;
   std::uint8_t motor_status_flags = 0;
   std::uint8_t encoder_flags = 0;
-  BoardReports motor_in;
+  BoardReports motor_in;  // as they crossed the wire, for the log's bit-exact replay
   BoardReports encoder_in;
+  BoardReadings<bridge::MotorReading> motor;  // the same reports, read
+  BoardReadings<bridge::EncoderReading> encoder;
   RawReport motor_out;                    // the command written this cycle
   std::int32_t motor_lost_reports = 0;    // cumulative in the session
   std::int32_t encoder_lost_reports = 0;  // cumulative in the session

@@ -53,7 +53,8 @@ struct SafetyInput {
   double commanded_duty = 0.0;
   int cycles_without_motor_report = 0;
   int cycles_without_encoder_report = 0;
-  std::uint8_t motor_status_flags = 0;  // 1065 byte 1
+  bool motor_over_temperature = false;  // the motor board's protection (bridge::MotorReading)
+  bool motor_under_voltage = false;
   double supply_voltage_v = 12.0;
   bool have_supply_reading = false;  // before the first report the supply is unknown
   int arm_still_driven_cycles = 0;   // see SafetyLimits::stuck_arm_cycles

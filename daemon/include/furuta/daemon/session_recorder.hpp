@@ -32,7 +32,6 @@ struct RecorderSettings {
   std::string software_version;
   std::string motor_device;  // usb trace device lines, for replay
   std::string encoder_device;
-  int pendulum_channel = 0;
   // A start is refused while the logs file system has less than this available: about 8 s of a
   // session (some 30 KiB/s at 16 ms), so a full disk refuses instead of starting the motor for a
   // log that fails at once.
@@ -62,6 +61,11 @@ class SessionRecorder {
   const std::optional<std::filesystem::path>& last_log() const { return last_log_; }
   std::string current_session() const { return session_; }
   std::int64_t samples_published() const { return samples_published_; }
+  // Called on this thread with each sample just before it is published (a benchmark's probe of
+  // the hand-off: RigSample::queued_ns). Set before the daemon starts.
+  void on_publish(std::function<void(const RigSample&)> observer) {
+    publish_observer_ = std::move(observer);
+  }
   const LatencyHistogram& session_wake_latency() const { return wake_latency_; }
   const std::string& last_fault() const { return last_fault_; }
 
@@ -107,6 +111,7 @@ class SessionRecorder {
   std::string session_;
   std::optional<std::filesystem::path> last_log_;
   std::int64_t samples_published_ = 0;
+  std::function<void(const RigSample&)> publish_observer_;
   LatencyHistogram wake_latency_;
   std::string last_fault_;
   History history_;
@@ -115,11 +120,12 @@ class SessionRecorder {
   std::mutex signed_starts_mutex_;
   std::deque<std::pair<std::int64_t, std::vector<std::uint8_t>>> signed_starts_;
   furuta::rig_sample_t sample_msg_;
+  std::vector<std::uint8_t> sample_buffer_;  // the encoded sample, published then logged
   furuta::rig_usb_report_t usb_msg_;
 };
 
-// The LCM sample message for a loop sample (decoding its raw reports for the per-report arrays).
-furuta::rig_sample_t to_lcm_sample(const RigSample& sample, const std::string& session,
-                                   int pendulum_channel);
+// The LCM sample message for a loop sample: its fields, and the per-report arrays from the
+// readings the loop made of each report (nothing is decoded again here).
+furuta::rig_sample_t to_lcm_sample(const RigSample& sample, const std::string& session);
 
 }  // namespace furuta::daemon

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "furuta/firmware_bridge/usb_trace.hpp"
@@ -53,8 +54,9 @@ struct SessionLog {
 // Throws std::runtime_error only when the file cannot be opened; damage is counted, not thrown.
 SessionLog load_session_log(const std::filesystem::path& path);
 
-// A command the host wrote to the 1065 (an OUTPUT report of the log), decoded: the board ramps its
-// applied duty towards `duty` at `acceleration_pct_per_s` from `time_ns` (the write's host time).
+// A command the host wrote to the motor board (an OUTPUT report of the log), read by the board's
+// adapter: the board ramps its applied duty towards `duty` at `acceleration_pct_per_s` (never 0)
+// from `time_ns` (the write's host time).
 struct MotorCommandWrite {
   std::int64_t time_ns = 0;
   double duty = 0.0;  // [-1, 1], n/255
@@ -62,12 +64,14 @@ struct MotorCommandWrite {
   double braking_fraction = 0.0;  // [0, 1], what duty 0 does
 };
 
-// Every command written to the 1065 that the transport accepted, in time order; reports too short
-// to decode are skipped.
-std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log);
+// Every command written to the motor board that the transport accepted, in time order, read by
+// the adapter named `motor_board` (the configuration's [boards.motor] model); reports it cannot
+// read are skipped.
+std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log,
+                                                    std::string_view motor_board);
 
-// A report the 1065 sent (an INPUT report of the log), decoded: what the board measured when it
-// made the report, received by the host at `time_ns`.
+// A report the motor board sent (an INPUT report of the log), read by its adapter: what the board
+// measured when it made the report, received by the host at `time_ns`.
 struct MotorInputReport {
   std::int64_t time_ns = 0;
   std::int32_t encoder_position = 0;  // the board's count; an i32 that wraps
@@ -75,8 +79,10 @@ struct MotorInputReport {
   double supply_v = 0.0;
 };
 
-// Every decodable report of the 1065, in time order (reports of equal time in the log's order).
-std::vector<MotorInputReport> motor_input_reports(const SessionLog& log);
+// Every report of the motor board its adapter can read, in time order (reports of equal time in
+// the log's order).
+std::vector<MotorInputReport> motor_input_reports(const SessionLog& log,
+                                                  std::string_view motor_board);
 
 // Each report's time on its board's own clock, fed the samples' reports in log order: the 1065's
 // 8-bit report counter unwrapped (in reports), the 1047's packet ticks accumulated (in ticks; the
