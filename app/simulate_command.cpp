@@ -4,14 +4,13 @@
 // report's writers. `furuta identify --simulate` runs the same after its fit.
 #include <unistd.h>
 
-#include <fstream>
-#include <nlohmann/json.hpp>
 #include <ostream>
 #include <sstream>
 
 #include "commands.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/pipeline/pipeline.hpp"
+#include "furuta/report/json.hpp"
 #include "furuta/report/outputs.hpp"
 #include "furuta/report/run_directory.hpp"
 #include "furuta/report/tables.hpp"
@@ -25,130 +24,6 @@ std::string percent_text(double pct) {
   std::ostringstream s;
   s << pct;
   return s.str();
-}
-
-// --- results.json of `furuta identify` ---
-
-class ResultsFileError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-double finite_number(const nlohmann::json& object, const std::string& key,
-                     const std::string& where) {
-  const auto it = object.find(key);
-  if (it == object.end()) throw ResultsFileError(where + "." + key + ": missing");
-  if (!it->is_number() || !std::isfinite(it->get<double>())) {
-    throw ResultsFileError(where + "." + key + ": not a finite number");
-  }
-  return it->get<double>();
-}
-
-model::Parameters<double> parameters_from(const nlohmann::json& object, const std::string& where) {
-  if (!object.is_object()) throw ResultsFileError(where + ": not an object");
-  model::Parameters<double> p;
-  p.mu1 = finite_number(object, "mu1", where);
-  p.mu2 = finite_number(object, "mu2", where);
-  p.mu3 = finite_number(object, "mu3", where);
-  p.mu4 = finite_number(object, "mu4", where);
-  p.mug = finite_number(object, "mug", where);
-  p.fv1 = finite_number(object, "fv1", where);
-  p.fv2 = finite_number(object, "fv2", where);
-  return p;
-}
-
-struct ResultsParameters {
-  // LSMI's point estimate, or for a recording too short for LSMI the refinement's (converged).
-  std::optional<model::Parameters<double>> lsmi;
-  std::optional<model::Parameters<double>> output_error;
-  std::optional<model::Parameters<double>> truth;
-  std::optional<model::Parameters<furuta::interval::Interval>> sivia;
-  std::string note;  // why there is no SIVIA set, when there is none
-};
-
-// The SIVIA outer hull by parameter name: the carried mu's come out as their prior (the LSMI
-// estimate +- Table II %), the frictions as the paving's hull.
-model::Parameters<furuta::interval::Interval> sivia_hull(const nlohmann::json& sivia) {
-  const auto names = sivia.find("parameters");
-  const auto hull = sivia.find("outer_hull");
-  if (names == sivia.end() || !names->is_array()) {
-    throw ResultsFileError("sivia.parameters: missing");
-  }
-  if (hull == sivia.end() || !hull->is_array() || hull->size() != names->size()) {
-    throw ResultsFileError("sivia.outer_hull: missing or not one interval per parameter");
-  }
-  model::Parameters<furuta::interval::Interval> p;
-  const std::array<std::pair<const char*, interval::Interval*>, 7> slots = {{{"mu1", &p.mu1},
-                                                                             {"mu2", &p.mu2},
-                                                                             {"mu3", &p.mu3},
-                                                                             {"mu4", &p.mu4},
-                                                                             {"mug", &p.mug},
-                                                                             {"fv1", &p.fv1},
-                                                                             {"fv2", &p.fv2}}};
-  for (const auto& [name, slot] : slots) {
-    bool found = false;
-    for (std::size_t k = 0; k < names->size(); ++k) {
-      if (!(*names)[k].is_string() || (*names)[k].get<std::string>() != name) continue;
-      const nlohmann::json& iv = (*hull)[k];
-      const std::string where =
-          std::string("sivia.outer_hull[") + std::to_string(k) + "] (" + name + ")";
-      if (!iv.is_array() || iv.size() != 2 || !iv[0].is_number() || !iv[1].is_number()) {
-        throw ResultsFileError(where + ": not an interval [lo, hi]");
-      }
-      const double lo = iv[0].get<double>(), hi = iv[1].get<double>();
-      if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) {
-        throw ResultsFileError(where + ": not a bounded interval");
-      }
-      *slot = interval::Interval(lo, hi);
-      found = true;
-    }
-    if (!found) throw ResultsFileError(std::string("sivia.parameters: no ") + name);
-  }
-  return p;
-}
-
-ResultsParameters read_results(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ResultsFileError("cannot open");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw ResultsFileError(std::string("not valid JSON: ") + e.what());
-  }
-  if (!j.is_object()) throw ResultsFileError("not a JSON object");
-  ResultsParameters r;
-  const auto combined = j.find("combined");
-  if (combined != j.end()) {
-    if (!combined->is_object() || !combined->contains("estimate")) {
-      throw ResultsFileError("combined.estimate: missing");
-    }
-    r.lsmi = parameters_from((*combined)["estimate"], "combined.estimate");
-  }
-  const auto refined = j.find("output_error");
-  if (!r.lsmi && refined != j.end() && refined->is_object() && refined->value("converged", false)) {
-    if (!refined->contains("estimate")) throw ResultsFileError("output_error.estimate: missing");
-    r.output_error = parameters_from((*refined)["estimate"], "output_error.estimate");
-  }
-  if (!r.lsmi && !r.output_error) {
-    throw ResultsFileError(
-        "no estimate: neither combined.estimate (LSMI) nor a converged output_error.estimate (not "
-        "a results.json of furuta identify?)");
-  }
-  if (j.contains("truth")) r.truth = parameters_from(j["truth"], "truth");
-  const auto sivia = j.find("sivia");
-  if (sivia == j.end()) {
-    r.note = "no SIVIA in it (furuta identify --sivia): point parameters only";
-  } else if (!sivia->is_object()) {
-    throw ResultsFileError("sivia: not an object");
-  } else if (sivia->contains("skipped")) {
-    r.note = "SIVIA did not run: point parameters only";
-  } else if (sivia->value("empty", false)) {
-    r.note = "SIVIA found no consistent parameter: point parameters only";
-  } else {
-    r.sivia = sivia_hull(*sivia);
-  }
-  return r;
 }
 
 }  // namespace
@@ -201,10 +76,10 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
   pipeline::MeasurementSource source;  // the simulated rig's default
   std::string note;
   if (!options.results.empty()) {
-    ResultsParameters r;
+    report::ResultsFile r;
     try {
-      r = read_results(options.results);
-    } catch (const ResultsFileError& e) {
+      r = report::read_results(options.results);
+    } catch (const report::ResultsFileError& e) {
       err << "furuta simulate: " << options.results.string() << ": " << e.what() << "\n";
       return 2;
     }

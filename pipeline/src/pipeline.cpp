@@ -39,9 +39,7 @@ Guaranteed run_guaranteed(const SiviaSettings& settings, const identification::I
   using namespace identification;
   const config::SiviaConfig& cfg = settings.config;
   GuaranteedOptions g;
-  g.prior = paper_prior(id.combined.estimate, cfg.mu_uncertainty_pct, 1.0);
-  g.prior[5] = interval::Interval(cfg.fv1_prior[0], cfg.fv1_prior[1]);
-  g.prior[6] = interval::Interval(cfg.fv2_prior[0], cfg.fv2_prior[1]);
+  g.prior = sivia_prior(cfg, id.combined.estimate);
   g.unknown.fill(false);
   for (const std::string& name : cfg.unknowns) {
     for (std::size_t k = 0; k < model::kParameterCount; ++k) {
@@ -110,8 +108,8 @@ Simulation run_simulation(const SimulationSettings& settings, const Run& run, co
                   source, settings.pieces, progress, settings.taylor_model_pieces);
 }
 
-// identify() prefixes LSMI's warnings with the experiment's name (or "all experiments"); the
-// others come from the data (lost reports, missing samples, a cut-short session, ...).
+}  // namespace
+
 std::vector<Warning> identification_warnings(const identification::Identification& id) {
   std::set<std::string> lsmi;
   for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
@@ -125,6 +123,8 @@ std::vector<Warning> identification_warnings(const identification::Identificatio
   }
   return out;
 }
+
+namespace {
 
 // LSMI is unconstrained (the paper's reference), so its answer may be no rig at all: the combined
 // estimate is checked, and each experiment's when that one is clearly outside while the combined
@@ -208,10 +208,13 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
                                             const identification::IdentifyOptions& identify_options,
                                             const Batch& batch, Run& run, Progress* progress) {
   const auto warn = [&](const std::string& text) {
-    // The refinement's own warnings already say where they come from.
-    const std::string said = text.rfind("output error: ", 0) == 0 ? text : "output error: " + text;
-    run.identification.warnings.push_back(said);
-    run.warnings.push_back({Warning::Stage::output_error, said});
+    // One list of plain strings says where each comes from in its words (the refinement's own
+    // warnings already do); the staged list has the stage for that.
+    const std::string prefix = "output error: ";
+    const bool prefixed = text.rfind(prefix, 0) == 0;
+    run.identification.warnings.push_back(prefixed ? text : prefix + text);
+    run.warnings.push_back(
+        {Warning::Stage::output_error, prefixed ? text.substr(prefix.size()) : text});
   };
   std::vector<const Recording*> fitted;
   for (const Recording& r : batch.fit) fitted.push_back(&r);
@@ -392,6 +395,13 @@ identification::DataErrorBounds data_error_bounds(const config::SiviaConfig& cfg
   bounds.ddq2 = bound(cfg.ddq2_bound);
   bounds.tau = bound(cfg.tau_bound);
   return bounds;
+}
+
+interval::Box sivia_prior(const config::SiviaConfig& sivia, const model::Parameters<double>& lsmi) {
+  interval::Box prior = identification::paper_prior(lsmi, sivia.mu_uncertainty_pct, 1.0);
+  prior[5] = interval::Interval(sivia.fv1_prior[0], sivia.fv1_prior[1]);
+  prior[6] = interval::Interval(sivia.fv2_prior[0], sivia.fv2_prior[1]);
+  return prior;
 }
 
 bool has_data_error_bounds(const config::SiviaConfig& cfg) {

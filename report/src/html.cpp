@@ -169,7 +169,7 @@ void section_warnings(Html& h, const ReportInput& in) {
     h.raw("<ul class=\"warnings\">\n");
     for (const Warning& w : warnings) {
       h.raw("<li>");
-      h.element("span", w.topic, "class=\"topic\"");
+      h.element("span", topic(w.stage), "class=\"topic\"");
       h.text(" " + w.text);
       h.raw("</li>\n");
     }
@@ -515,7 +515,7 @@ void section_simulation(Html& h, const ReportInput& in) {
 void section_physical(Html& h, const ReportInput& in) {
   std::vector<const Warning*> physical;
   for (const Warning& w : in.warnings) {
-    if (w.topic == "physical") physical.push_back(&w);
+    if (w.stage == Warning::Stage::physical) physical.push_back(&w);
   }
   if (physical.empty()) return;
   h.raw("<section id=\"physical\" class=\"physical\" role=\"alert\">\n");

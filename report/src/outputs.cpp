@@ -88,16 +88,12 @@ void write_identification(const std::filesystem::path& dir, const pipeline::Run&
                                   run.data_bounds ? &*run.data_bounds : nullptr));
     write_text_file(dir / ("signals_" + std::to_string(i + 1) + ".svg"), signals.back());
   }
-  if (id.validation) {
-    write_text_file(dir / "torque_validation.svg", svg_torque_validation(*id.validation));
-  }
-  if (run.output_error && run.output_error->held_out) {
-    const pipeline::HeldOutFreeRuns& h = *run.output_error->held_out;
-    write_text_file(dir / "free_run.svg",
-                    svg_free_runs(h.name, h.lsmi ? &*h.lsmi : nullptr, h.refined));
-  }
   const ReportInput page = report_page(run, software_version, signals, paving_svg);
-  // The page's figure is the file's: drawn once.
+  // The page's figures are the files': each drawn once.
+  if (page.validation) write_text_file(dir / "torque_validation.svg", page.validation->svg);
+  if (page.output_error && !page.output_error->svg.empty()) {
+    write_text_file(dir / "free_run.svg", page.output_error->svg);
+  }
   if (page.guaranteed && !page.guaranteed->set_svg.empty()) {
     write_text_file(dir / "guaranteed_set.svg", page.guaranteed->set_svg);
   }

@@ -1,6 +1,5 @@
 // The report's content from the domain results: sessions, Table I, Table II, SIVIA, warnings.
 #include <algorithm>
-#include <set>
 #include <sstream>
 
 #include "format.hpp"
@@ -44,24 +43,7 @@ ReportInput report_input(const identification::Identification& id) {
         id.validation->name, id.validation->fit.rmse_nm, id.validation->fit.rmse_percent_of_range,
         id.validation->fit.samples, svg_torque_validation(*id.validation)};
   }
-  // identify() prefixes LSMI's warnings as below; what else it warns about comes from the data
-  // (lost reports, missing samples, a cut-short session, irregular CSV time stamps).
-  std::set<std::string> excitation;
-  for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
-    for (const auto& w : id.per_experiment[i].warnings) {
-      excitation.insert(id.processed[i].name + ": " + w);
-    }
-  }
-  for (const auto& w : id.combined.warnings) excitation.insert("all experiments: " + w);
-  for (const auto& w : id.warnings) {
-    const bool physical = w.starts_with(identification::kPhysicalWarningPrefix);
-    const bool output_error = w.starts_with("output error: ");
-    r.warnings.push_back({physical                 ? "physical"
-                          : output_error           ? "output error"
-                          : excitation.contains(w) ? "excitation"
-                                                   : "session",
-                          output_error ? w.substr(14) : w});
-  }
+  r.warnings = pipeline::identification_warnings(id);
   return r;
 }
 
@@ -131,6 +113,7 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
                         const std::string& paving_svg) {
   const identification::Identification& id = run.identification;
   ReportInput page = report_input(id);
+  page.warnings = run.warnings;  // each with the stage that made it
   page.software_version = software_version;
   const auto number = [](double v, const char* unit) {
     std::ostringstream s;
@@ -216,9 +199,7 @@ std::vector<IntervalRow> table_two(const model::Parameters<double>& lsmi,
   if (result) {
     prior = result->paving.prior;  // what the paver was given
   } else {
-    prior = identification::paper_prior(lsmi, sivia.mu_uncertainty_pct);
-    prior[5] = interval::Interval(sivia.fv1_prior[0], sivia.fv1_prior[1]);
-    prior[6] = interval::Interval(sivia.fv2_prior[0], sivia.fv2_prior[1]);
+    prior = pipeline::sivia_prior(sivia, lsmi);
   }
   std::optional<interval::Box> hull;
   if (result && !result->empty) hull = result->paving.outer_hull();
@@ -264,32 +245,52 @@ SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::
   return s;
 }
 
+std::string topic(Warning::Stage stage) {
+  switch (stage) {
+    case Warning::Stage::lsmi:
+      return "excitation";
+    case Warning::Stage::physical:
+      return "physical";
+    case Warning::Stage::output_error:
+      return "output error";
+    case Warning::Stage::sivia:
+      return "SIVIA";
+    case Warning::Stage::guaranteed:
+      return "guaranteed";
+    case Warning::Stage::simulation:
+      return "simulation";
+    case Warning::Stage::data:
+      break;
+  }
+  return "session";
+}
+
 std::vector<Warning> derived_warnings(const ReportInput& input) {
   std::vector<Warning> out;
   for (const SessionSummary& s : input.sessions) {
     if (s.damaged_regions > 0) {
-      out.push_back({"session", s.file + ": " + std::to_string(s.damaged_regions) +
-                                    " damaged regions of the log skipped"});
+      out.push_back({Warning::Stage::data, s.file + ": " + std::to_string(s.damaged_regions) +
+                                               " damaged regions of the log skipped"});
     }
-    if (s.truncated_tail) out.push_back({"session", s.file + ": the log's tail is truncated"});
-    for (const auto& f : s.fatal_faults) out.push_back({"session", s.file + ": fatal fault " + f});
+    if (s.truncated_tail) {
+      out.push_back({Warning::Stage::data, s.file + ": the log's tail is truncated"});
+    }
+    for (const auto& f : s.fatal_faults) {
+      out.push_back({Warning::Stage::data, s.file + ": fatal fault " + f});
+    }
   }
+  using Stage = Warning::Stage;
+  // An empty or truncated paving is the run's own warning (pipeline::run).
   if (input.sivia) {
     const SiviaSummary& s = *input.sivia;
-    if (s.empty) {
-      out.push_back({"SIVIA", "empty feasible set: " +
-                                  (s.finding.empty() ? std::string("no parameter is consistent "
-                                                                   "with the data and its bounds")
-                                                     : s.finding)});
+    for (const std::string& excluded : s.excludes_output_error) {
+      out.push_back({Stage::sivia, excluded});
     }
-    if (s.truncated) {
-      out.push_back({"SIVIA", "the paving was truncated: the untested boxes count as boundary"});
-    }
-    for (const std::string& excluded : s.excludes_output_error) out.push_back({"SIVIA", excluded});
     if (s.inconsistent_samples > 0) {
-      out.push_back({"SIVIA", std::to_string(s.inconsistent_samples) +
-                                  " samples inconsistent with the whole set (tolerated by q = " +
-                                  std::to_string(s.q) + ")"});
+      out.push_back(
+          {Stage::sivia, std::to_string(s.inconsistent_samples) +
+                             " samples inconsistent with the whole set (tolerated by q = " +
+                             std::to_string(s.q) + ")"});
     }
   }
   if (input.simulation) {
@@ -298,12 +299,12 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
           r.status == validated::IntegrationResult::Status::ok) {
         continue;
       }
-      out.push_back(
-          {"simulation", "scenario " + scenario_label(r.scenario) + ", " + r.parameters.name +
-                             ": the tube ended early, at " + dash_fixed(r.t_reached_s, 3) +
-                             " s of " + dash_fixed(r.scenario.duration_s, 1) + " s (" +
-                             validated::to_string(r.status) +
-                             (r.reason.empty() ? "" : ": " + readable_numbers(r.reason)) + ")"});
+      out.push_back({Stage::simulation,
+                     "scenario " + scenario_label(r.scenario) + ", " + r.parameters.name +
+                         ": the tube ended early, at " + dash_fixed(r.t_reached_s, 3) + " s of " +
+                         dash_fixed(r.scenario.duration_s, 1) + " s (" +
+                         validated::to_string(r.status) +
+                         (r.reason.empty() ? "" : ": " + readable_numbers(r.reason)) + ")"});
     }
   }
   return out;

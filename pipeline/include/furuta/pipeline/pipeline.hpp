@@ -167,6 +167,9 @@ Settings settings_for(const config::RigConfig& rig);
 // whether the configuration gives any (a configuration without them leaves them all 0).
 identification::DataErrorBounds data_error_bounds(const config::SiviaConfig& sivia);
 bool has_data_error_bounds(const config::SiviaConfig& sivia);
+// The box SIVIA starts from (Table II): the mu's around the LSMI estimate +- [sivia]
+// mu_uncertainty_pct, the frictions' priors as [sivia] gives them.
+interval::Box sivia_prior(const config::SiviaConfig& sivia, const model::Parameters<double>& lsmi);
 
 // Told what the long steps are doing; the caller decides whether and how to show it.
 class Progress {
@@ -311,6 +314,11 @@ struct Warning {
   Stage stage = Stage::data;
   std::string text;
 };
+
+// An identification's own warnings with their stage: LSMI's (identify() prefixes them with the
+// experiment's name, or "all experiments") and the data's (lost reports, missing samples, a
+// cut-short session, a recording too short for LSMI). pipeline::run starts Run::warnings with them.
+std::vector<Warning> identification_warnings(const identification::Identification& id);
 
 // A parameter whose output-error estimate lies outside a guaranteed set's hull: either the set
 // rests on bounds the data break, or the model does not fit; a reader must be told which parameter

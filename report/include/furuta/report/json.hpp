@@ -5,8 +5,10 @@
 //
 //   write(dir / "results.json", json_text(results_json(run, "furuta 0.1.0")));
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -86,6 +88,24 @@ Json windowed_json(const pipeline::WindowedGuaranteed& windowed,
 // results.json of a run: results_json above with "sivia" (naming paving.json in "paving_file")
 // and "simulation" and "output_error" when they ran.
 Json results_json(const pipeline::Run& run, const std::string& software_version);
+
+// What a simulation takes back from a results.json: the point estimate (LSMI's, or the
+// converged refinement's where LSMI did not run), the truth of simulated sessions, SIVIA's outer
+// hull by parameter (the carried mu's as their prior), or why there is none.
+struct ResultsFile {
+  std::optional<model::Parameters<double>> lsmi;
+  std::optional<model::Parameters<double>> output_error;
+  std::optional<model::Parameters<double>> truth;
+  std::optional<model::Parameters<interval::Interval>> sivia;
+  std::string note;  // why there is no SIVIA set, when there is none
+};
+// A results.json that cannot be read, naming the field ("combined.estimate.mu3: missing").
+class ResultsFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+// Throws ResultsFileError.
+ResultsFile read_results(const std::filesystem::path& path);
 
 // batch.json, the trigger's record of one identification: its name, when, the logs directory,
 // the fitted logs and the held-out one (null when none) with their labels.

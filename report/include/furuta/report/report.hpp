@@ -30,12 +30,11 @@ namespace furuta::report {
 using pipeline::SessionSummary;
 using pipeline::summarize_session;
 
-struct Warning {
-  // "physical" (also shown above everything), "excitation", "session", "output error", "SIVIA",
-  // "simulation"
-  std::string topic;
-  std::string text;
-};
+// One vocabulary from the pipeline to the page: a warning is its stage and its text.
+using pipeline::Warning;
+// The heading a stage's warnings are shown under: "session" (the data), "excitation" (LSMI),
+// "physical" (also shown above everything), "output error", "SIVIA", "guaranteed", "simulation".
+std::string topic(Warning::Stage stage);
 
 // A row of Table II: the interval a parameter enters SIVIA with, and what SIVIA made of it.
 struct IntervalRow {
@@ -129,12 +128,12 @@ struct ReportInput {
 
   std::optional<SimulationSummary> simulation;  // Table III, Fig. 6; absent: --simulate not given
 
-  // Warnings found elsewhere (identification's); render_html adds derived_warnings().
+  // The run's warnings (pipeline::Run::warnings); render_html adds derived_warnings().
   std::vector<Warning> warnings;
 };
 
-// Table I, the validation, how the torque was had and identification's warnings (LSMI's as
-// "excitation", the data's as "session") from an identification.
+// Table I, the validation, how the torque was had and the identification's own warnings
+// (pipeline::identification_warnings) from an identification.
 ReportInput report_input(const identification::Identification& id);
 
 // How the torque was formed from a recording's input, for the captions: eq. 4 for duty (a log's
@@ -160,8 +159,9 @@ SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::
 GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& windowed,
                                      const std::vector<pipeline::EstimateOutsideSet>& excluded);
 
-// What the struct itself shows to be wary of: damaged or cut-short logs and fatal faults, an
-// empty or truncated SIVIA set, samples SIVIA tolerated, tubes that ended early.
+// What the struct itself shows to be wary of, beyond the run's warnings: damaged or cut-short logs
+// and fatal faults, the output-error estimate outside SIVIA's set, samples SIVIA tolerated, tubes
+// that ended early.
 std::vector<Warning> derived_warnings(const ReportInput& input);
 
 // The page. Every text is escaped; the SVG strings are the project's own generators' output and
