@@ -2,7 +2,7 @@
 # generated decoders refuse lengths that lcm-gen 1.3.1 trusts. A message comes from the network or
 # a log file, and as generated
 #   - a string length of 0 or below reaches std::string::assign(p, len - 1): std::length_error,
-#     which escapes LCM's C dispatch and ends the process (one 30-byte packet stopped furutad),
+#     which escapes LCM's C dispatch and ends the process (one malformed packet ends furutad),
 #     and INT32_MIN overflows `len - 1` (UB) and reads 2 GB past the buffer;
 #   - a negative array count reaches std::vector::resize: std::length_error again; a count larger
 #     than the bytes left (every element takes at least one) makes resize allocate up to 2 GB for a

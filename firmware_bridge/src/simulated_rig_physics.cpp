@@ -139,8 +139,9 @@ void SimulatedRig::Impl::integrate_to(std::int64_t t_ns) {
     std::int64_t end_ns = std::min(grid_next, t_ns);
     // A ramp that reaches its target within the step ends the step there: the step sees a duty
     // constant at the ramp's mean, and a short ramp (a small command change) spread over a whole
-    // step would act half a step late (measured: 0.05 ms on a 16 ms chirp, which an output-error
-    // fit read as 1 % of the arm's inertia).
+    // step would act half a step late: an effective delay on every small change, which an
+    // output-error fit reads as a bias in the arm's inertia (docs/measurements/identification.md,
+    // "Output-error refinement: five seed triples per excitation").
     const double gap = target_duty_ - applied_duty_;
     if (gap != 0.0) {
       const auto ramp_ns = static_cast<std::int64_t>(

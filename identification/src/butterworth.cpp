@@ -19,13 +19,13 @@ namespace {
 constexpr int kMaxOrder = 20;
 
 // Below this cut-off (relative to the sample rate) liquid's float poles stray from the exact ones
-// by a sizeable part of their spacing at high orders (first seen at 3e-4, order 20); 0.06 Hz
-// at 62.5 Hz is far below any use here.
+// by a sizeable part of their spacing at high orders; 0.06 Hz at 62.5 Hz is far below any use
+// here.
 constexpr double kMinRelativeCutoff = 1e-3;
 
 // A matched liquid pole must sit this close to its exact counterpart, as a fraction of the smallest
 // distance between two exact poles: close enough that the match cannot be ambiguous, loose enough
-// for single-precision rounding of a pole that crowds z = 1 (about 1e-5 at fc = 0.005 fs).
+// for single-precision rounding of a pole that crowds z = 1 at low cut-offs.
 constexpr double kPoleMatchFraction = 0.25;
 
 void require(bool ok, const char* parameter, const std::string& why) {
@@ -93,10 +93,10 @@ IirFilter design_butterworth_lowpass(int order, double cutoff_hz, double sample_
   }
 
   // liquid works in single precision. Rounding a1, a2 to float moves a pole near z = 1 enough to
-  // change the magnitude by up to ~4e-5 at low cut-offs (and the DC gain by ~1e-7, which would stop
-  // filtfilt returning a constant unchanged). So each liquid pole is replaced by the exact pole it
-  // approximates, computed in double; a pole that matches nothing means liquid's conventions are
-  // not what this code assumes, which must fail loudly.
+  // change the magnitude at low cut-offs (and the DC gain, which would stop filtfilt returning a
+  // constant unchanged; docs/measurements/identification.md, "Filters, in full"). So each liquid
+  // pole is replaced by the exact pole it approximates, computed in double; a pole that matches
+  // nothing means liquid's conventions are not what this code assumes, which must fail loudly.
   std::vector<std::complex<double>> exact = exact_digital_poles(order, fc);
   double separation = 2.0;
   for (std::size_t i = 0; i < exact.size(); ++i) {

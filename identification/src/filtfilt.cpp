@@ -23,8 +23,8 @@ struct SectionState {
 // and no start-up transient is injected at the (artificial) start of the padded signal. With slope
 // 0 this is scipy's lfilter_zi scaled by the level; matching the slope too matters because the odd
 // reflection continues the signal's slope, and a start from a constant's steady state would inject
-// a transient of slope x group delay (0.3 rad for a 2 rad/s arm through an 8th-order 5 Hz low-pass
-// at 62.5 Hz) that the default padding only damps to ~3e-3 rad by the first real sample.
+// a transient of slope x group delay that the default padding only damps, never removes, by the
+// first real sample (docs/measurements/identification.md, "Filters, in full").
 std::vector<SectionState> steady_state(const IirFilter& filter, double level, double slope) {
   std::vector<SectionState> states(filter.sections.size());
   double c = filter.gain * level, s = filter.gain * slope;
@@ -48,10 +48,10 @@ std::vector<SectionState> steady_state(const IirFilter& filter, double level, do
 
 // Samples over which the starting slope is measured: short enough to be the local slope (a mean
 // over the whole padding did worse on oscillating signals), and a mean over a few samples rather
-// than one difference against encoder steps. Through the 8th-order 5 Hz low-pass at 62.5 Hz,
-// against the constant's steady state: exact instead of 3.5e-3 rad off on a 2 rad/s ramp, 3x better
-// on a slow sinusoid, about even on faster ones (there the curvature the odd reflection cannot
-// continue dominates the edge error either way).
+// than one difference against encoder steps. Against the constant's steady state it makes a ramp
+// exact at the edges and a slow sinusoid better, and is about even on faster ones (there the
+// curvature the odd reflection cannot continue dominates the edge error either way;
+// docs/measurements/identification.md, "Filters, in full").
 constexpr std::ptrdiff_t kSlopeSpan = 4;
 
 // The line the start of `samples` follows: its first value and slope.

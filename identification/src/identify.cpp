@@ -110,7 +110,8 @@ Identification identify(const std::vector<RawExperiment>& experiments,
   }
   if (options.estimate_input_lag) {
     // Golden-section search of the residual over the lag: the residual is smooth and has one
-    // minimum within a sample period (measured on simulated sessions; see the README).
+    // minimum within a sample period (as measured on simulated sessions:
+    // docs/measurements/identification.md, "LSMI against the simulated truth").
     const auto residual = [&](double lag) {
       for (std::size_t i = 0; i < id.processed.size(); ++i) {
         torque_with_input_lag(id.processed[i], lag, experiments[i].input_kind, motor,

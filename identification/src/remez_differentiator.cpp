@@ -38,8 +38,8 @@ constexpr int kMaxIterations = 100;
 // The exchange stops when |error| at the extremals is level to this, relatively...
 constexpr double kLevelTolerance = 1e-9;
 // ... or absolutely. The weighted error is dimensionless (a relative slope error), P is of order 1,
-// and rounding in evaluating it leaves a few 1e-15 (measured): designs with errors below 1e-4 (long
-// filters, wide transition bands) stop at this floor before the relative level.
+// and rounding in evaluating it leaves an error near machine precision: designs with errors below
+// 1e-4 (long filters, wide transition bands) stop at this floor before the relative level.
 constexpr double kLevelFloor = 1e-13;
 // When rounding scrambles the alternation before either (optimal errors near 1e-13 and below), the
 // best design met is kept if its error is below this: a slope error no use here can notice.
@@ -54,9 +54,8 @@ constexpr int kMaxTaps = 1025;
 // gain is then 10 x (pass-band relative error) x 2 pi f_pass. Pass-band slope accuracy is what the
 // identification sees (it scales velocities and accelerations directly), while the stop band only
 // sees what the Butterworth ahead of it lets through (-106 dB at 10 Hz for an 8th-order 5 Hz
-// low-pass applied twice at 62.5 Hz). For 31 taps, 5 / 10 Hz at 62.5 Hz this buys 0.24 % slope
-// error instead of 1.0 % with equal weights, for a stop-band gain of 2.4 % instead of 1.0 % of the
-// edge gain.
+// low-pass applied twice at 62.5 Hz). Against equal weights this buys a much smaller slope error
+// for a somewhat larger stop-band gain (docs/measurements/identification.md, "Filters, in full").
 constexpr double kStopbandRelativeWeight = 0.1;
 
 void require(bool ok, const char* parameter, const std::string& why) {

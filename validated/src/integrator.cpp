@@ -214,8 +214,7 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     if (next.qr) ++result.qr_steps;
     // The step goes into the tube. Its box at t1 is the intersection of the three that hold every
     // solution there: the Lohner set's, the step's box over [t0, t1] and its Taylor form at h (the
-    // Lohner box alone was wider than the box over the step in 145 of 875 steps of scenario (a));
-    // the next step starts from it.
+    // Lohner box alone is at times wider than the box over the step); the next step starts from it.
     internal::append_step(result.tube, std::move(step), enclosure.apriori, next.set.x);
     {
       TubeStep& stored = result.tube.steps.back();

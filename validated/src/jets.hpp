@@ -26,7 +26,7 @@ void centre_coefficients(const Tape& tape, const std::vector<double>& m, int ord
 // The second-order term over the set inside the box y: second[i n + v] = half the second
 // derivative of x_[i]_v along delta = C rho + e (rho in r0, e in the interval vector `e`) over y,
 // i = 0..order. Both jets enclose the same quantity: the low orders (0..quadratic_order), where
-// the terms are largest, from the quadratic forms (tight, about 6x the cost per operation), the
+// the terms are largest, from the quadratic forms (tight, several times Jet2's cost), the
 // others from Jet2. With `forms` (not null) the low orders also give their quadratic form in rho:
 // forms[(i n + v) P + pair] (interval coefficients over y, P = n (n + 1) / 2 pairs a <= b) and
 // d2e[i n + v] (the terms with e), so that second = forms(rho) + d2e; the other orders have a

@@ -33,7 +33,7 @@ std::vector<Jet> direction_jets(const Box& y, const Matrix& c, const std::vector
 // The second-order term over the set inside the box y: second[i n + v] = half the second
 // derivative of x_[i]_v along delta = C rho + e (rho in r0, e in the interval vector `e`) over y,
 // i = 0..order. Both jets enclose the same quantity: the low orders (0..quadratic_order), where
-// the terms are largest, from the quadratic forms (tight, about 6x the cost per operation), the
+// the terms are largest, from the quadratic forms (tight, several times Jet2's cost), the
 // others from Jet2. With `forms` (not null) the low orders also give their quadratic form in rho:
 // forms[(i n + v) P + pair] (interval coefficients over y, P = n (n + 1) / 2 pairs a <= b) and
 // d2e[i n + v] (the terms with e), so that second = forms(rho) + d2e; the other orders have a
@@ -176,8 +176,8 @@ void second_order_extended_m(const Tape& tape, const Box& y, const Matrix& c, co
 }
 
 // The jets over (rho, r_L) run for n + |L| coordinates up to this, padded to the next of
-// kExtendedSizes (each size is an instantiation of the QuadJet runner: QuadJet<15> has 120
-// pairs, about 3x the cost of QuadJet<8> per operation). 15 = the Furuta model with its seven
+// kExtendedSizes (each size is an instantiation of the QuadJet runner, whose cost per operation
+// grows with its pairs: QuadJet<15> has 120, QuadJet<8> 36). 15 = the Furuta model with its seven
 // parameters carried as state (11 coordinates of rho, 4 of r).
 constexpr std::size_t kExtendedSizes[] = {2, 4, 6, 8, 10, 12, 15};
 static_assert(kExtendedSizes[std::size(kExtendedSizes) - 1] == kMaxExtended);

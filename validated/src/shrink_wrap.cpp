@@ -14,10 +14,10 @@
 // first-order inverse of the slots' linear coefficients L(z_theta) leaves in I - A M only what
 // L's first-order dependence on the parameters does not explain, so C is bounded as a Taylor
 // model in z_theta (the rows' own points in the slots bounded into each entry's remainder). With
-// a constant A, the parameters' +-2 % to +-50 % of the bench box made C pass 1 after 23 steps; with
-// A(z_theta) the parameter part of C is 0.17 when C passes 1, and the slots' own nonlinear terms,
-// which each wrap multiplies by (1 + delta)^(degree - 1) against the linear ones, are what end it
-// (bench/README.md, "Taylor models III").
+// a constant A, the parameters' spread over the bench box soon makes C pass 1; with A(z_theta)
+// the parameters' part of C stays small, and the slots' own nonlinear terms, which each wrap
+// multiplies by (1 + delta)^(degree - 1) against the linear ones, are what end it
+// (docs/measurements/taylor-model-flow.md, "Taylor models III").
 //
 // A may as well depend on z itself, the slots included (the argument runs for each z and e; the
 // point z' sought is near z, not z). At the base point (attempt_wrap_at_base_point), A(z) is D(z)'s
@@ -26,8 +26,9 @@
 // the segment from z to z', within delta of z in the slots and inside W, so |D(z) - M| <= sum_l
 // |dD / dz_l over W| delta_l. C is thus left with D's change within delta of z, where the attempt
 // over the box keeps its change over all of W. The Furuta arm's left-out row, whose error is
-// carried from step to step, needs that: over the box its delta came out 4-15 % above its |A e|
-// each step, and the carried error grew by as much (bench/README.md, "Taylor models V").
+// carried from step to step, needs that: over the box its delta comes out well above its |A e|
+// each step, and the carried error grows by as much (docs/measurements/taylor-model-flow.md,
+// "Taylor models V").
 
 #include "shrink_wrap.hpp"
 
@@ -185,8 +186,8 @@ std::optional<std::vector<double>> krawczyk_delta(const ModelMatrix& am, const M
     if (inside) return delta;
     // Raise delta towards the fixed point (I - C)^-1 a of this C (C grows with delta, slowly), or
     // where that has no positive solution, to a little above C delta + a. Only raised: a margin
-    // on every row each round compounds (the kept row's error, carried from step to step, grew
-    // by 5 % a round so).
+    // on every row each round compounds (the kept row's error, carried from step to step, would
+    // grow by that margin every round).
     const Eigen::VectorXd a_vec =
         Eigen::Map<const Eigen::VectorXd>(ae.data(), static_cast<Eigen::Index>(m));
     const Eigen::VectorXd fixed =

@@ -76,12 +76,12 @@ std::size_t split_component(const Box& piece, const Box& x0, const std::vector<b
   return piece.widest_relative_index(scale);
 }
 
-// The component to bisect at a planned split (issue 22), from the tube's last step: the start
+// The component to bisect at a planned split, from the tube's last step: the start
 // direction (state or parameter) with the largest share of the moving components' spread, each
 // moving component weighed by its own spread (its row of C times the piece's widths: the
-// polynomial's first-order coefficients). Against halving every direction in turn it gives
-// q2 at 4 s 1.55-3.31x the sampled spread in the point-parameter scenarios instead of 2.09-6.08x
-// (bench/README.md). The widest relative direction when the tube has no step or no spread.
+// polynomial's first-order coefficients). It keeps q2's tube closer to the sampled spread than
+// halving every direction in turn (docs/measurements/taylor-model-flow.md, "Splitting where the
+// spread comes from"). The widest relative direction when the tube has no step or no spread.
 std::size_t spread_component(const Box& piece, const Box& x0, const std::vector<bool>& read,
                              const std::vector<bool>& moving, const Tube& tube) {
   if (tube.steps.empty()) return split_component(piece, x0, read);
@@ -102,13 +102,13 @@ std::size_t spread_component(const Box& piece, const Box& x0, const std::vector<
   return static_cast<std::size_t>(best - share.begin());
 }
 
-// The component to bisect after a run that failed with `tube` (issue 22): at the tube's last step,
+// The component to bisect after a run that failed with `tube`: at the tube's last step,
 // the moving component whose error part has outgrown its exactly carried part the most (where
 // the set is being lost), and in its row of C the start direction (state or parameter) with the
 // largest term times the piece's width (the polynomial's first-order coefficients). Cycling
-// through the directions the field reads never cut fv1, whose +-10 % alone ends a Furuta tube at
-// 0.19 s (bench/README.md). The widest relative direction (split_component) when the tube has no
-// step or no spread.
+// through the directions the field reads never cut fv1, whose spread alone ends a Furuta tube
+// early on the bench box (docs/measurements/validated.md, "Limits, in full"). The widest relative
+// direction (split_component) when the tube has no step or no spread.
 std::size_t failure_component(const Box& piece, const Box& x0, const std::vector<bool>& read,
                               const std::vector<bool>& moving, const Tube& tube) {
   if (tube.steps.empty()) return split_component(piece, x0, read);

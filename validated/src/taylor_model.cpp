@@ -494,8 +494,9 @@ TaylorModel reciprocal(const TaylorModel& a) {
   if (!a.space_) return TaylorModel(Interval(1.0) / a.remainder_);
   // 1/x about c: d_i = (-1)^i / c^(i+1), and the rest of the geometric series exactly,
   // 1/x - sum_{i<=k} (c - x)^i / c^(i+1) = (c - x)^(k+1) / (c^(k+1) x), x in range. The Lagrange
-  // form, (c - x)^(k+1) / xi^(k+2), would take the smallest |xi| k + 1 times more: on a range
-  // from 0.45 c to 1.55 c (the Furuta model's determinant over a wide set) 24x wider at k = 3.
+  // form, (c - x)^(k+1) / xi^(k+2), would take the smallest |xi| k + 1 times more: far wider on a
+  // range that comes near 0, as the Furuta model's determinant does over a wide set
+  // (docs/measurements/taylor-model-flow.md, "Taylor models VI").
   return TaylorModel::compose(
       a, [](double c, const Interval& range, int k) -> std::optional<TaylorModel::Expansion> {
         if (range.contains_zero() || !range.is_bounded()) return std::nullopt;

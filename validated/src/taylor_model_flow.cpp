@@ -63,7 +63,8 @@ std::pair<T, T> at_and_over(const Coefficient& c, int k, const Interval& h) {
 // Taylor map's gradient run from p(z) + [0, 1] B r, p reduced to `jacobian_space`, and each entry
 // bounded over z. The interval run evaluates the field over the set's box, where the components'
 // dependence on each other and on the parameters is lost; this one keeps it to the first order
-// (bench/README.md, "Taylor models II", compares them with the range sampled over the set).
+// (docs/measurements/taylor-model-flow.md, "Taylor models II", compares them with the range
+// sampled over the set).
 void tighten_jacobians(TaylorRunner<Grad<kN, TaylorModel>>& runner, const Tape& tape,
                        const std::vector<TaylorModel>& p, const Matrix& b,
                        const std::vector<Interval>& r,

@@ -31,9 +31,9 @@ struct TaylorModelJob {
 
 // A cut restarts from a state whose error part (p's remainders and B r) is at most this share of
 // p's spread in every weighed component: there p's halves are nearly the halves of the whole set.
-// (Until 27 Nov 2026 the rule was the wholly wrapped states, whose r holds only rounding.) The
-// share was measured (bench/README.md, "Taylor models III"): 0.001 carries the pendulum's wide box
-// to 3 s in 8 pieces, where the wrapped states gave 2.697 s; 0.01-1 restart too late there.
+// A larger share restarts too late, and restarting only from wholly wrapped states (whose r holds
+// only rounding) carries the pendulum's wide box less far (docs/measurements/taylor-model-flow.md,
+// "Taylor models III").
 constexpr double kRestartErrorShare = 1e-3;
 
 // The sum of |coefficient| over p's non-constant monomials: its range's radius about the constant

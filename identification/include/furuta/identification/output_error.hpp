@@ -1,5 +1,5 @@
 #pragma once
-// Output-error refinement (issue 19): the model simulated with the input as the board applied it,
+// Output-error refinement: the model simulated with the input as the board applied it,
 // fitted to the measured angles at their own times by multiple shooting (Bock 1981), starting from
 // LSMI. No accelerations are formed, so the 16 ms sampling's differentiation bias is gone. The fit
 // stays in the physical region (docs/model.md) by its parametrisation.
@@ -82,7 +82,7 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
 // sample times when `raw.recorded` is empty); the input from its own times, ramped at
 // `raw.input_rate_limit_per_s` when it has one, else as recorded with `between` samples (held: a
 // logger that records what it wrote; linear; cubic: a sampled smooth signal, where linear's chords
-// shrink every peak: 0.06 % of every parameter on the voltage rig's six sines at 10 ms).
+// shrink every peak and so bias every parameter).
 // `angle_sigma_rad` as in OeExperiment (one count / sqrt(12)). A duty with supply readings is
 // scaled by their mean over `nominal_supply_v` (the rig configuration's motor voltage).
 OeExperiment oe_experiment_from_raw(const RawExperiment& raw, std::array<double, 2> angle_sigma_rad,
@@ -101,10 +101,12 @@ double angle_noise_from_readings(std::span<const double> q_rad);
 struct OutputErrorOptions {
   // Multiple shooting: each experiment is cut into segments of about this length, each with its
   // own initial state. 0.25 s, a third of a pendulum period (0.84 s): short enough that an LSMI
-  // start 30 % off (a pendulum spinning over at amplitude 0.5) keeps each segment's simulation in
-  // phase with the data, where 0.5 s segments lost it and stopped far off; long enough that the 4
-  // state unknowns are few against the segment's ~60 angles. The continuity residuals make the
-  // optimum one trajectory whatever the length: it decides whether the fit gets there.
+  // start far off (a pendulum spinning over at amplitude 0.5) keeps each segment's simulation in
+  // phase with the data, where segments twice as long lose it and stop far off
+  // (docs/measurements/identification.md, "Output-error refinement: five seed triples per
+  // excitation"); long enough that the 4 state unknowns are few against the segment's ~60 angles.
+  // The continuity residuals make the optimum one trajectory whatever the length: it decides
+  // whether the fit gets there.
   double segment_s = 0.25;
   // Fixed RK4 substeps at most this long between observations; the arm's time constant is 4.4 ms.
   double substep_s = 1e-3;

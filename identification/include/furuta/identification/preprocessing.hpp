@@ -54,8 +54,9 @@ JointSeries preprocess(const RawExperiment& experiment, const PreprocessOptions&
 // Forms series.tau from series.input (the filtered input) delayed by lag_s, and series.dq1.
 // The arm's time constant (mu1 over the back-EMF and viscous damping, about 4.4 ms on the paper's
 // rig) is far below the 16 ms sample period, so the torque is a small difference of two large
-// terms and mu1 moves by (fv1 + back-EMF damping) / mu1 per second of misalignment between input
-// and angles (about 23 % per ms): an unmodelled lag of a millisecond is a large bias.
+// terms and mu1 moves by (fv1 + back-EMF damping) / mu1, the reciprocal of that time constant, per
+// second of misalignment between input and angles: an unmodelled lag of a millisecond is a large
+// bias (docs/measurements/identification.md, "LSMI against the simulated truth").
 void torque_with_input_lag(JointSeries& series, double lag_s, InputKind kind,
                            const model::MotorData& motor, const VoltageMotor& voltage_motor);
 

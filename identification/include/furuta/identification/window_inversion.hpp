@@ -17,7 +17,8 @@
 // wrap's scale and delta (TaylorModelFlowStep::wrap_scale, wrap_delta), so readings before and
 // after a wrap still constrain one start; the parameters' variables are shared by every reading
 // of every window. Without wrapping the flow's error part grows through the arm's stiff mode and
-// ends a window within tenths of a second on a box of +-1 %.
+// soon ends a window, even on a narrow box (docs/measurements/identification.md, "Guaranteed
+// identification III, first step").
 
 #include <cstddef>
 #include <string>

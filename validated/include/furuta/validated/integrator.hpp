@@ -42,10 +42,11 @@ struct IntegratorOptions {
   double max_inflation = 20.0;
   // The second-order term of the Taylor coefficients 0..quadratic_order is computed with
   // QuadJet (its products of first-order forms kept as a quadratic form: tight where the field's
-  // terms cancel, ~6x the cost), the higher ones with Jet2 (-1: all). Both are sound; 2 gives the
-  // tightness of all orders at about half the cost on the Furuta model (doubleton). With the
-  // quadratic model the forms of these orders are carried: 3 reached furthest on the Furuta
-  // scenarios (2: 2.8-4 s, 3: 3.4-4 s, 4: 3.0-4 s at 1.2x the cost, 10: no further at 3x).
+  // terms cancel, at several times Jet2's cost), the higher ones with Jet2 (-1: all). Both are
+  // sound; the low orders hold most of the term, so a low quadratic_order keeps the tightness for
+  // much less work. With the quadratic model the forms of these orders are carried; the default
+  // is the order that carried the Furuta scenarios furthest, higher ones cost more and reach no
+  // further (docs/measurements/validated.md).
   int quadratic_order = 3;
   // The set is carried as a second-order model m + C r0 + P(r0) + B r (P: one quadratic form in
   // r0 per component, point coefficients): the second-order term of each step's Taylor map

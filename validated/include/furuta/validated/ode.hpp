@@ -199,7 +199,7 @@ class FurutaRampedDynamics {
 
 // The same model on the state alone, x = [q1, dq1, q2, dq2], the parameters (intervals) as
 // constants of the field: the Jacobian and second-order jets are 4-dimensional instead of 11
-// (about 7x cheaper per step). Sound for interval parameters too, but their correlation with the
+// (much cheaper per step). Sound for interval parameters too, but their correlation with the
 // motion is lost at every step (each step re-encloses the field over the whole parameter box), so
 // the tube is wider than FurutaDynamics's; it is the system of choice for point parameters.
 class FurutaStateDynamics {

@@ -98,11 +98,11 @@ ParameterSet interval_parameters(std::string name, const model::Parameters<doubl
                                  const std::array<double, 5>& mu_percent,
                                  const interval::Interval& fv1, const interval::Interval& fv2);
 
-// The integrator's settings for the Furuta scenarios (measured in bench/validated_bench.cpp):
-// tolerance 1e-11 (scenario (a) reaches 3.67 s, against 3.41 s at 1e-10 and 3.71 s at 1e-12 for
-// 20 % more steps; the other three reach 4 s), the QR frame
-// at every step (the arm's damping, about 150 /s, makes the parallelepiped ill-conditioned), and
-// max_width 2 pi (a q2 tube wider than a turn says nothing about the angle).
+// The integrator's settings for the Furuta scenarios (chosen with bench/validated_bench.cpp, its
+// figures in docs/measurements/validated.md): tolerance 1e-11 (a looser one ends scenario (a)
+// sooner, a tighter one takes more steps for little further), the QR frame at every step (the
+// arm's damping, about 150 /s, makes the parallelepiped ill-conditioned), and max_width 2 pi (a
+// q2 tube wider than a turn says nothing about the angle).
 IntegratorOptions scenario_integrator_options();
 
 // Split options that never split: one tube.
@@ -115,8 +115,9 @@ inline SplitOptions single_tube() {
 // `pieces` tubes for a scenario of `duration_s`: 1 is single_tube(); a power of two plans the
 // split (SplitOptions::planned_depth) at 0.5 s, or at an eighth of a shorter duration (the
 // pieces' second-order leftovers shrink with them while the error inherited at the split is still
-// small: on the four scenarios 4 pieces bring q2 at 4 s from 8-24x the sampled spread to 2-6x,
-// see validated/README.md). Throws std::invalid_argument for another count.
+// small, so a few pieces bring q2's tube at the end much closer to the sampled spread:
+// docs/measurements/validated.md, "Limits, in full"). Throws std::invalid_argument for another
+// count.
 SplitOptions scenario_split_options(std::size_t pieces, double duration_s);
 
 // The tube set of one scenario: one piece from `integrate`, or the pieces of a split run.
@@ -146,10 +147,11 @@ ScenarioTubes run_scenario_tubes(const Scenario& scenario,
                                  const StateUncertainty& uncertainty, IntegratorOptions options,
                                  const SplitOptions& split = single_tube());
 
-// The Taylor-model flow's settings for the Furuta scenarios (bench/README.md, "Taylor models IV"
-// and "V"): order 8 in time at tolerance 1e-8, order 3 in the variables, the error part wrapped
-// into the start (the arm's collapsed velocity left out when the whole wrap fails, the wrap's
-// preconditioner at the base point), the QR frame, max_width 2 pi.
+// The Taylor-model flow's settings for the Furuta scenarios
+// (docs/measurements/taylor-model-flow.md, "Taylor models IV" and "V"): order 8 in time at
+// tolerance 1e-8, order 3 in the variables, the error part wrapped into the start (the arm's
+// collapsed velocity left out when the whole wrap fails, the wrap's preconditioner at the base
+// point), the QR frame, max_width 2 pi.
 TaylorModelFlowOptions scenario_taylor_model_options();
 
 // One tube of a scenario through the Taylor-model flow over `set` (its `taylor_models` flag is

@@ -1,5 +1,5 @@
 #pragma once
-// Taylor models (issue 22): a polynomial of total degree <= k in n normalised variables z in
+// Taylor models: a polynomial of total degree <= k in n normalised variables z in
 // [-1, 1]^n with point coefficients, plus an interval remainder. A model stands for the set
 // { p(z) + r : z in [-1, 1]^n, r in R }; every operation returns a model whose set holds the
 // result for every z and every pair of values of its operands at that z (the operands must share

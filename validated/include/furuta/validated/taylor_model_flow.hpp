@@ -1,5 +1,5 @@
 #pragma once
-// Validated integration with the set as a Taylor model (issue 22): every solution
+// Validated integration with the set as a Taylor model: every solution
 // from x0 = mid(x0) + rad(x0) z (z in [-1, 1]^n; the parameters carried as state are variables
 // like the rest) is at time t in p(z) + B r for some r in the interval vector r, where p is a
 // polynomial of order `space_order` in z. One step: the Taylor map of p computed in Taylor-model
@@ -39,13 +39,14 @@ struct TaylorModelFlowOptions {
   // one whose column has collapsed onto the others, found as the one whose leaving out needs the
   // least widening) and keep the error along that variable's own component in the error part.
   // For a stiff, damped direction (the Furuta arm's velocity, whose start column ends in the
-  // pendulum's slow directions: a tube 10x narrower than the bench box reaches 1.9-4 s instead
-  // of 0.97-1.4 s); the pendulum's tube is shorter with it (bench/README.md, "Taylor models IV").
+  // pendulum's slow directions: the Furuta tubes go much further with it); the pendulum's tube is
+  // shorter with it (docs/measurements/taylor-model-flow.md, "Taylor models IV").
   bool wrap_without_collapsed = false;
   // Shrink wrapping's preconditioner as a function of the whole start point, not only of the
   // carried parameters (shrink_wrap.hpp): tighter where the start box is narrow against the
-  // parameters' spread (the Furuta tubes: bench/README.md, "Taylor models V"), looser where the
-  // slots' derivatives vary much over the start box (the pendulum with its stiffness carried).
+  // parameters' spread (the Furuta tubes: docs/measurements/taylor-model-flow.md, "Taylor models
+  // V"), looser where the slots' derivatives vary much over the start box (the pendulum with its
+  // stiffness carried).
   bool wrap_at_base_point = false;
   // Keep each step's end set as models (TaylorModelFlowStep::end_models): what set inversion
   // tests data against. Costs a copy of the polynomials per step.
