@@ -250,8 +250,9 @@ std::string describe_rig(const config::RigConfig& rig, const RunOptions& options
   } else {
     text << "USB boards through " << rig_io.description;
   }
-  text << ": 1065 serial " << motor.serial << " (firmware " << motor.firmware_version
-       << "), 1047 serial " << encoder.serial << " (firmware " << encoder.firmware_version << ")";
+  text << ": motor board " << rig.motor_board.model << " serial " << motor.serial << " (firmware "
+       << motor.firmware_version << "), encoder board " << rig.encoder_board.model << " serial "
+       << encoder.serial << " (firmware " << encoder.firmware_version << ")";
   if (options.virtual_time) text << ", virtual time";
   return text.str();
 }
@@ -273,8 +274,8 @@ void print_status(const furuta::rig_status_t& status, std::ostream& out) {
   if (s.cycles == 0) {
     out << "; cycles 0: the loop has not run yet, no reports";
   } else {
-    out << "; cycles " << s.cycles << ", overruns " << s.overruns << ", lost reports 1065 "
-        << s.motor_lost_reports << " / 1047 " << s.encoder_lost_reports;
+    out << "; cycles " << s.cycles << ", overruns " << s.overruns << ", lost reports motor board "
+        << s.motor_lost_reports << " / encoder board " << s.encoder_lost_reports;
   }
   out << "; wake-up latency ";
   if (s.latency_samples == 0) {

@@ -208,8 +208,8 @@ std::optional<OutputError> run_output_error(const OutputErrorSettings& settings,
                                             const identification::IdentifyOptions& identify_options,
                                             const Batch& batch, Run& run, Progress* progress) {
   const auto warn = [&](const std::string& text) {
-    // One list of plain strings says where each comes from in its words (the refinement's own
-    // warnings already do); the staged list has the stage for that.
+    // In the plain list a warning names its stage in its text (the refinement's own warnings
+    // already do); in the staged list the stage says it.
     const std::string prefix = "output error: ";
     const bool prefixed = text.rfind(prefix, 0) == 0;
     run.identification.warnings.push_back(prefixed ? text : prefix + text);
@@ -570,7 +570,8 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
       if (w.stage == Warning::Stage::output_error) why = w.text;
     }
     throw std::invalid_argument("nothing identified: LSMI did not run (" +
-                                out.identification.lsmi_skipped + "), and " + why);
+                                out.identification.lsmi_skipped +
+                                "), and the output-error refinement: " + why);
   }
   if (progress != nullptr) {
     progress->fit_done(out.identification, out.output_error ? &out.output_error->result : nullptr);

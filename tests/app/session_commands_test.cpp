@@ -497,7 +497,8 @@ TEST(RunCommand, SaysWhichRigAndWhichConfigurationItUses) {
   EXPECT_NE(out.str().find("furuta run: configuration " + config.string() + "\n"),
             std::string::npos)
       << out.str();
-  EXPECT_NE(out.str().find("furuta run: rig: simulated (--sim): 1065 serial "), std::string::npos)
+  EXPECT_NE(out.str().find("furuta run: rig: simulated (--sim): motor board 1065 serial "),
+            std::string::npos)
       << out.str();
   EXPECT_LT(out.str().find("furuta run: rig:"), out.str().find("session ended"));
 
