@@ -214,4 +214,8 @@ std::filesystem::path default_rig_config_path() {
   return installed;
 }
 
+bridge::MotorResolution motor_resolution(const RigConfig& rig) {
+  return bridge::make_motor_board(rig.motor_board.model, {}, {})->resolution();
+}
+
 }  // namespace furuta::config

@@ -76,6 +76,15 @@ class MotorBoard1065 final : public MotorBoard {
 
   void restart() noexcept override { counter_.reset(); }
 
+  // One raw step of each reading, through the codec's own conversions.
+  MotorResolution resolution() const noexcept override {
+    MotorReport1065 one_step;
+    one_step.applied_duty_raw = 1;
+    one_step.status_flags = k1065FlagActualDirection;
+    one_step.supply_raw = 1;
+    return {one_step.applied_duty(), one_step.supply_voltage_v()};
+  }
+
  private:
   std::uint8_t max_duty_raw_;
   double acceleration_pct_per_s_;

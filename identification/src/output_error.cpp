@@ -14,8 +14,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "board_1065.hpp"
-
 namespace furuta::identification {
 
 namespace {
@@ -26,7 +24,6 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kVelocityDefectTime_s = 0.01;
 // How far from a segment's start the observations are that give its starting state.
 constexpr double kStartFitHalfWidth_s = 0.04;
-using internal::kSupplyStep_v;
 
 double scalar_of(double x) {
   return x;
@@ -671,7 +668,8 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
 
   std::vector<double> supply_v;
   for (const auto& r : arm_positions) supply_v.push_back(r.supply_v);
-  scale_duty_by_supply(e, supply_v, rig.motor.nominal_voltage_v, kSupplyStep_v);
+  scale_duty_by_supply(e, supply_v, rig.motor.nominal_voltage_v,
+                       config::motor_resolution(rig).supply_step_v);
 
   // The board ramps its applied duty towards the newest command at the command's rate, from the
   // moment the command is written (docs/model.md; firmware_bridge's simulated rig does the same).

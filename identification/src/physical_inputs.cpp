@@ -6,14 +6,9 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "board_1065.hpp"
-
 namespace furuta::identification {
 
 namespace {
-
-using internal::kDutyStep;
-using internal::kSupplyStep_v;
 
 // The daemon's rest check holds a start until the pendulum count stays within this many counts
 // (docs/model.md, "Zeros").
@@ -49,9 +44,11 @@ RecordingBounds session_log_bounds(const config::RigConfig& rig) {
   const config::GuaranteedConfig& gc = rig.guaranteed;
   b.lag = {"lag", Interval(gc.lag_ms[0], gc.lag_ms[1]) / Interval(1000.0), "s",
            InputSource::configured, "[guaranteed] lag_ms"};
-  b.supply_error = {"supply_error", Interval(-0.5, 0.5) * Interval(kSupplyStep_v), "V",
-                    InputSource::supply_readings,
-                    "the 1065 reads its supply in steps of 80/2048 V: half a step"};
+  const bridge::MotorResolution step = config::motor_resolution(rig);
+  b.supply_error = {
+      "supply_error", Interval(-0.5, 0.5) * Interval(step.supply_step_v), "V",
+      InputSource::supply_readings,
+      "[boards.motor] model " + rig.motor_board.model + ": its supply reading's step, half of it"};
   b.arm_rest_speed_rad_s = gc.arm_rest_speed_rad_s;
   return b;
 }
@@ -88,9 +85,10 @@ PhysicalInputs physical_inputs(const config::RigConfig& rig,
        {&bounds.arm_angle_error, &bounds.pendulum_angle_error, &bounds.pendulum_zero}) {
     in.provenance.push_back(*b);
   }
-  in.duty_error = Interval(-0.5 * kDutyStep, 0.5 * kDutyStep);
+  const double duty_step = config::motor_resolution(rig).duty_step;
+  in.duty_error = Interval(-0.5 * duty_step, 0.5 * duty_step);
   add("duty_error", in.duty_error, "1", InputSource::duty_steps,
-      "the 1065 echoes its applied duty in steps of 1/255: half a step");
+      "[boards.motor] model " + rig.motor_board.model + ": its applied duty's step, half of it");
   in.provenance.push_back(bounds.lag);
 
   if (supply_readings_v.empty()) {

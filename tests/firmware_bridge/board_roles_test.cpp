@@ -109,6 +109,22 @@ TEST(BoardRoles, AWrittenCommandReadsBackAsTheBoardTakesIt) {
   EXPECT_DOUBLE_EQ(board->read_write(report)->acceleration_pct_per_s, 6250.0 / 255);
 }
 
+TEST(BoardRoles, TheMotorAdaptersResolutionIsOneStepOfItsReadings) {
+  auto board = make_motor_board("1065", {}, {});
+  const MotorResolution step = board->resolution();
+  EXPECT_DOUBLE_EQ(step.duty_step, 1.0 / 255.0);
+  EXPECT_DOUBLE_EQ(step.supply_step_v, 80.0 / 2048.0);
+  // Every reading it gives is a whole number of those steps.
+  for (std::uint8_t counter = 0; counter < 5; ++counter) {
+    const auto m = board->read(motor_report(counter), 0);
+    ASSERT_TRUE(m);
+    const double duty_steps = m->applied_duty / step.duty_step;
+    const double supply_steps = m->supply_v / step.supply_step_v;
+    EXPECT_NEAR(duty_steps, std::round(duty_steps), 1e-9);
+    EXPECT_NEAR(supply_steps, std::round(supply_steps), 1e-9);
+  }
+}
+
 TEST(BoardRoles, TheEncoderAdapterReadsItsChannelAndEnablesIt) {
   EncoderReport1047 r;
   r.channels[2].position_delta = -17;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "furuta/config/config_error.hpp"
+#include "furuta/firmware_bridge/board_roles.hpp"
 #include "furuta/firmware_bridge/encoder_geometry.hpp"
 #include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/model/model.hpp"
@@ -217,5 +218,7 @@ std::string read_config_text(const std::filesystem::path& path);
 RigConfig parse_rig_config(const std::string& text, const std::string& source_name);
 // The configuration shipped in config/rig.toml, for tools run without --config.
 std::filesystem::path default_rig_config_path();
+// The steps the motor board's readings move in, from its adapter ([boards.motor] model).
+bridge::MotorResolution motor_resolution(const RigConfig& rig);
 
 }  // namespace furuta::config

@@ -45,6 +45,12 @@ struct EncoderReading {
   int lost_before = 0;            // reports found lost at this one (their counts are gone)
 };
 
+// The steps a motor board's readings move in: what its wire can say.
+struct MotorResolution {
+  double duty_step = 0.0;      // the applied duty's, as the board echoes it
+  double supply_step_v = 0.0;  // the supply reading's
+};
+
 // What the loop asks of the motor.
 struct MotorCommand {
   double duty = 0.0;              // [-1, 1]
@@ -76,6 +82,7 @@ class MotorBoard {
       std::span<const std::uint8_t> report) const noexcept = 0;
   // The board is new as far as the host knows (a reconnect): loss detection starts again.
   virtual void restart() noexcept = 0;
+  virtual MotorResolution resolution() const noexcept = 0;
 };
 
 class EncoderBoard {
