@@ -443,16 +443,16 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
 
   session_motor_lost_ += cycle_motor_lost_;
   session_encoder_lost_ += cycle_encoder_lost_;
-  char detail[kDetailChars];
+  char lost[kDetailChars];
   if (cycle_motor_lost_ > 0) {
-    std::snprintf(detail, sizeof detail, "%s motor board: %d report(s) lost",
+    std::snprintf(lost, sizeof lost, "%s motor board: %d report(s) lost",
                   settings_.motor_board.c_str(), cycle_motor_lost_);
-    emit_fault("lost_reports", detail, StopReason::none, false, deadline_ns);
+    emit_fault("lost_reports", lost, StopReason::none, false, deadline_ns);
   }
   if (cycle_encoder_lost_ > 0) {
-    std::snprintf(detail, sizeof detail, "%s encoder board: %d report(s) lost, their counts too",
+    std::snprintf(lost, sizeof lost, "%s encoder board: %d report(s) lost, their counts too",
                   settings_.encoder_board.c_str(), cycle_encoder_lost_);
-    emit_fault("lost_reports", detail, StopReason::none, false, deadline_ns);
+    emit_fault("lost_reports", lost, StopReason::none, false, deadline_ns);
   }
   session_overruns_ += missed;
   if (missed > 0) {
