@@ -42,7 +42,7 @@ std::string motor_board_of(const session_log::SessionLog& log) {
 std::string last_motor_command(const session_log::SessionLog& log) {
   const furuta::rig_usb_report_t* last = nullptr;
   for (const auto& r : log.usb_reports) {
-    if (r.board == furuta::rig_usb_report_t::BOARD_MOTOR_1065 &&
+    if (r.board == furuta::rig_usb_report_t::BOARD_MOTOR &&
         (r.kind == furuta::rig_usb_report_t::KIND_OUTPUT ||
          r.kind == furuta::rig_usb_report_t::KIND_ERROR)) {
       last = &r;

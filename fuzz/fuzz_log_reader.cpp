@@ -75,7 +75,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   check(covered == log.samples.size());
   for (std::int8_t board :
-       {furuta::rig_usb_report_t::BOARD_MOTOR_1065, furuta::rig_usb_report_t::BOARD_ENCODER_1047}) {
+       {furuta::rig_usb_report_t::BOARD_MOTOR, furuta::rig_usb_report_t::BOARD_ENCODER}) {
     try {
       (void)usb_trace_from_log(log, board);
     } catch (const std::runtime_error&) {

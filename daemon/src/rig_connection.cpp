@@ -84,11 +84,11 @@ RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions&
       throw std::runtime_error(options.replay_log.string() + ": no session start record to replay");
     }
     c.motor = std::make_unique<bridge::ReplayTransport>(
-        session_log::usb_trace_from_log(log, furuta::rig_usb_report_t::BOARD_MOTOR_1065), *c.clock,
+        session_log::usb_trace_from_log(log, furuta::rig_usb_report_t::BOARD_MOTOR), *c.clock,
         bridge::ReplayTransport::OutputMode::record);
     c.encoder = std::make_unique<bridge::ReplayTransport>(
-        session_log::usb_trace_from_log(log, furuta::rig_usb_report_t::BOARD_ENCODER_1047),
-        *c.clock, bridge::ReplayTransport::OutputMode::record);
+        session_log::usb_trace_from_log(log, furuta::rig_usb_report_t::BOARD_ENCODER), *c.clock,
+        bridge::ReplayTransport::OutputMode::record);
     c.description = "replay of " + options.replay_log.string();
   } else if (options.backend == BackendChoice::simulated ||
              config.backend == config::UsbBackend::simulated) {

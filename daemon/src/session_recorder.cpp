@@ -205,15 +205,15 @@ void SessionRecorder::record_sample(const RigSample& s) {
     log_raw_report(raw, board, kind);
   };
   for (std::size_t i = 0; i < s.motor_in.count; ++i) {
-    log_raw(s.motor_in.reports[i], furuta::rig_usb_report_t::BOARD_MOTOR_1065,
+    log_raw(s.motor_in.reports[i], furuta::rig_usb_report_t::BOARD_MOTOR,
             furuta::rig_usb_report_t::KIND_INPUT);
   }
   for (std::size_t i = 0; i < s.encoder_in.count; ++i) {
-    log_raw(s.encoder_in.reports[i], furuta::rig_usb_report_t::BOARD_ENCODER_1047,
+    log_raw(s.encoder_in.reports[i], furuta::rig_usb_report_t::BOARD_ENCODER,
             furuta::rig_usb_report_t::KIND_INPUT);
   }
   if (s.motor_out.length > 0) {
-    log_raw(s.motor_out, furuta::rig_usb_report_t::BOARD_MOTOR_1065,
+    log_raw(s.motor_out, furuta::rig_usb_report_t::BOARD_MOTOR,
             s.motor_out.status == bridge::TransportStatus::ok
                 ? +furuta::rig_usb_report_t::KIND_OUTPUT
                 : +furuta::rig_usb_report_t::KIND_ERROR);
@@ -265,7 +265,7 @@ void SessionRecorder::record_fault(const FaultEvent& f) {
 
 void SessionRecorder::end_session(const SessionEndEvent& e) {
   if (e.final_command.length > 0) {
-    log_raw_report(e.final_command, furuta::rig_usb_report_t::BOARD_MOTOR_1065,
+    log_raw_report(e.final_command, furuta::rig_usb_report_t::BOARD_MOTOR,
                    e.final_command.status == bridge::TransportStatus::ok
                        ? +furuta::rig_usb_report_t::KIND_OUTPUT
                        : +furuta::rig_usb_report_t::KIND_ERROR);

@@ -121,7 +121,7 @@ std::vector<MotorCommandWrite> motor_command_writes(const SessionLog& log,
   const auto board = bridge::make_motor_board(motor_board, {}, {});
   std::vector<MotorCommandWrite> out;
   for (const furuta::rig_usb_report_t& r : log.usb_reports) {
-    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR ||
         r.kind != furuta::rig_usb_report_t::KIND_OUTPUT) {
       continue;
     }
@@ -139,7 +139,7 @@ std::vector<MotorInputReport> motor_input_reports(const SessionLog& log,
   const auto board = bridge::make_motor_board(motor_board, {}, {});
   std::vector<MotorInputReport> out;
   for (const furuta::rig_usb_report_t& r : log.usb_reports) {
-    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR ||
         r.kind != furuta::rig_usb_report_t::KIND_INPUT) {
       continue;
     }
@@ -155,14 +155,14 @@ std::vector<MotorInputReport> motor_input_reports(const SessionLog& log,
 
 bridge::UsbTrace usb_trace_from_log(const SessionLog& log, std::int8_t board) {
   const std::string where = " in " + log.path.string();
-  if (board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 &&
-      board != furuta::rig_usb_report_t::BOARD_ENCODER_1047) {
+  if (board != furuta::rig_usb_report_t::BOARD_MOTOR &&
+      board != furuta::rig_usb_report_t::BOARD_ENCODER) {
     throw std::invalid_argument("usb_trace_from_log: unknown board " + std::to_string(board));
   }
   if (!log.start) {
     throw std::runtime_error("usb_trace_from_log: no session start record" + where);
   }
-  const bool motor = board == furuta::rig_usb_report_t::BOARD_MOTOR_1065;
+  const bool motor = board == furuta::rig_usb_report_t::BOARD_MOTOR;
   const std::string& device_line = motor ? log.start->motor_device : log.start->encoder_device;
   if (device_line.empty()) {
     throw std::runtime_error(std::string("usb_trace_from_log: the start record has no ") +

@@ -430,7 +430,7 @@ TEST(CommandHandling, HostileBytesAndAFloodNeverMoveTheMotorBeyondTheLimits) {
   const int amplitude_raw = static_cast<int>(std::lround(limit * 255));
   int writes = 0, peak = 0;
   for (const auto& r : log.usb_reports) {
-    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR ||
         r.kind != furuta::rig_usb_report_t::KIND_OUTPUT) {
       continue;
     }

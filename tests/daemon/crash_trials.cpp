@@ -585,7 +585,7 @@ std::optional<double> last_logged_duty(const fs::path& path) {
   const session_log::SessionLog log = session_log::load_session_log(path);
   std::optional<double> duty;
   for (const auto& r : log.usb_reports) {
-    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065 ||
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR ||
         r.kind == furuta::rig_usb_report_t::KIND_INPUT) {
       continue;
     }

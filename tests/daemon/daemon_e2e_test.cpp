@@ -86,7 +86,7 @@ RunResult run_session(const config::RigConfig& rig, RigConnection& connection, c
 // The duty of the last output report written to the 1065, as logged.
 int last_motor_duty_raw(const session_log::SessionLog& log) {
   const bridge::UsbTrace trace =
-      session_log::usb_trace_from_log(log, furuta::rig_usb_report_t::BOARD_MOTOR_1065);
+      session_log::usb_trace_from_log(log, furuta::rig_usb_report_t::BOARD_MOTOR);
   const bridge::TraceEvent* last_out = nullptr;
   for (const auto& e : trace.events) {
     if (e.kind == bridge::TraceEventKind::output) last_out = &e;

@@ -76,7 +76,7 @@ struct LoggedMotorWrite {
 inline std::optional<LoggedMotorWrite> last_logged_motor_write(const session_log::SessionLog& log) {
   std::optional<LoggedMotorWrite> last;
   for (const auto& r : log.usb_reports) {
-    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065) continue;
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR) continue;
     if (r.kind != furuta::rig_usb_report_t::KIND_OUTPUT &&
         r.kind != furuta::rig_usb_report_t::KIND_ERROR) {
       continue;

@@ -181,7 +181,7 @@ LogSummary summarize_log(const fs::path& path, std::int64_t period_ns) {
   std::int64_t last_write_ns = 0;
   int last_duty_raw = -1;
   for (const auto& r : log.usb_reports) {
-    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR_1065) continue;
+    if (r.board != furuta::rig_usb_report_t::BOARD_MOTOR) continue;
     if (r.kind == furuta::rig_usb_report_t::KIND_INPUT) continue;
     last_write_ns = r.time_ns;
     last_duty_raw = testing::duty_raw_of(r.bytes);

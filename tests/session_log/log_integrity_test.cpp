@@ -56,7 +56,7 @@ fs::path write_session(const fs::path& dir, const std::vector<std::int64_t>& ski
     put(kChannelSample, encode(sample(seq)));
     rig_usb_report_t usb{};
     usb.time_ns = seq * 16'000'000 + 1;
-    usb.board = rig_usb_report_t::BOARD_MOTOR_1065;
+    usb.board = rig_usb_report_t::BOARD_MOTOR;
     usb.kind = rig_usb_report_t::KIND_INPUT;
     usb.bytes = {1, 2, 3, 4};
     usb.length = 4;

@@ -129,8 +129,8 @@ rig_fault_t fault(std::int64_t seq, const std::string& reason) {
   return f;
 }
 
-constexpr std::int8_t kMotor = rig_usb_report_t::BOARD_MOTOR_1065;
-constexpr std::int8_t kEncoder = rig_usb_report_t::BOARD_ENCODER_1047;
+constexpr std::int8_t kMotor = rig_usb_report_t::BOARD_MOTOR;
+constexpr std::int8_t kEncoder = rig_usb_report_t::BOARD_ENCODER;
 constexpr std::int8_t kIn = rig_usb_report_t::KIND_INPUT;
 constexpr std::int8_t kOut = rig_usb_report_t::KIND_OUTPUT;
 constexpr std::int8_t kErr = rig_usb_report_t::KIND_ERROR;
