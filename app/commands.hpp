@@ -140,22 +140,14 @@ struct IdentifyCommandOptions {
   bool use_intact_part = false;
 };
 }  // namespace furuta::app
-namespace furuta::config {
-struct RigConfig;
-}
-namespace furuta::identification {
-struct IdentifyOptions;
+namespace furuta::pipeline {
+struct BatchRequest;
 }
 namespace furuta::app {
-// The identification settings for a rig: its configuration's [identification], then the command's
-// overrides.
-identification::IdentifyOptions identify_options_for(const config::RigConfig& rig,
-                                                     const IdentifyCommandOptions& options);
-// The pipeline's settings for a rig and the command's options: identify_options_for, [sivia] and
-// the threads, the scenarios (each --simulate-seconds long).
-pipeline::Settings identify_settings(const config::RigConfig& rig,
-                                     const IdentifyCommandOptions& options);
-// The command's inputs as a batch, then pipeline::run (progress on stderr when it is a terminal).
+// The command's inputs and overrides as the pipeline's intake takes them (pipeline/intake.hpp).
+pipeline::BatchRequest batch_request(const IdentifyCommandOptions& options);
+// The command's inputs through pipeline::load_batch, then pipeline::run (progress on stderr when
+// it is a terminal).
 // Nothing when the inputs are unusable (the reason on err: bad arguments, unreadable or foreign
 // files, a bad configuration); what the fit itself throws passes through. With `table_one`,
 // Table I is written there as soon as LSMI is done, before SIVIA and the scenarios run.

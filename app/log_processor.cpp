@@ -23,6 +23,7 @@
 
 #include "commands.hpp"
 #include "furuta/daemon/rig_connection.hpp"
+#include "furuta/pipeline/intake.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/outputs.hpp"
@@ -342,33 +343,33 @@ class Processor {
   void identify(const Batch& batch) {
     const fs::path temp = o_.identifications_dir / (kTempPrefix + batch.name);
     fs::remove_all(temp);
-    IdentifyCommandOptions options;
-    for (const auto& log : batch.fit) options.logs.push_back(log.path);
-    if (batch.validation) options.validate = batch.validation->path;
-    options.sivia = o_.automation.sivia;
-    options.guaranteed = o_.automation.guaranteed;
-    options.simulate = o_.automation.simulate;
-    options.simulate_seconds = o_.automation.simulate_seconds;
-    std::ostringstream problems;
+    pipeline::BatchRequest request;
+    for (const auto& log : batch.fit) request.logs.push_back(log.path);
+    if (batch.validation) request.validate = batch.validation->path;
+    // The report and results.json name the logs where they will be: the batch moves to done/ as
+    // a whole once its files are in place.
+    request.files_listed_in = done_;
+    request.overrides.sivia = o_.automation.sivia;
+    request.overrides.guaranteed = o_.automation.guaranteed;
+    request.overrides.simulate = o_.automation.simulate;
+    request.overrides.simulate_seconds = o_.automation.simulate_seconds;
+    std::string problems;
     std::optional<pipeline::Run> run;
     try {
-      run = run_identification(options, problems);
-      if (run) {
-        // The report and results.json name the logs where they will be: the batch moves to
-        // done/ as a whole once its files are in place.
-        for (auto& input : run->inputs) {
-          input.path = (done_ / fs::path(input.path).filename()).string();
-        }
+      const pipeline::Intake intake = pipeline::load_batch(request);
+      for (const std::string& refusal : intake.refusals) problems += refusal + "\n";
+      if (intake.batch) {
+        run = pipeline::run(*intake.batch, intake.settings);
         report::write_identification(temp, *run, daemon::kSoftwareVersion);
       }
     } catch (const std::exception& e) {
       run.reset();
-      problems << e.what() << "\n";
+      problems += std::string(e.what()) + "\n";
     }
     if (!run) {
       fs::remove_all(temp);
       fail(batch.paths(), "identification " + batch.name + " (" + batch.describe() +
-                              ") failed: " + trimmed(problems.str()));
+                              ") failed: " + trimmed(problems));
       return;
     }
     report::write_text_file(temp / "batch.json",

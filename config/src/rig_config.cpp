@@ -218,4 +218,8 @@ bridge::MotorResolution motor_resolution(const RigConfig& rig) {
   return bridge::make_motor_board(rig.motor_board.model, {}, {})->resolution();
 }
 
+double pendulum_resolution_rad(const RigConfig& rig) {
+  return bridge::resolution_rad(rig.pendulum_encoder);
+}
+
 }  // namespace furuta::config

@@ -555,7 +555,9 @@ Run run(const Batch& batch, const Settings& settings, Progress* progress) {
   if (batch.nominal) out.identification.nominal = *batch.nominal;
   if (batch.truth) out.identification.truth = *batch.truth;
   for (const auto& path : batch.files) {
-    out.inputs.push_back({path.string(), identification::sha256_file(path.string())});
+    const std::filesystem::path listed =
+        batch.files_listed_in.empty() ? path : batch.files_listed_in / path.filename();
+    out.inputs.push_back({listed.string(), identification::sha256_file(path.string())});
   }
   out.warnings = identification_warnings(out.identification);
   out.physical = check_physical(out.identification, batch.kind, out.warnings);

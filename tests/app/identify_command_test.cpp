@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/identification/identify.hpp"
+#include "furuta/pipeline/intake.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
@@ -43,8 +44,9 @@ Fit identify_sessions(const std::vector<fs::path>& fit, const fs::path& held_out
   }
   const auto validation =
       identification::experiment_from_log(session_log::load_session_log(held_out));
-  Fit f{identification::identify(experiments, validation, identify_options_for(rig, command),
-                                 rig.motor),
+  Fit f{identification::identify(
+            experiments, validation,
+            pipeline::settings_for(rig, batch_request(command).overrides).identify, rig.motor),
         rig.simulation.parameters};
   return f;
 }

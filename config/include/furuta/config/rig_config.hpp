@@ -220,5 +220,7 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
 std::filesystem::path default_rig_config_path();
 // The steps the motor board's readings move in, from its adapter ([boards.motor] model).
 bridge::MotorResolution motor_resolution(const RigConfig& rig);
+// One count of the pendulum's encoder, in radians of the pendulum ([encoders.pendulum]).
+double pendulum_resolution_rad(const RigConfig& rig);
 
 }  // namespace furuta::config

@@ -98,6 +98,9 @@ struct Batch {
   // The files the recordings came from (and an import spec), in the order results.json lists
   // them with their SHA-256.
   std::vector<std::filesystem::path> files;
+  // Where the outputs name the files: empty, where they are; else this directory (the trigger
+  // moves a batch's logs there once its identification is written).
+  std::filesystem::path files_listed_in;
   config::RigConfig rig;  // [identification], [sivia], the motor for eq. 4, the simulated rig
   // Where `rig` came from: the file given (--config), or the log whose start record carried it;
   // neither for CSV recordings identified without a configuration.
