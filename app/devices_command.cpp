@@ -24,7 +24,8 @@ constexpr int kUsbUnreadable = 2;
 constexpr const char* kUdevRule = "systemd/70-furuta-phidgets.rules";
 
 // HID boards go through hidraw (hidapi), which leaves the kernel driver in place; a vendor-class
-// interface (1047 firmware 2xx) has no hidraw node, so only libusb reaches it.
+// interface (the encoder board's at firmware 2xx, per its adapter) has no hidraw node, so only
+// libusb reaches it.
 std::string backend_for(const bridge::DeviceInfo& device) {
   return device.vendor_class_interface ? "libusb (vendor-class interface)" : "hidapi (HID)";
 }

@@ -25,8 +25,8 @@ namespace furuta::app {
 
 namespace {
 
-// The last command written to the 1065 as the log recorded it: on every way a session ends it must
-// be the zero command, so this is what to look at after a fault.
+// The last command written to the motor board as the log recorded it: on every way a session ends
+// it must be the zero command, so this is what to look at after a fault.
 // The motor board's adapter name as the log's carried configuration says (the default without one).
 std::string motor_board_of(const session_log::SessionLog& log) {
   if (log.start) {
@@ -142,8 +142,8 @@ int run_log_export_csv_command(const std::filesystem::path& path,
   // Beside each row's values, when each was taken (docs/csv-import.md reads them back): the host
   // time of the newest report behind each angle and its time on the board's own clock
   // (session_log::BoardTimeline; a row without a new report repeats the last), and the command in
-  // force on the 1065 at the row's end as the board received it (its byte's duty) with the time
-  // it was written.
+  // force on the motor board at the row's end as the board received it (its byte's duty) with the
+  // time it was written.
   csv << "seq,t_s,arm_counts,pendulum_counts,q1_rad,q2_rad,commanded_duty,applied_duty,"
          "current_a,supply_v,motor_flags,encoder_flags,motor_lost,encoder_lost,overruns,flags,"
          "arm_time_s,pendulum_time_s,written_duty,written_s,arm_board_reports,pendulum_board_"

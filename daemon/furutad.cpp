@@ -163,9 +163,9 @@ int main(int argc, char** argv) {
     }
 
     // A daemon that cannot log must say so now, not at the first start. It still comes up: it is
-    // what writes the zero command to a 1065 left driving by a daemon killed mid-session, and a
-    // directory can come back (a mount, a permission) without a restart. Until then every start
-    // is refused with this reason and the status says it (daemon/README.md, "Logs").
+    // what writes the zero command to a motor board left driving by a daemon killed mid-session,
+    // and a directory can come back (a mount, a permission) without a restart. Until then every
+    // start is refused with this reason and the status says it (daemon/README.md, "Logs").
     if (std::string why = session_log::logs_dir_problem(settings.recorder.logs_dir, 0);
         !why.empty()) {
       std::cerr << "furutad: WARNING: cannot log sessions in "

@@ -79,7 +79,8 @@ BoardSelection read_board(Section& s, const std::string& model,
   return b;
 }
 
-// [boards.motor] (the 1065) and [boards.encoder] (the 1047, and the pendulum's channel on it).
+// [boards.motor] (the motor board) and [boards.encoder] (the encoder board, and the pendulum's
+// channel on it).
 void read_boards(Section boards, RigConfig& c) {
   Section motor = boards.child("motor");
   c.motor_board = read_board(motor, RigConfig{}.motor_board.model, bridge::motor_board_kinds());

@@ -189,7 +189,8 @@ void ControlLoop::try_reconnect(std::int64_t now_ns) {
   if (motor_down_ && motor_.reconnect() == TransportStatus::ok) {
     motor_down_ = false;
     motor_down_reported_ = false;  // lost again before the other is back: reported again
-    // The 1065 back without a power-up (a USB error, not an unplug) may still drive: zero it now.
+    // The motor board back without a power-up (a USB error, not an unplug) may still drive: zero
+    // it now.
     write_command(0.0, settings_.stop_braking_fraction, nullptr);
   }
   if (encoder_down_ && encoder_.reconnect() == TransportStatus::ok) {

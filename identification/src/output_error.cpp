@@ -526,10 +526,10 @@ void scale_duty_by_supply(OeExperiment& e, std::vector<double> supply_v, double 
   e.input_gain_sigma = sigma_v / mean;
 }
 
-// The input as an actuator with a slew limit applies it (the 1065's duty ramp): from each
-// command's time it moves towards the command at the command's rate. Appends the breakpoints of
-// the piecewise-linear result to the experiment's input, from a second before `t` (at `applied`)
-// to a second after the last observation.
+// The input as an actuator with a slew limit applies it (the motor board's duty ramp, its
+// adapter's acceleration): from each command's time it moves towards the command at the command's
+// rate. Appends the breakpoints of the piecewise-linear result to the experiment's input, from a
+// second before `t` (at `applied`) to a second after the last observation.
 class RampedInput {
  public:
   RampedInput(OeExperiment& e, double t, double applied, double braking)
@@ -591,8 +591,9 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
   // Every report of both boards, not one per cycle: the boards report every 8 ms, and an arm
   // angle 8 ms after a command change still shows the arm's 4.4 ms transient that separates its
   // inertia from the data path's lag. The sample lists the decodable reports of its cycle, oldest
-  // first, and its angles are those of the newest; the older 1047 reports' angles follow from their
-  // deltas, the older 1065 reports' from their positions in the raw reports of the log.
+  // first, and its angles are those of the newest; the older encoder board reports' angles follow
+  // from their deltas, the older motor board reports' from their positions in the raw reports of
+  // the log.
   const std::vector<session_log::MotorInputReport> arm_positions =
       session_log::motor_input_reports(log, rig.motor_board.model);
   std::size_t cursor = 0;
@@ -608,8 +609,9 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
   const double pendulum_rad_per_count =
       rig.pendulum_encoder.sign * kTwoPi / rig.pendulum_encoder.counts_per_joint_rev();
 
-  // Each joint's readings with the host's time and the board's own (the 1065's report counter,
-  // the 1047's accumulated packet ticks); a reading whose host time does not move on is dropped.
+  // Each joint's readings with the host's time and the board's own (the motor board's report
+  // counter, the encoder board's accumulated packet ticks); a reading whose host time does not
+  // move on is dropped.
   std::array<std::vector<double>, 2> host_s, board, angle;
   const auto observe = [&](int joint, std::int64_t host_ns, double board_time, double angle_rad) {
     const double t = seconds(host_ns);

@@ -20,8 +20,8 @@ namespace furuta::config {
 enum class UsbBackend : std::uint8_t { simulated, hidapi, libusb };
 
 struct BoardSelection {
-  // The board's adapter (bridge::make_motor_board, make_encoder_board): "1065", "1047", or one
-  // registered.
+  // The board's adapter (bridge::make_motor_board, make_encoder_board) by its configuration name:
+  // one built in or registered (bridge::motor_board_kinds, encoder_board_kinds).
   std::string model;
   std::optional<std::string> serial;  // none: the first board of that product
   // Open a board whose firmware version is outside what the codecs know (bridge::known_firmware),
@@ -185,7 +185,8 @@ struct ExcitationConfig {
   int multisine_components = 8;
   double multisine_f_min_hz = 0.2;
   double multisine_f_max_hz = 5.0;
-  double board_acceleration_pct_per_s = 6250.0;  // the 1065's duty ramp
+  // The motor board's duty ramp (its adapter's acceleration).
+  double board_acceleration_pct_per_s = 6250.0;
 };
 
 struct RigConfig {

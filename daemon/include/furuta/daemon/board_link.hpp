@@ -2,12 +2,10 @@
 // How the control loop reaches one board: take every report that has arrived, write one report.
 // Two ways to read, one interface:
 //  - DirectBoardLink polls the transport on the loop thread. For the simulated rig and replay,
-//  whose
-//    reports carry their arrival time already.
-//  - ThreadedBoardLink keeps a reader thread blocked in read_report, so each report is stamped when
-//  it
-//    arrives (the 1047's loss detection needs arrival times), and hands reports to the loop through
-//    a lock-free queue. For hardware.
+//    whose reports carry their arrival time already.
+//  - ThreadedBoardLink keeps a reader thread blocked in read_report, so each report is stamped
+//    when it arrives (the encoder board's loss detection, in its adapter, needs arrival times),
+//    and hands reports to the loop through a lock-free queue. For hardware.
 
 #include <atomic>
 #include <chrono>

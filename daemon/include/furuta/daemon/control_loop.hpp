@@ -153,8 +153,8 @@ class ControlLoop {
   // While idle with a board down: every reconnect interval, try to reopen and re-initialise.
   void try_reconnect(std::int64_t now_ns);
   // Enables the pendulum's channel and writes the zero command: at start-up and after a
-  // reconnect (the 1065 resets on power-up, the 1047's channels come up disabled). False if a
-  // write failed (the board is marked down again).
+  // reconnect (the motor board resets on power-up, the encoder board's channels come up
+  // disabled). False if a write failed (the board is marked down again).
   bool initialise_boards();
 
   LoopSettings settings_;
@@ -192,7 +192,8 @@ class ControlLoop {
   int cycle_encoder_lost_ = 0;
   // Board state carried across cycles.
   std::int64_t arm_counts_ = 0;
-  std::int64_t pendulum_counts_ = 0;  // running sum of 1047 deltas since the channel was enabled
+  // Running sum of the encoder board's deltas since the pendulum channel was enabled.
+  std::int64_t pendulum_counts_ = 0;
   double applied_duty_ = 0;
   double motor_current_a_ = 0;
   double supply_voltage_v_ = 0;

@@ -81,8 +81,8 @@ struct SessionStartEvent {
   std::int64_t period_ns = 0;
   std::int64_t monotonic_ns = 0;
   std::int64_t wall_time_ns = 0;
-  std::int64_t arm_zero_counts = 0;       // 1065 position taken as q1 = 0
-  std::int64_t pendulum_zero_counts = 0;  // accumulated 1047 counts taken as q2 = 0
+  std::int64_t arm_zero_counts = 0;       // the motor board's position taken as q1 = 0
+  std::int64_t pendulum_zero_counts = 0;  // the encoder board's accumulated counts taken as q2 = 0
 };
 
 struct SessionEndEvent {

@@ -36,7 +36,7 @@ struct RigConnection {
   std::unique_ptr<bridge::Transport> encoder;
   std::unique_ptr<BoardLink> motor_link;
   std::unique_ptr<BoardLink> encoder_link;
-  std::string description;  // "simulated rig", "hidapi: 1065 serial ...", for messages
+  std::string description;  // "simulated rig", "hidapi", "replay of ...", for messages
   // What the caller must show the user: a board opened although its firmware is untested.
   std::vector<std::string> warnings;
 };

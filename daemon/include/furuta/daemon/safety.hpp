@@ -20,7 +20,7 @@ enum class StopReason : std::uint8_t {
   signal,  // SIGINT / SIGTERM
   arm_angle_limit,
   duty_limit,
-  stale_motor_reports,  // no fresh 1065 report for N cycles
+  stale_motor_reports,  // no fresh motor board report for N cycles
   stale_encoder_reports,
   usb_error,
   under_voltage,
@@ -42,7 +42,7 @@ struct SafetyLimits {
   double max_supply_v = 34.0;   // its "warning" threshold
   // A frozen encoder: the arm limit and the bang-bang thresholds read the arm's count, so a count
   // that stops while the motor drives must stop the session before the arm reaches its stop.
-  int stuck_arm_cycles = 4;         // fresh 1065 reports in a row with the same count...
+  int stuck_arm_cycles = 4;         // fresh motor board reports in a row with the same count...
   double stuck_arm_min_duty = 0.1;  // ...while |applied duty| is at least this
   double stuck_pendulum_arm_travel_rad = 6.283185307179586;  // arm travel with no pendulum count
 };

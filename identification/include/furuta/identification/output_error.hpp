@@ -51,9 +51,10 @@ struct OeExperiment {
   double supply_scale = 1.0;  // duty: effective duty = duty * supply voltage / nominal voltage
   VoltageMotor voltage_motor;
   // The input's gain is fitted around 1 with this relative standard deviation as its prior (the
-  // uncertainty of the supply reading or of a recorded voltage's scale); 0 holds it at 1. The 1065
-  // reports its supply in steps of 80/2048 V, 0.33 % of 12 V, and every inertia scales with the
-  // gain, so without it the standard deviations would ignore the largest error there is.
+  // uncertainty of the supply reading or of a recorded voltage's scale); 0 holds it at 1. The
+  // motor board reports its supply in steps of 80/2048 V (its adapter's step), 0.33 % of 12 V,
+  // and every inertia scales with the gain, so without it the standard deviations would ignore
+  // the largest error there is.
   double input_gain_sigma = 0.0;
   // Standard deviation of each joint's angle noise [rad]: one count / sqrt(12) for a quantising
   // encoder; and where each came from (the misfit warning says it).
@@ -61,8 +62,8 @@ struct OeExperiment {
   std::array<AngleNoiseSource, 2> angle_noise_source = {AngleNoiseSource::encoder_resolution,
                                                         AngleNoiseSource::encoder_resolution};
   std::vector<std::string> warnings;
-  // Session logs: every supply reading of the 1065's reports [V] (the guaranteed identification's
-  // drive, physical_inputs.hpp); empty for other recordings.
+  // Session logs: every supply reading of the motor board's reports [V] (the guaranteed
+  // identification's drive, physical_inputs.hpp); empty for other recordings.
   std::vector<double> supply_readings_v;
   // Per joint: the board's clock its observations' times were mapped from, or nothing where they
   // are the host's stamps (no board time, or one that does not keep time).
@@ -71,10 +72,10 @@ struct OeExperiment {
 
 // From a session log: the angles of every report of both boards at its time, the board's own clock
 // mapped onto the host's (fit_board_clock) where it keeps time, else the host's; the input rebuilt
-// from every command written to the 1065 (session_log::motor_command_writes) and the board's ramp
-// towards it, scaled by the mean supply reading of the 1065's reports. `rig` gives the encoders'
-// geometry, the motor's nominal voltage and the braking before the first command (the log's
-// carried configuration, or the one the user named).
+// from every command written to the motor board (session_log::motor_command_writes) and the
+// board's ramp towards it, scaled by the mean supply reading of the motor board's reports. `rig`
+// gives the encoders' geometry, the motor's nominal voltage and the braking before the first
+// command (the log's carried configuration, or the one the user named).
 OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
                                     const config::RigConfig& rig);
 

@@ -27,8 +27,8 @@ using interval::Interval;
 enum class InputSource {
   encoder_counts,   // half a count of the encoder's resolution
   rest_check,       // the daemon's rest check before a session starts
-  duty_steps,       // the 1065 applies (and echoes) duties in steps of 1/255
-  supply_readings,  // the 1065's supply readings of the session, and their step
+  duty_steps,       // the motor board applies (and echoes) duties in its adapter's steps of 1/255
+  supply_readings,  // the motor board's supply readings of the session, and their step
   data_sheet,       // [motor]'s figures with [guaranteed] motor_tolerance_pct
   configured,       // a [guaranteed] setting (a bound no recording gives)
   cad,              // [nominal] (CAD values) with [guaranteed] prior_percent
@@ -57,7 +57,7 @@ struct DriveData {
 };
 
 // What the recording's own logger bounds: for a session log the daemon (encoder counts, its rest
-// check, the 1065's supply readings) and [guaranteed] lag_ms; for a CSV its import spec's
+// check, the motor board's supply readings) and [guaranteed] lag_ms; for a CSV its import spec's
 // [guaranteed] table. Each value is the interval its error lies in.
 struct RecordingBounds {
   PhysicalInput arm_angle_error;       // rad: true angle minus reading
@@ -71,7 +71,7 @@ struct RecordingBounds {
 };
 
 // A session log's bounds: the configuration's encoders (half a count), the daemon's rest check,
-// [guaranteed] lag_ms and arm_rest_speed_rad_s, the 1065's supply step.
+// [guaranteed] lag_ms and arm_rest_speed_rad_s, the motor board's supply step (its adapter's).
 RecordingBounds session_log_bounds(const config::RigConfig& rig);
 
 struct PhysicalInputs {
@@ -86,9 +86,9 @@ struct PhysicalInputs {
   std::vector<PhysicalInput> provenance;
 };
 
-// From the configuration and the session's supply readings (volts, each reading of the 1065; at
-// least one). Throws std::invalid_argument without [nominal] (the prior's centre) or readings, or
-// with a reading that is not a finite positive voltage.
+// From the configuration and the session's supply readings (volts, each reading of the motor
+// board; at least one). Throws std::invalid_argument without [nominal] (the prior's centre) or
+// readings, or with a reading that is not a finite positive voltage.
 PhysicalInputs physical_inputs(const config::RigConfig& rig,
                                std::span<const double> supply_readings_v);
 // The same with the recording's bounds stated (a CSV's import spec): the drive and the prior from

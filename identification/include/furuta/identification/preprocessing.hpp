@@ -31,8 +31,8 @@ struct RawExperiment {
 // (its echo, not the command). Warns about lost reports and overruns in the session.
 // The two boards report at their own times (up to a report period apart): each channel is placed
 // at the host receive time of the report it came from and resampled (cubic) onto one uniform grid,
-// the 1065's times shifted by their median lag behind the cycle. The duty (a step signal) is
-// resampled linearly.
+// the motor board's times shifted by their median lag behind the cycle. The duty (a step signal)
+// is resampled linearly.
 RawExperiment experiment_from_log(const session_log::SessionLog& log);
 RawExperiment experiment_from_csv(const ImportedSeries& series, const std::string& name);
 

@@ -1,6 +1,6 @@
 #pragma once
-// The arm's drive: a Maxon DC motor and gearbox driven by the 1065's PWM duty (paper section IV.A,
-// eq. 4; docs/model.md).
+// The arm's drive: a Maxon DC motor and gearbox driven by the motor board's PWM duty (paper
+// section IV.A, eq. 4; docs/model.md).
 
 #include <numbers>
 

@@ -84,10 +84,11 @@ struct MotorInputReport {
 std::vector<MotorInputReport> motor_input_reports(const SessionLog& log,
                                                   std::string_view motor_board);
 
-// Each report's time on its board's own clock, fed the samples' reports in log order: the 1065's
-// 8-bit report counter unwrapped (in reports), the 1047's packet ticks accumulated (in ticks; the
-// first report's are left out: they cover time before the host listened). A lost 1047 report
-// takes its ticks with it, so after one the 1047's times no longer keep time.
+// Each report's time on its board's own clock, fed the samples' reports in log order: the motor
+// board's 8-bit report counter unwrapped (in reports), the encoder board's packet ticks
+// accumulated (in ticks; the first report's are left out: they cover time before the host
+// listened). A lost encoder board report takes its ticks with it, so after one the encoder
+// board's times no longer keep time.
 class BoardTimeline {
  public:
   double motor_report(std::int16_t packet_counter);

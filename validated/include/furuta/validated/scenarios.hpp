@@ -43,7 +43,7 @@ struct MeasurementOptions {
   double step_s = 1e-3;                  // RK4 step of the true model
   double sample_period_s = 0.016;        // the daemon's loop
   double arm_resolution_rad = 0.0;       // 0: one count of the 512-line motor encoder behind 26:1
-  double pendulum_resolution_rad = 0.0;  // 0: one count of the 1047's 4096 per turn
+  double pendulum_resolution_rad = 0.0;  // 0: one count of the pendulum channel's 4096 per turn
 };
 
 struct ScenarioMeasurement {
