@@ -18,6 +18,7 @@ set(FURUTA_MODULE_DEPENDENCIES
   "daemon:firmware_bridge,config,session_log,lcmtypes,model,command_auth,common"
   "identification:model,interval,config,session_log,validated"
   "validated:model,interval,common"
+  "validated_research:validated,model,interval,common"
   "pipeline:identification,validated,session_log,config,model,interval"
   "report:pipeline,identification,validated,session_log,config,model,interval,common"
   "app:firmware_bridge,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
