@@ -26,6 +26,7 @@
 #include "furuta/model/model.hpp"
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/ode.hpp"
+#include "furuta/validated/research/affine_enclosure.hpp"
 
 namespace {
 
@@ -215,7 +216,7 @@ int main(int argc, char** argv) {
       steps += r.steps;
       std::vector<Row> rows;
       for (const Observation* o : w.obs) {
-        const validated::AffineEnclosure e = r.tube.affine_at(o->t);
+        const validated::research::AffineEnclosure e = validated::research::affine_at(r.tube, o->t);
         for (int joint = 0; joint < 2; ++joint) {
           const int c = joint == 0 ? 0 : 2;
           const double res = joint == 0 ? kArmRes : kPendulumRes;

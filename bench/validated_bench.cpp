@@ -22,6 +22,7 @@
 
 #include "furuta/model/model.hpp"
 #include "furuta/validated/integrator.hpp"
+#include "furuta/validated/research/benchmark_systems.hpp"
 #include "furuta/validated/split.hpp"
 #include "furuta/validated/taylor_model_flow.hpp"
 #include "furuta/validated/taylor_model_split.hpp"
@@ -42,7 +43,7 @@ double env_or(const char* name, double fallback) {
 // ---- (1) The DynIbex pendulum ------------------------------------------------------------------
 
 void BM_Pendulum(benchmark::State& state) {
-  const v::SimplePendulum pendulum;
+  const v::research::SimplePendulum pendulum;
   const Box x0{Interval(-1.755, -1.735), Interval(-0.01, 0.01)};
   v::IntegratorOptions options;
   options.t_end = 4.0;
@@ -399,7 +400,7 @@ BENCHMARK(BM_FurutaTaylorModelsSplit)
 // gives. `critical_s` is the sum over the cutting tree's generations of their longest run: the wall
 // time with a core per run.
 void BM_PendulumTaylorModelsSplit(benchmark::State& state) {
-  const v::SimplePendulum pendulum;
+  const v::research::SimplePendulum pendulum;
   const Box x0{Interval(-2.045, -1.445), Interval(-0.3, 0.3)};
   v::TaylorModelFlowOptions o;
   o.integrator.t_end = 3.0;

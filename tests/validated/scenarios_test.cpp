@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "furuta/validated/research/paper_parameters.hpp"
 #include "short_scenario_run.hpp"
 
 namespace furuta::validated {
@@ -123,7 +124,7 @@ TEST(ScenarioMeasurement, BadOptionsAreRefused) {
 
 TEST(ScenarioParameters, IntervalSetsWidenTheMusAndTakeTheFrictions) {
   const model::Parameters<double> p = model::paper_run1();
-  const ParameterSet set = interval_parameters(
+  const ParameterSet set = research::interval_parameters(
       "SIVIA", p, {12, 12, 10, 12, 15}, Interval(0.043012, 0.13002), Interval(0.000454, 0.001174));
   EXPECT_EQ(set.name, "SIVIA");
   EXPECT_LE(set.parameters.mu1.lo(), p.mu1 * 0.88);
@@ -134,10 +135,12 @@ TEST(ScenarioParameters, IntervalSetsWidenTheMusAndTakeTheFrictions) {
   const ParameterSet point = point_parameters("LSMI", p);
   EXPECT_TRUE(point.parameters.fv2.is_point());
   EXPECT_EQ(point.parameters.fv2.lo(), p.fv2);
-  EXPECT_THROW(interval_parameters("x", p, {-1, 0, 0, 0, 0}, Interval(0, 1), Interval(0, 1)),
-               std::invalid_argument);
-  EXPECT_THROW(interval_parameters("x", p, {0, 0, 0, 0, 0}, Interval::entire(), Interval(0, 1)),
-               std::invalid_argument);
+  EXPECT_THROW(
+      research::interval_parameters("x", p, {-1, 0, 0, 0, 0}, Interval(0, 1), Interval(0, 1)),
+      std::invalid_argument);
+  EXPECT_THROW(
+      research::interval_parameters("x", p, {0, 0, 0, 0, 0}, Interval::entire(), Interval(0, 1)),
+      std::invalid_argument);
 }
 
 using ShortRun = furuta::testing::ShortScenarioRun;

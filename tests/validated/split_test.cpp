@@ -12,11 +12,13 @@
 
 #include "furuta/model/model.hpp"
 #include "furuta/validated/ode.hpp"
+#include "furuta/validated/research/benchmark_systems.hpp"
 #include "reference.hpp"
 
 namespace furuta::validated {
 namespace {
 
+using research::SimplePendulum;
 using testing::Point;
 
 // The pendulum from a box 10x the benchmark's: one tube passes max_width at about 2 s, the split

@@ -11,11 +11,13 @@
 #include <vector>
 
 #include "furuta/validated/ode.hpp"
+#include "furuta/validated/research/benchmark_systems.hpp"
 #include "reference.hpp"
 
 namespace furuta::validated {
 namespace {
 
+using research::SimplePendulum;
 using testing::Point;
 
 // For every sampled solution and every time on a grid up to r.t_reached: some piece's enclosure

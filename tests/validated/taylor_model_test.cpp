@@ -17,6 +17,7 @@
 #include "furuta/model/model.hpp"
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/ode.hpp"
+#include "furuta/validated/research/benchmark_systems.hpp"
 #include "furuta/validated/taylor.hpp"
 #include "mpfr_oracle.hpp"
 
@@ -26,6 +27,7 @@ namespace {
 using furuta::testing::d_str;
 using furuta::testing::Mp;
 using furuta::testing::mp_str;
+using research::SimplePendulum;
 
 std::size_t binomial(std::size_t n, std::size_t k) {
   std::size_t r = 1;

@@ -9,9 +9,13 @@
 #include <vector>
 
 #include "furuta/validated/ode.hpp"
+#include "furuta/validated/research/benchmark_systems.hpp"
 
 namespace furuta::validated {
 namespace {
+
+using research::HarmonicOscillator;
+using research::SimplePendulum;
 
 double factorial(int n) {
   double f = 1.0;

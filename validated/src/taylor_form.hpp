@@ -1,13 +1,14 @@
 #pragma once
 // Evaluation of a step's Taylor form (internal to the validated integrator): the series of one
 // component from its coefficient rows, and the Jacobian's series V(s) = sum_i s^i V_i, both by
-// Horner.
+// Horner; a step's form at s in its parts (form_terms, defined in tube.cpp).
 
 #include <algorithm>
 #include <cstddef>
 #include <vector>
 
 #include "furuta/interval/interval.hpp"
+#include "furuta/validated/integrator.hpp"
 #include "interval_matrix.hpp"
 
 namespace furuta::validated::internal {
@@ -32,5 +33,18 @@ inline IMatrix jacobian_series(const std::vector<Interval>& jacobian, std::size_
   }
   return v;
 }
+
+// The parts of a step's Taylor form at s that do not carry the start exactly: V(s) (by Horner),
+// the centre's and the second-order term's polynomials, the quadratic part P(r0) and the gathered
+// errors B r through V(s), and the Lagrange remainder. The start's own part is V(s) C r0.
+struct FormTerms {
+  IMatrix v;
+  std::vector<Interval> polynomial, quadratic, errors, remainder;
+};
+
+// The step's form at s (a part of [0, h]), its quadratic part over step_r0 (the step's r0, or the
+// tube's when the step has none); n and order are the tube's.
+FormTerms form_terms(const TubeStep& step, std::size_t n, int order, const Interval& s,
+                     const std::vector<Interval>& step_r0);
 
 }  // namespace furuta::validated::internal

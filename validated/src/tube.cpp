@@ -13,37 +13,9 @@
 
 namespace furuta::validated {
 
-using internal::forms_range;
+using internal::form_terms;
+using internal::FormTerms;
 using internal::from_point;
-using internal::horner;
-using internal::IMatrix;
-using internal::jacobian_series;
-
-namespace {
-
-// The parts of a step's Taylor form at s that do not carry the start exactly: V(s) (by Horner),
-// the centre's and the second-order term's polynomials, the quadratic part P(r0) and the gathered
-// errors B r through V(s), and the Lagrange remainder.
-struct FormTerms {
-  IMatrix v;
-  std::vector<Interval> polynomial, quadratic, errors, remainder;
-};
-
-FormTerms form_terms(const TubeStep& step, std::size_t n, int order, const Interval& s,
-                     const std::vector<Interval>& step_r0) {
-  FormTerms t{jacobian_series(step.jacobian, n, order, s), {}, {}, {}, {}};
-  t.quadratic = t.v * forms_range(step.quad, step_r0);
-  t.errors = (t.v * from_point(n, step.b)) * step.r;
-  const Interval s_k1 = pow(s, order + 1);
-  for (std::size_t i = 0; i < n; ++i) {
-    t.polynomial.push_back(horner(step.centre, n, i, order, s) +
-                           horner(step.second, n, i, order, s));
-    t.remainder.push_back(s_k1 * step.remainder[i]);
-  }
-  return t;
-}
-
-}  // namespace
 
 Box Tube::step_form(std::size_t index, const Interval& s) const {
   const TubeStep& step = steps.at(index);
@@ -55,40 +27,6 @@ Box Tube::step_form(std::size_t index, const Interval& s) const {
   Box out(n);
   for (std::size_t i = 0; i < n; ++i) {
     out[i] = t.polynomial[i] + linear0[i] + t.quadratic[i] + t.errors[i] + t.remainder[i];
-  }
-  return out;
-}
-
-AffineEnclosure Tube::affine_at(double t) const {
-  if (!(t >= t_start && t <= t_end()) || steps.empty()) {
-    throw std::out_of_range("Tube::affine_at: t outside the tube");
-  }
-  // The step that starts at or before t and ends after it (the last one at t_end()).
-  auto it = std::upper_bound(steps.begin(), steps.end(), t,
-                             [](double time, const TubeStep& s) { return time < s.t1; });
-  if (it == steps.end()) --it;
-  const TubeStep& step = *it;
-  if (!step.has_form()) throw std::out_of_range("Tube::affine_at: the step has no Taylor form");
-  const std::size_t n = dimension;
-  const Interval s = (Interval(t) - Interval(step.t0)) & Interval(0.0, step.h.hi());
-  AffineEnclosure out;
-  out.dimension = n;
-  out.rho = step.r0.empty() ? r0 : step.r0;
-  out.origin = step.origin.empty() ? initial.mid() : step.origin;
-  const FormTerms terms = form_terms(step, n, order, s, out.rho);
-  // V(s) C splits into its midpoint (the point matrix a) and the rest, enclosed over rho.
-  const IMatrix vc = terms.v * from_point(n, step.c);
-  out.a.resize(n * n);
-  IMatrix rest(n);
-  for (std::size_t k = 0; k < n * n; ++k) {
-    out.a[k] = vc.v[k].mid();
-    rest.v[k] = vc.v[k] - Interval(out.a[k]);
-  }
-  const std::vector<Interval> linear_rest = rest * out.rho;
-  out.offset.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    out.offset[i] = terms.polynomial[i] + linear_rest[i] + terms.quadratic[i] + terms.errors[i] +
-                    terms.remainder[i];
   }
   return out;
 }
@@ -129,6 +67,20 @@ Box Tube::enclosure_over(double ta, double tb) const {
 }
 
 namespace internal {
+
+FormTerms form_terms(const TubeStep& step, std::size_t n, int order, const Interval& s,
+                     const std::vector<Interval>& step_r0) {
+  FormTerms t{jacobian_series(step.jacobian, n, order, s), {}, {}, {}, {}};
+  t.quadratic = t.v * forms_range(step.quad, step_r0);
+  t.errors = (t.v * from_point(n, step.b)) * step.r;
+  const Interval s_k1 = pow(s, order + 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    t.polynomial.push_back(horner(step.centre, n, i, order, s) +
+                           horner(step.second, n, i, order, s));
+    t.remainder.push_back(s_k1 * step.remainder[i]);
+  }
+  return t;
+}
 
 TubeStep start_step(const Doubleton& set, const StepEnclosure& enclosure) {
   const std::size_t n = set.m.size();

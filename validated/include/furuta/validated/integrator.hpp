@@ -3,7 +3,7 @@
 // enclosure, the set carried in Lohner's doubleton form (parallelepiped or QR frame) with a
 // second-order term against the wrapping effect (see validated/README.md).
 //
-//   IntegrationResult r = integrate(SimplePendulum{}, x0, options);
+//   IntegrationResult r = integrate(FurutaDynamics(tau), x0, options);
 //   if (r.status != IntegrationResult::Status::ok) ... r.t_failed, r.reason
 //   Box at_1s = r.tube.enclosure_at(1.0);
 //
@@ -56,19 +56,6 @@ struct IntegratorOptions {
   bool quadratic_model = true;
   double t_start = 0.0;
   double t_end = 1.0;
-};
-
-// Every solution at one time as an affine form in its start: x(t) in offset + a rho for every
-// start x0 = origin + rho with rho in `rho`. `a` is a point matrix (the midpoint of the step's
-// V(s) C); the rest of V(s) C over rho, the quadratic part, the gathered errors and the Lagrange
-// remainder are in `offset`. Set inversion reads the measured components of it as linear
-// constraints on the start and on parameters carried as state.
-struct AffineEnclosure {
-  std::size_t dimension = 0;
-  std::vector<double> a;         // dimension x dimension, row-major
-  std::vector<Interval> offset;  // dimension
-  std::vector<Interval> rho;     // the box rho lives in (the start minus origin)
-  std::vector<double> origin;    // dimension
 };
 
 // One step of the tube, over [t0, t1].
@@ -127,10 +114,6 @@ class Tube {
   // The Taylor form of step i over s (a part of [0, h]), not intersected with anything; a step
   // without a form gives its box over the step.
   Box step_form(std::size_t i, const Interval& s) const;
-  // The affine form of every solution at t in [t_start, t_end()] (see AffineEnclosure); at a
-  // step's boundary the later step's. Throws std::out_of_range outside the tube or in a step
-  // without a form.
-  AffineEnclosure affine_at(double t) const;
 };
 
 struct IntegrationResult {

@@ -9,7 +9,6 @@
 //   const ScenarioMeasurement m = measure_scenario(s, model::paper_run1());
 //   const ScenarioResult r = evaluate_scenario(s, point_parameters("LSMI", estimate), m, {}, {});
 
-#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -92,11 +91,6 @@ struct ParameterSet {
 
 // Point parameters (every interval a single value).
 ParameterSet point_parameters(std::string name, const model::Parameters<double>& p);
-// The paper's interval parameters: the mu's as mu_centre +- percent (Table II: 12, 12, 10, 12, 15
-// for mu1, mu2, mu3, mu4, mug), the frictions as given (SIVIA's outer hull).
-ParameterSet interval_parameters(std::string name, const model::Parameters<double>& mu_centre,
-                                 const std::array<double, 5>& mu_percent,
-                                 const interval::Interval& fv1, const interval::Interval& fv2);
 
 // The integrator's settings for the Furuta scenarios (chosen with bench/validated_bench.cpp, its
 // figures in docs/measurements/validated.md): tolerance 1e-11 (a looser one ends scenario (a)
