@@ -10,8 +10,8 @@
 #include "devices_report.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/firmware_bridge/clock.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_backends.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 namespace furuta::app {
 
@@ -53,7 +53,7 @@ void print_device(std::ostream& out, const bridge::DeviceInfo& device, const std
 // The simulated rig is listed as the USB scan lists hardware: from its boards' descriptors, so the
 // firmware is read from bcdDevice as the vendor reads it.
 int list_simulated(const DevicesOptions& options, std::ostream& out, std::ostream& err) {
-  bridge::SimulatedRigConfig rig_config;
+  sim::SimulatedRigConfig rig_config;
   if (!options.config_path.empty()) {
     try {
       rig_config = config::load_rig_config(options.config_path).simulation;
@@ -63,7 +63,7 @@ int list_simulated(const DevicesOptions& options, std::ostream& out, std::ostrea
     }
   }
   bridge::VirtualClock clock;
-  bridge::SimulatedRig rig(rig_config, clock);
+  sim::SimulatedRig rig(rig_config, clock);
   const std::unique_ptr<bridge::UsbBus> bus = rig.make_usb_bus();
   const bridge::DiscoveryResult found = bridge::discover_phidgets(*bus);
   if (found.devices.empty()) {

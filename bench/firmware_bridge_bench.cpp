@@ -6,11 +6,13 @@
 
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 namespace {
 
 using namespace furuta::bridge;
+using furuta::sim::SimulatedRig;
+using furuta::sim::SimulatedRigConfig;
 
 void BM_Decode1065Input(benchmark::State& state) {
   MotorReport1065 in;

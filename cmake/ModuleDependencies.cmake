@@ -10,18 +10,19 @@ set(FURUTA_MODULE_DEPENDENCIES
   "common:"
   "model:"
   "interval:common"
-  "firmware_bridge:model"
-  "config:firmware_bridge,model"
+  "firmware_bridge:"
+  "simulator:firmware_bridge,model"
+  "config:firmware_bridge,simulator,model"
   "lcmtypes:"
   "command_auth:lcmtypes,common"
   "session_log:lcmtypes,firmware_bridge"
-  "daemon:firmware_bridge,config,session_log,lcmtypes,model,command_auth,common"
+  "daemon:firmware_bridge,simulator,config,session_log,lcmtypes,model,command_auth,common"
   "identification:model,interval,config,session_log,validated"
   "validated:model,interval,common"
   "validated_research:validated,model,interval,common"
   "pipeline:identification,validated,session_log,config,model,interval"
   "report:pipeline,identification,validated,session_log,config,model,interval,common"
-  "app:firmware_bridge,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
+  "app:firmware_bridge,simulator,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
 )
 
 function(furuta_check_module_dependencies)

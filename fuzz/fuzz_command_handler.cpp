@@ -26,7 +26,7 @@
 #include "furuta/firmware_bridge/clock.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/phidget_ids.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 using namespace furuta;
 using namespace furuta::daemon;
@@ -46,7 +46,7 @@ void check_reason(const std::string& reason) {
 struct Rig {
   config::RigConfig config = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
   bridge::VirtualClock clock{1'000'000'000};
-  std::unique_ptr<bridge::SimulatedRig> sim;
+  std::unique_ptr<sim::SimulatedRig> sim;
   std::unique_ptr<bridge::Transport> motor_usb, encoder_usb;
   std::unique_ptr<DirectBoardLink> motor, encoder;
   DaemonSettings settings;
@@ -54,7 +54,7 @@ struct Rig {
   std::unique_ptr<Daemon> daemon;
 
   Rig() {
-    sim = std::make_unique<bridge::SimulatedRig>(config.simulation, clock);
+    sim = std::make_unique<sim::SimulatedRig>(config.simulation, clock);
     motor_usb = sim->make_transport();
     encoder_usb = sim->make_transport();
     check(motor_usb->open({bridge::kPhidgetsVendorId, bridge::kProductMotorControl1065, {}}) ==

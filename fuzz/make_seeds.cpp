@@ -16,12 +16,12 @@
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/phidget_ids.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_command_t.hpp"
 #include "furuta/rig_status_t.hpp"
 #include "furuta/session_log/lcm_log.hpp"
 #include "furuta/session_log/session_log.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 namespace fs = std::filesystem;
 using namespace furuta;
@@ -146,9 +146,9 @@ int main(int argc, char** argv) {
 
   // A short session log as the daemon writes it: start, samples, USB traffic, a fault, end.
   bridge::VirtualClock clock(1'000'000'000);
-  bridge::SimulatedRig sim(bridge::SimulatedRigConfig{}, clock);
-  auto motor = sim.make_transport();
-  auto encoder = sim.make_transport();
+  sim::SimulatedRig rig(sim::SimulatedRigConfig{}, clock);
+  auto motor = rig.make_transport();
+  auto encoder = rig.make_transport();
   motor->open({bridge::kPhidgetsVendorId, bridge::kProductMotorControl1065, {}});
   encoder->open({bridge::kPhidgetsVendorId, bridge::kProductEncoder1047, {}});
   const fs::path tmp = fs::temp_directory_path() / "furuta-make-seeds";

@@ -20,8 +20,8 @@ if [ "${FURUTA_ARM64_ALL:-0}" = 1 ]; then
   cmake --build --preset arm64 --parallel "$(nproc)"
 else
   cmake --build --preset arm64 --parallel "$(nproc)" --target furuta furutad common_tests \
-    model_tests config_tests lcmtypes_tests firmware_bridge_tests command_auth_tests \
-    session_log_tests daemon_tests interval_tests identification_tests
+    model_tests config_tests lcmtypes_tests firmware_bridge_tests simulator_tests \
+    command_auth_tests session_log_tests daemon_tests interval_tests identification_tests
 fi
 built=$SECONDS
 ctest --preset arm64 --parallel "$(nproc)"

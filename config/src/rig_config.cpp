@@ -120,7 +120,7 @@ void read_encoders(Section encoders, RigConfig& c) {
 }
 
 // [simulation.initial_state], in degrees.
-void read_initial_state(Section x0, bridge::SimulatedRigConfig& s) {
+void read_initial_state(Section x0, sim::SimulatedRigConfig& s) {
   s.initial_state.q1 = x0.number("q1_deg", 0.0) * kDegToRad;
   s.initial_state.dq1 = x0.number("dq1_deg_per_s", 0.0) * kDegToRad;
   s.initial_state.q2 = x0.number("q2_deg", 0.0) * kDegToRad;
@@ -130,8 +130,8 @@ void read_initial_state(Section x0, bridge::SimulatedRigConfig& s) {
 
 // [simulation]: the simulated rig's own settings (its boards are the configured ones, see
 // simulate_the_configured_rig).
-bridge::SimulatedRigConfig read_simulation(Section sim) {
-  bridge::SimulatedRigConfig s;
+sim::SimulatedRigConfig read_simulation(Section sim) {
+  sim::SimulatedRigConfig s;
   s.seed = static_cast<std::uint64_t>(sim.integer("seed", 1, non_negative_integer, ">= 0"));
   s.integration_step_s = sim.number(
       "integration_step_s", s.integration_step_s, [](double v) { return v > 0 && v <= 1e-3; },
@@ -155,7 +155,7 @@ bridge::SimulatedRigConfig read_simulation(Section sim) {
 
 // The simulated boards are built like the configured ones.
 void simulate_the_configured_rig(RigConfig& c) {
-  bridge::SimulatedRigConfig& s = c.simulation;
+  sim::SimulatedRigConfig& s = c.simulation;
   s.motor = c.motor;
   s.motor_encoder_counts_per_rev = c.arm_encoder.counts_per_rev;
   s.pendulum_encoder_counts_per_rev = c.pendulum_encoder.counts_per_rev;

@@ -92,7 +92,7 @@ RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions&
     c.description = "replay of " + options.replay_log.string();
   } else if (options.backend == BackendChoice::simulated ||
              config.backend == config::UsbBackend::simulated) {
-    c.simulated_rig = std::make_unique<bridge::SimulatedRig>(config.simulation, *c.clock);
+    c.simulated_rig = std::make_unique<sim::SimulatedRig>(config.simulation, *c.clock);
     c.motor = c.simulated_rig->make_transport();
     c.encoder = c.simulated_rig->make_transport();
     c.description = "simulated rig";

@@ -27,7 +27,7 @@ using usb_detail::ContextPtr;
 using usb_detail::DeviceList;
 using usb_detail::HandlePtr;
 
-constexpr int kInterface = 0;
+constexpr int kClaimedInterface = 0;
 
 TransportStatus status_from_libusb(int error) {
   switch (error) {
@@ -65,10 +65,11 @@ void describe_interface(libusb_device* device, UsbDeviceDescription& d) {
     return;
   }
   const ConfigPtr config(raw);
-  if (config->bNumInterfaces <= kInterface || config->interface[kInterface].num_altsetting < 1) {
+  if (config->bNumInterfaces <= kClaimedInterface ||
+      config->interface[kClaimedInterface].num_altsetting < 1) {
     return;
   }
-  const libusb_interface_descriptor& interface = config->interface[kInterface].altsetting[0];
+  const libusb_interface_descriptor& interface = config->interface[kClaimedInterface].altsetting[0];
   d.interface_class = interface.bInterfaceClass;
   if (interface.extra != nullptr && interface.extra_length > 0) {
     d.interface_extra.assign(interface.extra, interface.extra + interface.extra_length);
@@ -85,8 +86,8 @@ class LibusbDevice final : public UsbDevice {
       : handle_(std::move(handle)), detached_kernel_driver_(detached_kernel_driver) {}
   ~LibusbDevice() override {
     // Give the board back as we found it, so hidraw tools (and our hidapi backend) see it again.
-    libusb_release_interface(handle_.get(), kInterface);
-    if (detached_kernel_driver_) libusb_attach_kernel_driver(handle_.get(), kInterface);
+    libusb_release_interface(handle_.get(), kClaimedInterface);
+    if (detached_kernel_driver_) libusb_attach_kernel_driver(handle_.get(), kClaimedInterface);
   }
 
   TransportStatus control_transfer(const UsbSetup& setup, std::span<std::uint8_t> data,
@@ -174,14 +175,14 @@ class LibusbBus final : public UsbBus {
       HandlePtr handle(raw);
       // usbhid binds the HID boards; the interface cannot be claimed while it does.
       bool detached = false;
-      if (libusb_kernel_driver_active(handle.get(), kInterface) == 1) {
-        const int result = libusb_detach_kernel_driver(handle.get(), kInterface);
+      if (libusb_kernel_driver_active(handle.get(), kClaimedInterface) == 1) {
+        const int result = libusb_detach_kernel_driver(handle.get(), kClaimedInterface);
         if (result != LIBUSB_SUCCESS) return status_from_libusb(result);
         detached = true;
       }
-      const int claimed = libusb_claim_interface(handle.get(), kInterface);
+      const int claimed = libusb_claim_interface(handle.get(), kClaimedInterface);
       if (claimed != LIBUSB_SUCCESS) {
-        if (detached) libusb_attach_kernel_driver(handle.get(), kInterface);
+        if (detached) libusb_attach_kernel_driver(handle.get(), kClaimedInterface);
         return status_from_libusb(claimed);
       }
       out = std::make_unique<LibusbDevice>(std::move(handle), detached);

@@ -23,10 +23,10 @@
 #include "furuta/command_auth/status_signature.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/session_log/lcm_log.hpp"
 #include "furuta/session_log/session_log.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 #include "stepped_clock.hpp"
 #include "temp_dir.hpp"
 
@@ -149,7 +149,7 @@ TEST(RemoteCommand, WithNoDaemonListeningItSaysSoAndReturns2) {
 class SteppedDaemon final : public DaemonChannel {
  public:
   SteppedDaemon() {
-    sim_ = std::make_unique<bridge::SimulatedRig>(config_.simulation, clock_);
+    sim_ = std::make_unique<sim::SimulatedRig>(config_.simulation, clock_);
     motor_usb_ = sim_->make_transport();
     encoder_usb_ = sim_->make_transport();
     EXPECT_EQ(motor_usb_->open({bridge::kPhidgetsVendorId, bridge::kProductMotorControl1065, {}}),
@@ -258,7 +258,7 @@ class SteppedDaemon final : public DaemonChannel {
   TempDir key_dir_{"furuta-key"};
   config::RigConfig config_ = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
   furuta::testing::SteppedClock clock_{1'000'000'000};
-  std::unique_ptr<bridge::SimulatedRig> sim_;
+  std::unique_ptr<sim::SimulatedRig> sim_;
   std::unique_ptr<bridge::Transport> motor_usb_, encoder_usb_;
   std::unique_ptr<daemon::DirectBoardLink> motor_, encoder_;
   daemon::DaemonSettings settings_;

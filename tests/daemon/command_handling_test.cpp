@@ -27,9 +27,9 @@
 #include "furuta/command_auth/status_signature.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_status_t.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 #include "lcm_datagram.hpp"
 #include "stepped_clock.hpp"
 #include "temp_dir.hpp"
@@ -84,7 +84,7 @@ class Inbox {
 struct CommandRig {
   config::RigConfig config = testing::quiet_rig();
   furuta::testing::SteppedClock clock{1'000'000'000};
-  std::unique_ptr<bridge::SimulatedRig> sim;
+  std::unique_ptr<sim::SimulatedRig> sim;
   std::unique_ptr<bridge::Transport> motor_usb;
   std::unique_ptr<bridge::Transport> encoder_usb;
   std::unique_ptr<DirectBoardLink> motor;
@@ -107,7 +107,7 @@ struct CommandRig {
   }
 
   CommandRig() {
-    sim = std::make_unique<bridge::SimulatedRig>(config.simulation, clock);
+    sim = std::make_unique<sim::SimulatedRig>(config.simulation, clock);
     motor_usb = sim->make_transport();
     encoder_usb = sim->make_transport();
     const bool opened =
@@ -751,7 +751,7 @@ TEST(CommandHandling, AStatusRequestGetsTheStateAndTheCounts) {
 
   // Lost reports show in the counts: three 1065 reports dropped.
   rig.step_cycles(1);
-  rig.sim->drop_reports(bridge::RigBoard::motor_1065, 3);
+  rig.sim->drop_reports(sim::RigBoard::motor_1065, 3);
   rig.step_cycles(4);
   const rig_status_t lost = rig.ask(status_request());
   EXPECT_EQ(lost.motor_lost_reports, 3);

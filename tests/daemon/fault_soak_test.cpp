@@ -31,7 +31,7 @@ namespace furuta::daemon {
 namespace {
 
 namespace fs = std::filesystem;
-using bridge::RigBoard;
+using sim::RigBoard;
 
 constexpr std::int64_t kMs = 1'000'000;
 constexpr std::int64_t kS = 1'000'000'000;
@@ -216,7 +216,7 @@ struct SoakSettings {
 // in time (act on a fault, reconnect, take the next session).
 class SoakDriver {
  public:
-  SoakDriver(bridge::SimulatedRig& rig, const bridge::Clock& clock, const SoakSettings& settings,
+  SoakDriver(sim::SimulatedRig& rig, const bridge::Clock& clock, const SoakSettings& settings,
              std::int64_t period_ns)
       : rig_(rig), clock_(clock), settings_(settings), period_ns_(period_ns), rng_(settings.seed) {}
   void attach(Daemon& daemon) {
@@ -488,7 +488,7 @@ class SoakDriver {
     }
   }
 
-  bridge::SimulatedRig& rig_;
+  sim::SimulatedRig& rig_;
   const bridge::Clock& clock_;
   SoakSettings settings_;
   std::int64_t period_ns_;
@@ -557,7 +557,7 @@ SoakReport run_soak(const SoakSettings& soak) {
   config.simulation.usb_latency_jitter_ns = 1'500'000;
   config.simulation.seed = soak.seed;
   RigConnection io = connect_rig(config, {BackendChoice::simulated, {}, /*virtual_time=*/true});
-  bridge::SimulatedRig& rig = *io.simulated_rig;
+  sim::SimulatedRig& rig = *io.simulated_rig;
 
   DaemonSettings settings = daemon_settings_from_config(config);
   settings.recorder.logs_dir = dir.path() / "logs";
@@ -651,7 +651,7 @@ SoakReport run_soak(const SoakSettings& soak) {
   const auto& commands = rig.motor_commands();
   std::size_t w = 0;
   std::int64_t outside = 0;
-  for (const bridge::MotorCommandRecord& command : commands) {
+  for (const sim::MotorCommandRecord& command : commands) {
     if (command.duty == 0.0) continue;
     while (w < windows.size() && windows[w].second <= command.time_ns) ++w;
     const bool inside = w < windows.size() && windows[w].first <= command.time_ns;
@@ -666,7 +666,7 @@ SoakReport run_soak(const SoakSettings& soak) {
   for (const auto& [start_ns, end_ns] : windows) {
     auto it = std::lower_bound(
         commands.begin(), commands.end(), end_ns,
-        [](const bridge::MotorCommandRecord& r, std::int64_t t) { return r.time_ns < t; });
+        [](const sim::MotorCommandRecord& r, std::int64_t t) { return r.time_ns < t; });
     bool zero = it != commands.begin() && std::prev(it)->duty == 0.0;
     for (; !zero && it != commands.end() && it->time_ns <= end_ns + period_ns; ++it) {
       zero = it->duty == 0.0;

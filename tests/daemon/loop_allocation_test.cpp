@@ -21,7 +21,7 @@
 namespace furuta::daemon {
 namespace {
 
-using bridge::RigBoard;
+using sim::RigBoard;
 
 // Counts allocations on the loop thread from its second cycle until `idle_after_end` cycles after
 // the session has ended, then asks the loop to exit. Calls `script` before each drain, with the
@@ -239,7 +239,7 @@ TEST(LoopAllocation, FaultsAndRefusalsDoNotAllocateOnTheLoopThread) {
   ExcitationSpec spec = session_spec(s, ProfileKind::bang_bang);
   const SessionRequest second = s.request(spec);  // built here: constructing one allocates
   CountedRun run(s, 200);
-  bridge::SimulatedRig& rig = *s.io.simulated_rig;
+  sim::SimulatedRig& rig = *s.io.simulated_rig;
   bridge::VirtualClock& clock = s.clock();
   const std::int64_t period = s.settings.period_ns;
   ControlLoop& loop = run.loop;

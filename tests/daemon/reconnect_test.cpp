@@ -18,7 +18,7 @@ namespace furuta::daemon {
 namespace {
 
 namespace fs = std::filesystem;
-using bridge::RigBoard;
+using sim::RigBoard;
 using testing::HookedLink;
 
 constexpr std::int64_t kMs = 1'000'000;
@@ -171,7 +171,7 @@ TEST(Reconnect, ThreadedLinkReopensTheBoardByItsIdentity) {
   bridge::MonotonicClock clock;
   config::RigConfig config = testing::quiet_rig();
   config.simulation.record_truth = false;
-  bridge::SimulatedRig rig(config.simulation, clock);
+  sim::SimulatedRig rig(config.simulation, clock);
   auto transport = rig.make_transport();
   ASSERT_EQ(transport->open({bridge::kPhidgetsVendorId, bridge::kProductEncoder1047, {}}),
             bridge::TransportStatus::ok);

@@ -23,7 +23,7 @@ namespace furuta::daemon {
 namespace {
 
 namespace fs = std::filesystem;
-using bridge::RigBoard;
+using sim::RigBoard;
 using testing::HookedLink;
 using testing::TempDir;
 
@@ -54,7 +54,7 @@ struct Rig {
   }
   ~Rig() { daemon.reset(); }  // before the links and the rig it drives
 
-  bridge::SimulatedRig& sim() { return *io.simulated_rig; }
+  sim::SimulatedRig& sim() { return *io.simulated_rig; }
 
   // Builds the daemon (settings are final from here) and queues the session.
   void create(const furuta::rig_command_t& start) {

@@ -15,13 +15,16 @@
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/phidget_ids.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/usb_backends.hpp"
 #include "furuta/firmware_bridge/usb_device.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 namespace furuta::bridge::usb_transport_test {
 namespace {
 
+using sim::RigBoard;
+using sim::SimulatedRig;
+using sim::SimulatedRigConfig;
 using std::chrono::milliseconds;
 
 // --------------------------------------------------------------------- firmware versions

@@ -127,7 +127,8 @@ TEST(RigModel, EnergyIsConservedWithoutFrictionOrTorque) {
   EXPECT_GT(std::abs(x.dq2), 0.0);
 }
 
-// Acceptance check 2 (the rig-level variant of the clamped arm is in simulated_rig_test.cpp).
+// Acceptance check 2 (the rig-level variant of the clamped arm is in
+// tests/simulator/simulated_rig_test.cpp).
 TEST(RigModel, ClampedSmallOscillationHasThePendulumPeriod) {
   model::Parameters<double> p = model::paper_run1();
   p.fv2 = 0.0;  // undamped, so the period is exactly the natural one

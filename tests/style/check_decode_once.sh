@@ -20,7 +20,7 @@ if [ -n "$found" ]; then
 fi
 # The board side of the wire decodes only what the host writes.
 found=$(sources | xargs grep -nE '\bdecode_output_[0-9a-z]+\(' |
-  grep -vE "$allowed" | grep -vE '^firmware_bridge/src/simulated_rig[a-z_]*\.cpp:' || true)
+  grep -vE "$allowed" | grep -vE '^simulator/src/simulated_rig[a-z_]*\.cpp:' || true)
 if [ -n "$found" ]; then
   echo "output reports decoded outside the boards' adapters and the simulated rig:"
   echo "$found"

@@ -12,8 +12,8 @@
 #include "furuta/config/config_error.hpp"
 #include "furuta/firmware_bridge/board_roles.hpp"
 #include "furuta/firmware_bridge/encoder_geometry.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/model/model.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 namespace furuta::config {
 
@@ -198,7 +198,7 @@ struct RigConfig {
   bridge::EncoderGeometry arm_encoder;  // gear_ratio = motor.total_ratio()
   bridge::EncoderGeometry pendulum_encoder;
   model::MotorData motor;
-  bridge::SimulatedRigConfig simulation;             // geometry and motor copied in from the above
+  sim::SimulatedRigConfig simulation;                // geometry and motor copied in from the above
   std::optional<model::Parameters<double>> nominal;  // CAD values, for comparison only
   DaemonConfig daemon;
   SafetyConfig safety;

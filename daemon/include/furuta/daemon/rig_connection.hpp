@@ -13,8 +13,8 @@
 #include "furuta/daemon/board_link.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/firmware_bridge/clock.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
 #include "furuta/firmware_bridge/transport.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 namespace furuta::daemon {
 
@@ -31,7 +31,7 @@ struct ConnectOptions {
 struct RigConnection {
   std::unique_ptr<bridge::Clock> base_clock;  // what `clock` is built on, when it is shifted
   std::unique_ptr<bridge::Clock> clock;
-  std::unique_ptr<bridge::SimulatedRig> simulated_rig;  // when simulated
+  std::unique_ptr<sim::SimulatedRig> simulated_rig;  // when simulated
   std::unique_ptr<bridge::Transport> motor;
   std::unique_ptr<bridge::Transport> encoder;
   std::unique_ptr<BoardLink> motor_link;

@@ -1,10 +1,9 @@
 #pragma once
 // The USB layer beneath the libusb transport: a bus that lists the devices of a vendor with their
 // descriptors and opens one, and an opened device's control and interrupt transfers. libusb
-// implements it for hardware (make_libusb_bus); the simulated rig implements it too
-// (SimulatedRig::make_usb_bus), so the transport's choices (which request, which endpoint, which
-// lengths, which firmware version) meet the boards' byte protocol in tests, as libfranka's
-// transport meets its mock server.
+// implements it for hardware (make_libusb_bus); the simulated rig (simulator/) implements it too,
+// so the transport's choices (which request, which endpoint, which lengths, which firmware version)
+// meet the boards' byte protocol in tests, as libfranka's transport meets its mock server.
 
 #include <chrono>
 #include <cstddef>

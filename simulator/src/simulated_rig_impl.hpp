@@ -1,5 +1,5 @@
 #pragma once
-// Private to the firmware bridge: the simulated rig's state (SimulatedRig::Impl) and its parts,
+// Private to the simulator: the simulated rig's state (SimulatedRig::Impl) and its parts,
 // shared by simulated_rig.cpp (the boards' USB side: open, read, write, faults, the public API) and
 // simulated_rig_physics.cpp (the model integrated, reports generated on the boards' clocks).
 
@@ -13,11 +13,11 @@
 #include <stdexcept>
 #include <utility>
 
-#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
-namespace furuta::bridge {
+namespace furuta::sim {
 
-namespace sim_detail {
+namespace detail {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr std::int64_t kNsPerS = 1'000'000'000;
@@ -37,7 +37,7 @@ inline int board_index(RigBoard board) {
 }
 
 struct PendingReport {
-  std::array<std::uint8_t, kMaxReportBytes> bytes{};
+  std::array<std::uint8_t, bridge::kMaxReportBytes> bytes{};
   std::size_t length = 0;
   std::int64_t delivery_ns = 0;
 };
@@ -141,26 +141,27 @@ struct Board {
   Encoder encoder;
 };
 
-}  // namespace sim_detail
+}  // namespace detail
 
 class SimulatedRig::Impl {
  public:
-  Impl(SimulatedRigConfig config, Clock& clock);
+  Impl(SimulatedRigConfig config, bridge::Clock& clock);
 
   // --- called by the transports ---
   std::uint64_t new_handle_id() {
     std::lock_guard lock(mutex_);
     return next_handle_id_++;
   }
-  TransportStatus open(std::uint64_t handle, const DeviceMatch& match, RigBoard& board,
-                       DeviceInfo& info);
+  bridge::TransportStatus open(std::uint64_t handle, const bridge::DeviceMatch& match,
+                               RigBoard& board, bridge::DeviceInfo& info);
   void release(std::uint64_t handle, RigBoard board);
-  TransportStatus read(std::uint64_t handle, RigBoard board, UsbReport& report,
-                       std::chrono::nanoseconds timeout);
-  TransportStatus write(std::uint64_t handle, RigBoard board, std::span<const std::uint8_t> bytes);
+  bridge::TransportStatus read(std::uint64_t handle, RigBoard board, bridge::UsbReport& report,
+                               std::chrono::nanoseconds timeout);
+  bridge::TransportStatus write(std::uint64_t handle, RigBoard board,
+                                std::span<const std::uint8_t> bytes);
 
   // --- the rig's own API ---
-  std::vector<DeviceInfo> devices() const;
+  std::vector<bridge::DeviceInfo> devices() const;
   void drop_reports(RigBoard board, int count);
   void delay_reports(RigBoard board, int count, std::int64_t extra_latency_ns);
   void truncate_reports(RigBoard board, int count, std::size_t length_bytes);
@@ -192,8 +193,8 @@ class SimulatedRig::Impl {
   }
 
  private:
-  DeviceInfo info_of(RigBoard board) const;
-  sim_detail::Board& board_of(RigBoard board) { return boards_[sim_detail::board_index(board)]; }
+  bridge::DeviceInfo info_of(RigBoard board) const;
+  detail::Board& board_of(RigBoard board) { return boards_[detail::board_index(board)]; }
   // The arm torque at `duty`; `idle`: the board has no PWM (duty exactly 0), so it brakes.
   double drive_torque(double duty, double dq1, bool idle) const;
   void reset_motor();
@@ -203,10 +204,10 @@ class SimulatedRig::Impl {
   void generate(RigBoard board, std::int64_t generated_ns);
   std::size_t build_1065(double torque, std::span<std::uint8_t> out);
   std::size_t build_1047(std::int64_t generated_ns, std::span<std::uint8_t> out);
-  void corrupt(sim_detail::PendingReport& report);
-  std::int64_t next_delivery_estimate(const sim_detail::Board& b) const;
+  void corrupt(detail::PendingReport& report);
+  std::int64_t next_delivery_estimate(const detail::Board& b) const;
   bool handle_valid(std::uint64_t handle, RigBoard board) const {
-    const sim_detail::Board& b = boards_[sim_detail::board_index(board)];
+    const detail::Board& b = boards_[detail::board_index(board)];
     return b.connected && b.owner == handle;
   }
   std::size_t input_report_bytes(RigBoard board) const {
@@ -215,7 +216,7 @@ class SimulatedRig::Impl {
   }
 
   const SimulatedRigConfig config_;
-  Clock& clock_;
+  bridge::Clock& clock_;
   mutable std::mutex mutex_;
 
   std::int64_t t0_ns_ = 0;
@@ -225,7 +226,7 @@ class SimulatedRig::Impl {
   bool arm_clamped_ = false;
 
   // 1065 motor drive.
-  MotorOutput1065 motor_output_{};
+  bridge::MotorOutput1065 motor_output_{};
   double target_duty_ = 0.0;
   double applied_duty_ = 0.0;
   double supply_v_ = 0.0;
@@ -237,10 +238,10 @@ class SimulatedRig::Impl {
   double tick_ns_1047_ = 0.0;
   std::uint32_t packet_time_ticks_ = 0;
 
-  std::array<sim_detail::Board, sim_detail::kBoardCount> boards_{};
+  std::array<detail::Board, detail::kBoardCount> boards_{};
 
   std::mt19937_64 noise_rng_;
-  std::array<std::mt19937_64, sim_detail::kBoardCount> jitter_rng_;
+  std::array<std::mt19937_64, detail::kBoardCount> jitter_rng_;
   std::mt19937_64 corrupt_rng_;
   std::normal_distribution<double> standard_normal_{0.0, 1.0};
 
@@ -249,4 +250,4 @@ class SimulatedRig::Impl {
   std::uint64_t next_handle_id_ = 1;
 };
 
-}  // namespace furuta::bridge
+}  // namespace furuta::sim

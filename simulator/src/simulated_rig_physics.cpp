@@ -4,9 +4,10 @@
 #include "furuta/firmware_bridge/phidget_ids.hpp"
 #include "simulated_rig_impl.hpp"
 
-namespace furuta::bridge {
+namespace furuta::sim {
 
-using namespace sim_detail;  // NOLINT(google-build-using-namespace): this file is the rig's own
+using namespace bridge;  // NOLINT(google-build-using-namespace): the boards' types and codecs
+using namespace detail;  // NOLINT(google-build-using-namespace): this file is the rig's own
 
 SimulatedRig::Impl::Impl(SimulatedRigConfig config, Clock& clock)
     : config_(std::move(config)), clock_(clock) {
@@ -309,4 +310,4 @@ std::int64_t SimulatedRig::Impl::next_delivery_estimate(const Board& b) const {
   return std::max(delivery, b.last_delivery_ns);
 }
 
-}  // namespace furuta::bridge
+}  // namespace furuta::sim

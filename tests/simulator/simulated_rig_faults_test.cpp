@@ -3,7 +3,7 @@
 
 #include "simulated_rig_bench.hpp"
 
-namespace furuta::bridge {
+namespace furuta::sim {
 namespace {
 
 using namespace rig_test;  // NOLINT(google-build-using-namespace): the rig tests' own helpers
@@ -286,4 +286,4 @@ TEST(SimulatedRig, InjectedBoardFaultsShowInTheStatusByte) {
 }
 
 }  // namespace
-}  // namespace furuta::bridge
+}  // namespace furuta::sim

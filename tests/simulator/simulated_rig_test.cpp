@@ -5,7 +5,7 @@
 
 #include "simulated_rig_bench.hpp"
 
-namespace furuta::bridge {
+namespace furuta::sim {
 namespace {
 
 using namespace rig_test;  // NOLINT(google-build-using-namespace): the rig tests' own helpers
@@ -562,4 +562,4 @@ TEST(SimulatedRig, RealTimeClockPacesReports) {
 // another; run under TSAN this is the data-race check.
 
 }  // namespace
-}  // namespace furuta::bridge
+}  // namespace furuta::sim

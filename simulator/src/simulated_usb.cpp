@@ -17,7 +17,9 @@
 
 #include "furuta/firmware_bridge/phidget_ids.hpp"
 
-namespace furuta::bridge {
+namespace furuta::sim {
+
+using namespace bridge;  // NOLINT(google-build-using-namespace): the boards' types and codecs
 
 namespace {
 
@@ -179,4 +181,4 @@ std::unique_ptr<UsbBus> make_simulated_usb_bus(SimulatedRig& rig) {
   return std::make_unique<SimulatedUsbBus>(rig);
 }
 
-}  // namespace furuta::bridge
+}  // namespace furuta::sim

@@ -17,9 +17,11 @@
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/phidget_ids.hpp"
-#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
-namespace furuta::bridge::rig_test {
+namespace furuta::sim::rig_test {
+
+using namespace bridge;  // NOLINT(google-build-using-namespace): the boards' types and codecs
 
 using std::chrono::milliseconds;
 constexpr std::int64_t kMs = 1'000'000;
@@ -154,4 +156,4 @@ inline bool same_bytes(const std::vector<Received>& a, const std::vector<Receive
   return true;
 }
 
-}  // namespace furuta::bridge::rig_test
+}  // namespace furuta::sim::rig_test

@@ -21,7 +21,7 @@
 #include "furuta/firmware_bridge/usb_device.hpp"
 #include "furuta/model/model.hpp"
 
-namespace furuta::bridge {
+namespace furuta::sim {
 
 enum class RigBoard : std::uint8_t { motor_1065 = 0, encoder_1047 = 1 };
 
@@ -87,21 +87,21 @@ struct MotorCommandRecord {
 
 class SimulatedRig {
  public:
-  SimulatedRig(SimulatedRigConfig config, Clock& clock);
+  SimulatedRig(SimulatedRigConfig config, bridge::Clock& clock);
   ~SimulatedRig();
   SimulatedRig(const SimulatedRig&) = delete;
   SimulatedRig& operator=(const SimulatedRig&) = delete;
 
   // A new USB handle onto this rig; open() it with the product id of the board wanted.
   // The rig must outlive its transports.
-  std::unique_ptr<Transport> make_transport();
+  std::unique_ptr<bridge::Transport> make_transport();
   // What discovery would list: the boards currently connected.
-  std::vector<DeviceInfo> devices() const;
+  std::vector<bridge::DeviceInfo> devices() const;
   // The rig as a USB bus: the boards with their descriptors (bcdDevice, interface class, endpoints,
   // HID report descriptor) and their control and interrupt endpoints, for the USB transport and
   // discovery (make_usb_transport, discover_phidgets). A vendor-class 1047 answers only the
   // vendor's interface-recipient write request. The rig must outlive the bus.
-  std::unique_ptr<UsbBus> make_usb_bus();
+  std::unique_ptr<bridge::UsbBus> make_usb_bus();
 
   // --- faults (each applies to reports generated from now on) ---
   void drop_reports(RigBoard board, int count);
@@ -139,4 +139,4 @@ class SimulatedRig {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace furuta::bridge
+}  // namespace furuta::sim

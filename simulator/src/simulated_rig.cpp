@@ -1,12 +1,13 @@
-#include "furuta/firmware_bridge/simulated_rig.hpp"
+#include "furuta/simulator/simulated_rig.hpp"
 
 #include "furuta/firmware_bridge/phidget_ids.hpp"
 #include "simulated_rig_impl.hpp"
 #include "simulated_usb.hpp"
 
-namespace furuta::bridge {
+namespace furuta::sim {
 
-using namespace sim_detail;  // NOLINT(google-build-using-namespace): this file is the rig's own
+using namespace bridge;  // NOLINT(google-build-using-namespace): the boards' types and codecs
+using namespace detail;  // NOLINT(google-build-using-namespace): this file is the rig's own
 
 DeviceInfo SimulatedRig::Impl::info_of(RigBoard board) const {
   DeviceInfo info;
@@ -333,4 +334,4 @@ std::unique_ptr<UsbBus> SimulatedRig::make_usb_bus() {
   return make_simulated_usb_bus(*this);
 }
 
-}  // namespace furuta::bridge
+}  // namespace furuta::sim
