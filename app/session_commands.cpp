@@ -22,7 +22,6 @@
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
-#include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_command_t.hpp"
 #include "furuta/rig_status_t.hpp"

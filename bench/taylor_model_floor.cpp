@@ -151,9 +151,9 @@ int main(int argc, char** argv) {
   const v::FurutaDynamics system(Interval(s.tau_nm));
   const std::vector<v::Tape> tapes = v::record_system(system);
   const std::vector<double> switches = v::switch_times(system);
-  const v::internal::TaylorModelFlowSetup setup(tapes, switches, x0, o);
-  v::internal::TaylorModelFlowState flow = v::internal::initial_flow_state(setup, x0);
-  v::internal::TaylorModelFlowRunners runners;
+  const v::detail::TaylorModelFlowSetup setup(tapes, switches, x0, o);
+  v::detail::TaylorModelFlowState flow = v::detail::initial_flow_state(setup, x0);
+  v::detail::TaylorModelFlowRunners runners;
   v::TaylorModelFlowResult result;
   result.initial = x0;
 
@@ -169,13 +169,13 @@ int main(int argc, char** argv) {
               "dq2_rate", "q2_est");
   for (int step = 0; flow.t < t_end; ++step) {
     const double t0 = flow.t;
-    if (auto failure = v::internal::taylor_model_flow_step(setup, runners, flow, result)) {
+    if (auto failure = v::detail::taylor_model_flow_step(setup, runners, flow, result)) {
       std::printf("failed at t = %.4f s: %s\n", flow.t, failure->reason.c_str());
       break;
     }
     const double h = flow.t - t0;
     // The error part after the step: the new error alone (the one before was zero).
-    const std::vector<Interval> error = v::internal::from_point(flow.b) * flow.r;
+    const std::vector<Interval> error = v::detail::from_point(flow.b) * flow.r;
     const double new_q2 = error[C::q2].width();
     const double new_dq2 = error[C::dq2].width();
     q2_error += new_q2 + dq2_error * h;

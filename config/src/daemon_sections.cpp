@@ -1,6 +1,7 @@
 // rig.toml's sections for the daemon: [daemon], [daemon.realtime], [safety], [limits],
 // [excitation].
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "sections.hpp"
@@ -151,10 +152,10 @@ CommandLimitsConfig read_limits(Section l, const SafetyConfig& safety) {
   return lc;
 }
 
-ExcitationConfig read_excitation(Section e, const CommandLimitsConfig& limits) {
+ExcitationConfig read_excitation(Section e, const CommandLimitsConfig& limits,
+                                 const bridge::MotorBoardKind& motor_board) {
   ExcitationConfig ec;
-  ec.profile = e.choice("profile", ec.profile,
-                        {"bang_bang", "free_decay", "step", "prbs", "chirp", "multisine"});
+  ec.profile = e.choice("profile", ec.profile, kExcitationProfiles);
   ec.amplitude_duty = e.number("amplitude_duty", ec.amplitude_duty, fraction, "in (0, 1]");
   if (ec.amplitude_duty > limits.max_amplitude_duty) {
     e.fail("amplitude_duty", e.node("amplitude_duty"), "must not exceed limits.max_amplitude_duty");
@@ -171,13 +172,16 @@ ExcitationConfig read_excitation(Section e, const CommandLimitsConfig& limits) {
     e.fail("arm_switch_deg", e.node("arm_switch_deg"), "must not exceed limits.max_arm_switch_deg");
   }
   read_profile_shapes(e, ec);
+  std::ostringstream range;
+  range << "in [" << motor_board.min_acceleration_pct_per_s << ", "
+        << motor_board.max_acceleration_pct_per_s << "] (the motor board's range)";
   ec.board_acceleration_pct_per_s = e.number(
       "board_acceleration_pct_per_s", ec.board_acceleration_pct_per_s,
-      [](double v) {
-        return v >= bridge::k1065MinAccelerationPctPerS &&
-               v <= bridge::k1065FullScaleAccelerationPctPerS;
+      [&](double v) {
+        return v >= motor_board.min_acceleration_pct_per_s &&
+               v <= motor_board.max_acceleration_pct_per_s;
       },
-      "in [24.51, 6250] (the vendor library's range for the 1065)");
+      range.str().c_str());
   e.reject_unknown_keys();
   return ec;
 }

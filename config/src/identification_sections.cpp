@@ -61,8 +61,7 @@ OutputErrorConfig read_output_error(Section s) {
 
 SiviaConfig read_sivia(Section s) {
   SiviaConfig sc;
-  sc.unknowns =
-      s.choices("unknowns", sc.unknowns, {"mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"});
+  sc.unknowns = s.choices("unknowns", sc.unknowns, model::kParameterNames);
   if (sc.unknowns.empty()) {
     s.fail("unknowns", s.node("unknowns"), "must name at least one parameter");
   }

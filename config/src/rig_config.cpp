@@ -4,6 +4,7 @@
 #include "furuta/config/rig_config.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -42,14 +43,23 @@ bridge::EncoderGeometry read_encoder(Section s, double default_cpr) {
 }
 
 model::Parameters<double> read_parameters(Section s, const model::Parameters<double>& d) {
+  // The inertias on the diagonal of M are positive, gravity's and the frictions' coefficients
+  // not negative; mu2 and mu3 take either sign (docs/model.md).
+  struct Rule {
+    Section::NumberRule valid;
+    const char* text;
+  };
+  const std::array<Rule, model::kParameterCount> rules = {Rule{positive, "> 0"},
+                                                          Rule{{}, ""},
+                                                          Rule{{}, ""},
+                                                          Rule{positive, "> 0"},
+                                                          Rule{non_negative, ">= 0"},
+                                                          Rule{non_negative, ">= 0"},
+                                                          Rule{non_negative, ">= 0"}};
   model::Parameters<double> p;
-  p.mu1 = s.number("mu1", d.mu1, positive, "> 0");
-  p.mu2 = s.number("mu2", d.mu2);
-  p.mu3 = s.number("mu3", d.mu3);
-  p.mu4 = s.number("mu4", d.mu4, positive, "> 0");
-  p.mug = s.number("mug", d.mug, non_negative, ">= 0");
-  p.fv1 = s.number("fv1", d.fv1, non_negative, ">= 0");
-  p.fv2 = s.number("fv2", d.fv2, non_negative, ">= 0");
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    p[k] = s.number(model::kParameterNames[k], d[k], rules[k].valid, rules[k].text);
+  }
   s.reject_unknown_keys();
   return p;
 }
@@ -183,7 +193,8 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
   c.daemon = detail::read_daemon(top.child("daemon"));
   c.safety = detail::read_safety(top.child("safety"), c.daemon);
   c.limits = detail::read_limits(top.child("limits"), c.safety);
-  c.excitation = detail::read_excitation(top.child("excitation"), c.limits);
+  c.excitation = detail::read_excitation(top.child("excitation"), c.limits,
+                                         bridge::motor_board_kind(c.motor_board.model));
   c.identification = detail::read_identification(top.child("identification"), c.daemon);
   c.output_error = detail::read_output_error(top.child("output_error"));
   c.sivia = detail::read_sivia(top.child("sivia"));

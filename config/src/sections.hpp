@@ -33,7 +33,9 @@ inline bool non_negative_integer(std::int64_t v) {
 DaemonConfig read_daemon(Section s);  // [daemon] and [daemon.realtime]
 SafetyConfig read_safety(Section s, const DaemonConfig& daemon);
 CommandLimitsConfig read_limits(Section s, const SafetyConfig& safety);
-ExcitationConfig read_excitation(Section s, const CommandLimitsConfig& limits);
+// The duty ramp is checked against the motor board's range.
+ExcitationConfig read_excitation(Section s, const CommandLimitsConfig& limits,
+                                 const bridge::MotorBoardKind& motor_board);
 
 // identification_sections.cpp
 IdentificationConfig read_identification(Section s, const DaemonConfig& daemon);

@@ -110,6 +110,11 @@ std::string Section::required_text(const std::string& key, const std::string& wh
 
 std::string Section::choice(const std::string& key, const std::string& fallback,
                             std::initializer_list<const char*> allowed) {
+  return choice(key, fallback, std::span<const char* const>(allowed.begin(), allowed.size()));
+}
+
+std::string Section::choice(const std::string& key, const std::string& fallback,
+                            std::span<const char* const> allowed) {
   const std::string value = text(key, fallback);
   std::string list;
   for (const char* a : allowed) {
@@ -122,6 +127,12 @@ std::string Section::choice(const std::string& key, const std::string& fallback,
 std::vector<std::string> Section::choices(const std::string& key,
                                           const std::vector<std::string>& fallback,
                                           std::initializer_list<const char*> allowed) {
+  return choices(key, fallback, std::span<const char* const>(allowed.begin(), allowed.size()));
+}
+
+std::vector<std::string> Section::choices(const std::string& key,
+                                          const std::vector<std::string>& fallback,
+                                          std::span<const char* const> allowed) {
   const toml::node* node = use(key);
   if (!node) return fallback;
   const toml::array* a = node->as_array();

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "furuta/config/rig_config.hpp"
+
 namespace furuta::daemon {
 namespace {
 
@@ -149,30 +151,20 @@ double draw_switch_period(const ExcitationSpec& s, std::mt19937_64& rng) noexcep
 
 }  // namespace
 
+static_assert(config::kExcitationProfiles.size() ==
+                  static_cast<std::size_t>(ProfileKind::multisine) + 1,
+              "every profile kind has its name in config::kExcitationProfiles, in order");
+
 std::optional<ProfileKind> parse_profile_kind(std::string_view name) {
-  for (auto kind : {ProfileKind::bang_bang, ProfileKind::free_decay, ProfileKind::step,
-                    ProfileKind::prbs, ProfileKind::chirp, ProfileKind::multisine}) {
-    if (to_string(kind) == name) return kind;
+  for (std::size_t i = 0; i < config::kExcitationProfiles.size(); ++i) {
+    if (name == config::kExcitationProfiles[i]) return static_cast<ProfileKind>(i);
   }
   return std::nullopt;
 }
 
 std::string_view to_string(ProfileKind kind) {
-  switch (kind) {
-    case ProfileKind::bang_bang:
-      return "bang_bang";
-    case ProfileKind::free_decay:
-      return "free_decay";
-    case ProfileKind::step:
-      return "step";
-    case ProfileKind::prbs:
-      return "prbs";
-    case ProfileKind::chirp:
-      return "chirp";
-    case ProfileKind::multisine:
-      return "multisine";
-  }
-  return "unknown";
+  const auto i = static_cast<std::size_t>(kind);
+  return i < config::kExcitationProfiles.size() ? config::kExcitationProfiles[i] : "unknown";
 }
 
 Excitation::Excitation(const ExcitationSpec& spec) : spec_(spec), rng_(spec.seed) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "furuta/firmware_bridge/board_roles.hpp"
 #include "furuta/firmware_bridge/replay_transport.hpp"
 #include "furuta/firmware_bridge/usb_backends.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -15,12 +16,12 @@ using bridge::TransportStatus;
 
 namespace {
 
-void open_or_throw(bridge::Transport& transport, std::uint16_t product,
+void open_or_throw(bridge::Transport& transport, const bridge::UsbIdentity& usb,
                    const std::optional<std::string>& serial, const char* what) {
-  const TransportStatus status = transport.open({bridge::kPhidgetsVendorId, product, serial});
+  const TransportStatus status = transport.open({usb.vendor_id, usb.product_id, serial});
   if (status == TransportStatus::ok) return;
   std::string message = std::string("cannot open the ") + what + " (" +
-                        std::string(bridge::phidget_product_name(product)) +
+                        std::string(bridge::phidget_product_name(usb.product_id)) +
                         (serial ? ", serial " + *serial : std::string()) +
                         "): " + std::string(bridge::to_string(status));
   if (status == TransportStatus::access_denied) {
@@ -103,10 +104,10 @@ RigConnection connect_rig(const config::RigConfig& config, const ConnectOptions&
     c.description = libusb ? "libusb" : "hidapi";
     threaded = true;  // hardware: stamp each report at its arrival
   }
-  open_or_throw(*c.motor, bridge::kProductMotorControl1065, config.motor_board.serial,
-                "motor board");
-  open_or_throw(*c.encoder, bridge::kProductEncoder1047, config.encoder_board.serial,
-                "encoder board");
+  open_or_throw(*c.motor, bridge::motor_board_kind(config.motor_board.model).usb,
+                config.motor_board.serial, "motor board");
+  open_or_throw(*c.encoder, bridge::encoder_board_kind(config.encoder_board.model).usb,
+                config.encoder_board.serial, "encoder board");
   // A replay plays what was recorded from boards that were accepted then.
   if (options.backend != BackendChoice::replay) {
     check_firmware(c.motor->device_info(), config.motor_board, "motor board", "[boards.motor]",

@@ -7,15 +7,12 @@
 #include <stdexcept>
 
 #include "furuta/common/wire_text.hpp"
+#include "furuta/config/rig_config.hpp"
 
 namespace furuta::daemon {
 namespace {
 
 using furuta::rig_command_t;
-
-constexpr ProfileKind kAllProfiles[] = {ProfileKind::bang_bang, ProfileKind::free_decay,
-                                        ProfileKind::step,      ProfileKind::prbs,
-                                        ProfileKind::chirp,     ProfileKind::multisine};
 
 // Shortest round-trip form, so a value just above a limit never prints as the limit itself.
 std::string shortest_text(double value) {
@@ -32,9 +29,9 @@ std::string printable_quoted(std::string_view text) {
 
 std::string known_profiles() {
   std::string out;
-  for (auto kind : kAllProfiles) {
+  for (const char* name : config::kExcitationProfiles) {
     if (!out.empty()) out += ", ";
-    out += to_string(kind);
+    out += name;
   }
   return out;
 }

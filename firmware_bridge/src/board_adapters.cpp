@@ -10,6 +10,7 @@
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
 #include "furuta/firmware_bridge/lost_reports.hpp"
+#include "furuta/firmware_bridge/phidget_ids.hpp"
 
 namespace furuta::bridge {
 
@@ -132,14 +133,20 @@ class EncoderBoard1047 final : public EncoderBoard {
 
 struct Registry {
   std::mutex mutex;
-  std::map<std::string, MotorBoardMaker, std::less<>> motor = {
-      {"1065", [](const DeviceInfo&, const MotorBoardSettings& s) -> std::unique_ptr<MotorBoard> {
-         return std::make_unique<MotorBoard1065>(s);
-       }}};
-  std::map<std::string, EncoderBoardMaker, std::less<>> encoder = {
-      {"1047", [](const DeviceInfo& d, int channel) -> std::unique_ptr<EncoderBoard> {
-         return std::make_unique<EncoderBoard1047>(d, channel);
-       }}};
+  std::map<std::string, MotorBoardKind, std::less<>> motor = {
+      {std::string(kShippedMotorBoard),
+       {.make = [](const DeviceInfo&, const MotorBoardSettings& s) -> std::unique_ptr<MotorBoard> {
+          return std::make_unique<MotorBoard1065>(s);
+        },
+        .usb = {kPhidgetsVendorId, kProductMotorControl1065},
+        .min_acceleration_pct_per_s = k1065MinAccelerationPctPerS,
+        .max_acceleration_pct_per_s = k1065FullScaleAccelerationPctPerS}}};
+  std::map<std::string, EncoderBoardKind, std::less<>> encoder = {
+      {std::string(kShippedEncoderBoard),
+       {.make = [](const DeviceInfo& d, int channel) -> std::unique_ptr<EncoderBoard> {
+          return std::make_unique<EncoderBoard1047>(d, channel);
+        },
+        .usb = {kPhidgetsVendorId, kProductEncoder1047}}}};
 };
 
 Registry& registry() {
@@ -155,7 +162,7 @@ std::vector<std::string> names(const Map& map) {
 }
 
 template <typename Map>
-typename Map::mapped_type find_maker(const Map& map, std::string_view kind, const char* role) {
+typename Map::mapped_type find_kind(const Map& map, std::string_view kind, const char* role) {
   const auto it = map.find(kind);
   if (it != map.end()) return it->second;
   std::string known;
@@ -166,34 +173,36 @@ typename Map::mapped_type find_maker(const Map& map, std::string_view kind, cons
 
 }  // namespace
 
+MotorBoardKind motor_board_kind(std::string_view kind) {
+  std::lock_guard lock(registry().mutex);
+  return find_kind(registry().motor, kind, "motor");
+}
+
+EncoderBoardKind encoder_board_kind(std::string_view kind) {
+  std::lock_guard lock(registry().mutex);
+  return find_kind(registry().encoder, kind, "encoder");
+}
+
 std::unique_ptr<MotorBoard> make_motor_board(std::string_view kind, const DeviceInfo& device,
                                              const MotorBoardSettings& settings) {
-  MotorBoardMaker maker = nullptr;
-  {
-    std::lock_guard lock(registry().mutex);
-    maker = find_maker(registry().motor, kind, "motor");
-  }
-  return maker(device, settings);
+  return motor_board_kind(kind).make(device, settings);
 }
 
 std::unique_ptr<EncoderBoard> make_encoder_board(std::string_view kind, const DeviceInfo& device,
                                                  int channel) {
-  EncoderBoardMaker maker = nullptr;
-  {
-    std::lock_guard lock(registry().mutex);
-    maker = find_maker(registry().encoder, kind, "encoder");
-  }
-  return maker(device, channel);
+  return encoder_board_kind(kind).make(device, channel);
 }
 
-bool register_motor_board(std::string_view kind, MotorBoardMaker maker) {
+bool register_motor_board(std::string_view kind, const MotorBoardKind& board) {
+  if (board.make == nullptr) return false;
   std::lock_guard lock(registry().mutex);
-  return registry().motor.emplace(std::string(kind), maker).second;
+  return registry().motor.emplace(std::string(kind), board).second;
 }
 
-bool register_encoder_board(std::string_view kind, EncoderBoardMaker maker) {
+bool register_encoder_board(std::string_view kind, const EncoderBoardKind& board) {
+  if (board.make == nullptr) return false;
   std::lock_guard lock(registry().mutex);
-  return registry().encoder.emplace(std::string(kind), maker).second;
+  return registry().encoder.emplace(std::string(kind), board).second;
 }
 
 std::vector<std::string> motor_board_kinds() {

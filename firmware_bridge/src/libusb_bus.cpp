@@ -22,10 +22,10 @@ namespace furuta::bridge {
 
 namespace {
 
-using usb_detail::ConfigPtr;
-using usb_detail::ContextPtr;
-using usb_detail::DeviceList;
-using usb_detail::HandlePtr;
+using detail::ConfigPtr;
+using detail::ContextPtr;
+using detail::DeviceList;
+using detail::HandlePtr;
 
 constexpr int kClaimedInterface = 0;
 
@@ -54,7 +54,7 @@ TransportStatus status_from_libusb(int error) {
 }
 
 unsigned int timeout_ms(std::chrono::milliseconds timeout) {
-  return usb_detail::timeout_ms_at_least_one(timeout);
+  return detail::timeout_ms_at_least_one(timeout);
 }
 
 // Interface 0's descriptors, from the active configuration (index 0 when none is active yet).
@@ -139,7 +139,7 @@ class LibusbBus final : public UsbBus {
       d.vendor_id = descriptor.idVendor;
       d.product_id = descriptor.idProduct;
       d.bcd_device = descriptor.bcdDevice;
-      d.path = usb_detail::bus_path(device);
+      d.path = detail::bus_path(device);
       describe_interface(device, d);
       // The serial is a string descriptor, fetched from the device: that needs it opened, which
       // is where missing permissions show. Other failures (unplugged mid-scan) list it anyway.
@@ -148,7 +148,7 @@ class LibusbBus final : public UsbBus {
       if (opened == LIBUSB_ERROR_ACCESS) d.access_denied = true;
       if (opened == LIBUSB_SUCCESS) {
         const HandlePtr handle(raw);
-        d.serial = usb_detail::read_serial(handle.get(), descriptor.iSerialNumber);
+        d.serial = detail::read_serial(handle.get(), descriptor.iSerialNumber);
       }
       out.push_back(std::move(d));
     }
@@ -166,7 +166,7 @@ class LibusbBus final : public UsbBus {
       libusb_device_descriptor descriptor{};
       if (libusb_get_device_descriptor(device, &descriptor) != LIBUSB_SUCCESS) continue;
       if (descriptor.idVendor != wanted.vendor_id || descriptor.idProduct != wanted.product_id ||
-          usb_detail::bus_path(device) != wanted.path) {
+          detail::bus_path(device) != wanted.path) {
         continue;
       }
       libusb_device_handle* raw = nullptr;
@@ -198,7 +198,7 @@ class LibusbBus final : public UsbBus {
   bool start(std::string& error) {
     if (context_) return true;
     int code = 0;
-    context_ = usb_detail::make_context(code);
+    context_ = detail::make_context(code);
     if (!context_) error = std::string("libusb_init failed: ") + libusb_strerror(code);
     return context_ != nullptr;
   }

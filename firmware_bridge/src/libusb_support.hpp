@@ -11,7 +11,7 @@
 #include <memory>
 #include <string>
 
-namespace furuta::bridge::usb_detail {
+namespace furuta::bridge::detail {
 
 struct ContextDeleter {
   void operator()(libusb_context* context) const { libusb_exit(context); }
@@ -101,4 +101,4 @@ inline unsigned int timeout_ms_at_least_one(std::chrono::nanoseconds timeout) {
   return static_cast<unsigned int>(ms);
 }
 
-}  // namespace furuta::bridge::usb_detail
+}  // namespace furuta::bridge::detail

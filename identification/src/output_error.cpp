@@ -14,6 +14,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "furuta/model/duty_ramp.hpp"
+
 namespace furuta::identification {
 
 namespace {
@@ -526,28 +528,27 @@ void scale_duty_by_supply(OeExperiment& e, std::vector<double> supply_v, double 
   e.input_gain_sigma = sigma_v / mean;
 }
 
-// The input as an actuator with a slew limit applies it (the motor board's duty ramp, its
-// adapter's acceleration): from each command's time it moves towards the command at the command's
-// rate. Appends the breakpoints of the piecewise-linear result to the experiment's input, from a
-// second before `t` (at `applied`) to a second after the last observation.
+// The input as the motor board applies it (model::DutyRamp): from each command's time it moves
+// towards the command at the command's rate. Appends the breakpoints of the piecewise-linear
+// result to the experiment's input, from a second before `t` (at `applied`) to a second after the
+// last observation.
 class RampedInput {
  public:
   RampedInput(OeExperiment& e, double t, double applied, double braking)
-      : e_(e), t_(t), applied_(applied), target_(applied), braking_(braking) {
+      : e_(e), t_(t), duty_(applied), braking_(braking) {
     add(t - 1.0, applied, braking);
   }
   // A command at `at` (ignored when earlier than the previous one).
   void command(double at, double target, double rate_per_s, double braking) {
     if (at < t_) return;
     ramp_until(at);
-    target_ = target;
+    duty_.command(target, rate_per_s);
     braking_ = braking;
-    rate_per_s_ = rate_per_s;
-    add(at, applied_, braking_);
+    add(at, duty_.applied(), braking_);
   }
   void finish(double last_observation_s) {
     ramp_until(std::max(t_, last_observation_s) + 1.0);
-    add(t_, applied_, braking_);
+    add(t_, duty_.applied(), braking_);
   }
 
  private:
@@ -561,20 +562,18 @@ class RampedInput {
     e_.input.push_back(value);
     e_.braking_fraction.push_back(brake);
   }
+  // The ramp's end, where it ends before `until`, is a breakpoint.
   void ramp_until(double until) {
-    const double reach = t_ + std::abs(target_ - applied_) / rate_per_s_;
-    if (reach < until) {
-      if (applied_ != target_) add(reach, target_, braking_);
-      applied_ = target_;
-    } else {
-      applied_ += std::copysign(rate_per_s_ * (until - t_), target_ - applied_);
-    }
+    const double reach = t_ + duty_.seconds_to_target();
+    if (reach < until && duty_.applied() != duty_.target()) add(reach, duty_.target(), braking_);
+    duty_.advance(until - t_);
     t_ = until;
   }
 
   OeExperiment& e_;
-  double t_, applied_, target_, braking_;
-  double rate_per_s_ = 1.0;
+  double t_;
+  model::DutyRamp duty_;
+  double braking_;
 };
 
 }  // namespace
@@ -674,7 +673,7 @@ OeExperiment oe_experiment_from_log(const session_log::SessionLog& log,
                        config::motor_resolution(rig).supply_step_v);
 
   // The board ramps its applied duty towards the newest command at the command's rate, from the
-  // moment the command is written (docs/model.md; firmware_bridge's simulated rig does the same).
+  // moment the command is written (model::DutyRamp, which the simulated rig uses too).
   const std::vector<session_log::MotorCommandWrite> writes =
       session_log::motor_command_writes(log, rig.motor_board.model);
   RampedInput ramp(

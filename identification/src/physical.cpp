@@ -124,21 +124,21 @@ std::string cause_text(LikelyCause cause) {
 const char* quantity(PhysicalCondition c) {
   switch (c) {
     case PhysicalCondition::mu1_positive:
-      return "mu1";
+      return model::kParameterNames[0];
     case PhysicalCondition::mu2_positive:
-      return "mu2";
+      return model::kParameterNames[1];
     case PhysicalCondition::mu3_positive:
-      return "mu3";
+      return model::kParameterNames[2];
     case PhysicalCondition::mu4_positive:
-      return "mu4";
+      return model::kParameterNames[3];
     case PhysicalCondition::mug_positive:
-      return "mug";
+      return model::kParameterNames[4];
     case PhysicalCondition::mass_matrix_positive_definite:
       return "mu1 mu4 - mu3^2";
     case PhysicalCondition::fv1_nonnegative:
-      return "fv1";
+      return model::kParameterNames[5];
     case PhysicalCondition::fv2_nonnegative:
-      return "fv2";
+      return model::kParameterNames[6];
   }
   return "?";
 }

@@ -138,9 +138,8 @@ PhysicalInputs physical_inputs(const config::RigConfig& rig,
               plus_minus(cad.mug, relative),
               friction,
               friction};
-  const char* names[model::kParameterCount] = {"mu1", "mu2", "mu3", "mu4", "mug", "fv1", "fv2"};
-  const char* units[model::kParameterCount] = {"kg m^2",      "kg m^2", "kg m^2", "kg m^2",
-                                               "kg m^2 s^-2", "N m s",  "N m s"};
+  const auto& names = model::kParameterNames;
+  const auto& units = model::kParameterUnits;
   std::size_t k = 0;
   for (const Interval& v : in.prior) {
     const bool is_friction = k >= 5;

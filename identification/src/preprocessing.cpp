@@ -99,10 +99,10 @@ RawExperiment experiment_from_log(const session_log::SessionLog& log) {
   }
   const auto& last = log.samples.back();
   if (last.motor_lost_reports > 0 || last.encoder_lost_reports > 0) {
-    e.warnings.push_back(
-        e.name + ": lost reports in the session (1065: " + std::to_string(last.motor_lost_reports) +
-        ", 1047: " + std::to_string(last.encoder_lost_reports) +
-        "); pendulum counts may be off after a 1047 loss");
+    e.warnings.push_back(e.name + ": lost reports in the session (motor board: " +
+                         std::to_string(last.motor_lost_reports) +
+                         ", encoder board: " + std::to_string(last.encoder_lost_reports) +
+                         "); pendulum counts may be off after an encoder board's loss");
   }
   if (last.overruns > 0) {
     e.warnings.push_back(e.name + ": " + std::to_string(last.overruns) +

@@ -1,5 +1,8 @@
 // tubes.json and paving.json: every tube step of every scenario run, every SIVIA box with its
 // verdict and the data boxes SIVIA was given, for checking the results outside the project.
+#include <array>
+
+#include "furuta/model/parameters.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/tables.hpp"
 
@@ -9,10 +12,19 @@ namespace {
 
 // The tubes' components: the state, then the parameters when they are carried as state, then the
 // torque when it is carried too (validated::run_scenario_taylor_models).
-constexpr const char* kComponents[] = {"q1",  "dq1", "q2",  "dq2", "mu1", "mu2",
-                                       "mu3", "mu4", "mug", "fv1", "fv2", "tau"};
-constexpr const char* kUnits[] = {"rad",    "rad/s",  "rad",         "rad/s", "kg m^2", "kg m^2",
-                                  "kg m^2", "kg m^2", "kg m^2 s^-2", "N m s", "N m s",  "N m"};
+constexpr std::size_t kComponentCount = 4 + model::kParameterCount + 1;
+// The state's, then model::kParameterNames (or kParameterUnits), then the torque's.
+constexpr std::array<const char*, kComponentCount> components(
+    const std::array<const char*, 4>& state,
+    const std::array<const char*, model::kParameterCount>& parameters, const char* torque) {
+  std::array<const char*, kComponentCount> out{};
+  for (std::size_t i = 0; i < 4; ++i) out[i] = state[i];
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) out[4 + k] = parameters[k];
+  out[kComponentCount - 1] = torque;
+  return out;
+}
+constexpr auto kComponents = components({"q1", "dq1", "q2", "dq2"}, model::kParameterNames, "tau");
+constexpr auto kUnits = components({"rad", "rad/s", "rad", "rad/s"}, model::kParameterUnits, "N m");
 // The same per unit of a drive gain in N m (a set whose torque_scale is not 1).
 constexpr const char* kUnitsPerGain[] = {"rad", "rad/s", "rad", "rad/s", "s^2", "s^2",
                                          "s^2", "s^2",   "1",   "s",     "s",   "1"};

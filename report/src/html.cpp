@@ -35,6 +35,7 @@ figure { margin: 1em 0; }
 figure svg { max-width: 100%; height: auto; border: 1px solid #eee; }
 figcaption { font-size: 0.9em; color: #444; }
 .warnings li { margin: 0.2em 0; }
+.warnings li.failed, .warnings li.suspect { border-left: 3px solid #b00020; padding-left: 0.4em; }
 .topic { display: inline-block; min-width: 6em; font-weight: bold; color: #8a4b00; }
 .absent { color: #666; font-style: italic; }
 .none { color: #2a6e2a; }
@@ -129,7 +130,7 @@ void sessions_table(Html& h, const std::vector<SessionSummary>& sessions) {
   }
   h.table("sessions", "Sessions (from their logs)",
           {"log", "role", "label", "profile", "amplitude [duty]", "duration [s]", "period [ms]",
-           "seed", "samples", "missing samples", "lost reports 1065 / 1047", "missed cycles",
+           "seed", "samples", "missing samples", "lost reports motor / encoder", "missed cycles",
            "faults", "ended"},
           rows);
 }
@@ -168,7 +169,7 @@ void section_warnings(Html& h, const ReportInput& in) {
   } else {
     h.raw("<ul class=\"warnings\">\n");
     for (const Warning& w : warnings) {
-      h.raw("<li>");
+      h.raw("<li class=\"" + kind_name(w.kind) + "\">");
       h.element("span", topic(w.stage), "class=\"topic\"");
       h.text(" " + w.text);
       h.raw("</li>\n");

@@ -248,7 +248,7 @@ SiviaSummary sivia_summary(const identification::GuaranteedResult& result, std::
 std::string topic(Warning::Stage stage) {
   switch (stage) {
     case Warning::Stage::lsmi:
-      return "excitation";
+      return "LSMI";
     case Warning::Stage::physical:
       return "physical";
     case Warning::Stage::output_error:
@@ -265,32 +265,51 @@ std::string topic(Warning::Stage stage) {
   return "session";
 }
 
+std::string kind_name(Warning::Kind kind) {
+  switch (kind) {
+    case Warning::Kind::data:
+      return "data";
+    case Warning::Kind::skipped:
+      return "skipped";
+    case Warning::Kind::failed:
+      return "failed";
+    case Warning::Kind::suspect:
+      return "suspect";
+    case Warning::Kind::note:
+      break;
+  }
+  return "note";
+}
+
 std::vector<Warning> derived_warnings(const ReportInput& input) {
   std::vector<Warning> out;
   for (const SessionSummary& s : input.sessions) {
     if (s.damaged_regions > 0) {
-      out.push_back({Warning::Stage::data, s.file + ": " + std::to_string(s.damaged_regions) +
-                                               " damaged regions of the log skipped"});
+      out.push_back({Warning::Stage::data, Warning::Kind::data,
+                     s.file + ": " + std::to_string(s.damaged_regions) +
+                         " damaged regions of the log skipped"});
     }
     if (s.truncated_tail) {
-      out.push_back({Warning::Stage::data, s.file + ": the log's tail is truncated"});
+      out.push_back(
+          {Warning::Stage::data, Warning::Kind::data, s.file + ": the log's tail is truncated"});
     }
     for (const auto& f : s.fatal_faults) {
-      out.push_back({Warning::Stage::data, s.file + ": fatal fault " + f});
+      out.push_back({Warning::Stage::data, Warning::Kind::data, s.file + ": fatal fault " + f});
     }
   }
   using Stage = Warning::Stage;
+  using Kind = Warning::Kind;
   // An empty or truncated paving is the run's own warning (pipeline::run).
   if (input.sivia) {
     const SiviaSummary& s = *input.sivia;
     for (const std::string& excluded : s.excludes_output_error) {
-      out.push_back({Stage::sivia, excluded});
+      out.push_back({Stage::sivia, Kind::suspect, excluded});
     }
     if (s.inconsistent_samples > 0) {
-      out.push_back(
-          {Stage::sivia, std::to_string(s.inconsistent_samples) +
-                             " samples inconsistent with the whole set (tolerated by q = " +
-                             std::to_string(s.q) + ")"});
+      out.push_back({Stage::sivia, Kind::note,
+                     std::to_string(s.inconsistent_samples) +
+                         " samples inconsistent with the whole set (tolerated by q = " +
+                         std::to_string(s.q) + ")"});
     }
   }
   if (input.simulation) {
@@ -299,7 +318,7 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
           r.status == validated::IntegrationResult::Status::ok) {
         continue;
       }
-      out.push_back({Stage::simulation,
+      out.push_back({Stage::simulation, Kind::failed,
                      "scenario " + scenario_label(r.scenario) + ", " + r.parameters.name +
                          ": the tube ended early, at " + dash_fixed(r.t_reached_s, 3) + " s of " +
                          dash_fixed(r.scenario.duration_s, 1) + " s (" +

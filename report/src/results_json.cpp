@@ -432,20 +432,17 @@ Json results_json(const pipeline::Run& run, const std::string& software_version)
     }
   }
   if (!run.sivia && run.settings.sivia.run) {
-    std::string why;
-    for (const pipeline::Warning& w : run.warnings) {
-      if (w.stage == pipeline::Warning::Stage::sivia) why = w.text;
-    }
-    more["sivia"] = Json{{"skipped", why}};
+    more["sivia"] =
+        Json{{"skipped", pipeline::warning_text(run.warnings, pipeline::Warning::Stage::sivia,
+                                                pipeline::Warning::Kind::skipped)}};
   }
   if (run.windowed) {
     more["guaranteed"] = windowed_json(*run.windowed, run.windowed_excludes_output_error);
   } else if (run.settings.windowed.run) {
-    std::string why;
-    for (const pipeline::Warning& w : run.warnings) {
-      if (w.stage == pipeline::Warning::Stage::guaranteed) why = w.text;
-    }
-    more["guaranteed"] = Json{{"verdict", "skipped"}, {"finding", why}};
+    more["guaranteed"] =
+        Json{{"verdict", "skipped"},
+             {"finding", pipeline::warning_text(run.warnings, pipeline::Warning::Stage::guaranteed,
+                                                pipeline::Warning::Kind::skipped)}};
   }
   if (run.simulation) more["simulation"] = simulation_json(*run.simulation);
   // Only when there is something to say: a consistent fit's results.json stays as it was.

@@ -116,9 +116,9 @@ TransportStatus SimulatedRig::Impl::write(std::uint64_t handle, RigBoard board,
       return TransportStatus::invalid_argument;
     }
     motor_output_ = output;
-    target_duty_ = output.duty_cycle();
+    duty_.command(output.duty_cycle(), duty_rate_per_s(output));
     if (config_.record_motor_commands) {
-      motor_commands_.push_back({clock_.now_ns(), target_duty_, false});
+      motor_commands_.push_back({clock_.now_ns(), duty_.target(), false});
     }
   } else {
     if (bytes.size() != k1047OutputReportBytes) return TransportStatus::invalid_argument;

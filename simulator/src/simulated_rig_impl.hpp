@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "furuta/model/duty_ramp.hpp"
 #include "furuta/simulator/simulated_rig.hpp"
 
 namespace furuta::sim {
@@ -143,6 +144,9 @@ struct Board {
 
 }  // namespace detail
 
+// The duty per second the board ramps at for a written command (model::DutyRamp's rate).
+double duty_rate_per_s(const bridge::MotorOutput1065& output);
+
 class SimulatedRig::Impl {
  public:
   Impl(SimulatedRigConfig config, bridge::Clock& clock);
@@ -227,8 +231,7 @@ class SimulatedRig::Impl {
 
   // 1065 motor drive.
   bridge::MotorOutput1065 motor_output_{};
-  double target_duty_ = 0.0;
-  double applied_duty_ = 0.0;
+  model::DutyRamp duty_;  // the applied duty ramping towards the newest command
   double supply_v_ = 0.0;
   bool over_temperature_ = false;
   bool under_voltage_ = false;

@@ -86,8 +86,8 @@ double SimulatedRig::Impl::drive_torque(double duty, double dq1, bool idle) cons
 
 void SimulatedRig::Impl::reset_motor() {
   motor_output_ = MotorOutput1065{};
-  target_duty_ = 0.0;
-  applied_duty_ = 0.0;
+  duty_.hold(0.0);
+  duty_.command(0.0, duty_rate_per_s(motor_output_));
 }
 
 void SimulatedRig::Impl::power_up(RigBoard board) {
@@ -123,14 +123,15 @@ void SimulatedRig::Impl::advance_locked(std::int64_t t_ns) {
   integrate_to(t_ns);
 }
 
+double duty_rate_per_s(const MotorOutput1065& output) {
+  double pct = output.acceleration_pct_per_s();
+  // Inferred: raw acceleration 0 is taken as the slowest ramp the wire can express rather than a
+  // motor that never responds.
+  if (pct <= 0.0) pct = k1065FullScaleAccelerationPctPerS / 255.0;
+  return pct / 100.0;
+}
+
 void SimulatedRig::Impl::integrate_to(std::int64_t t_ns) {
-  const double max_duty_step_per_s = [&] {
-    double pct = motor_output_.acceleration_pct_per_s();
-    // Inferred: raw acceleration 0 is taken as the slowest ramp the wire can express rather than a
-    // motor that never responds.
-    if (pct <= 0.0) pct = k1065FullScaleAccelerationPctPerS / 255.0;
-    return pct / 100.0;
-  }();
   Encoder& arm = board_of(RigBoard::motor_1065).encoder;
   Encoder& pendulum = board_of(RigBoard::encoder_1047).encoder;
   while (physics_ns_ < t_ns) {
@@ -143,22 +144,18 @@ void SimulatedRig::Impl::integrate_to(std::int64_t t_ns) {
     // step would act half a step late: an effective delay on every small change, which an
     // output-error fit reads as a bias in the arm's inertia (docs/measurements/identification.md,
     // "Output-error refinement: five seed triples per excitation").
-    const double gap = target_duty_ - applied_duty_;
-    if (gap != 0.0) {
+    if (duty_.target() != duty_.applied()) {
       const auto ramp_ns = static_cast<std::int64_t>(
-          std::ceil(std::abs(gap) / max_duty_step_per_s * static_cast<double>(kNsPerS)));
+          std::ceil(duty_.seconds_to_target() * static_cast<double>(kNsPerS)));
       end_ns = std::min(end_ns, physics_ns_ + std::max<std::int64_t>(1, ramp_ns));
     }
     const double h = static_cast<double>(end_ns - physics_ns_) / kNsPerS;
 
-    const double duty_start = applied_duty_;
-    const double max_change = max_duty_step_per_s * h;
-    applied_duty_ =
-        std::abs(gap) <= max_change ? target_duty_ : applied_duty_ + std::copysign(max_change, gap);
+    const double duty_start = duty_.applied();
     // The ramp is linear within the step (the step ends where it reaches the target), and RK4
     // sees it so at each stage. The board is idle (braking) where the whole step has duty 0; a
     // ramp through 0 is not.
-    const double duty_end = applied_duty_;
+    const double duty_end = duty_.advance(h);
     const bool idle = duty_start == 0.0 && duty_end == 0.0;
 
     state_ = model::rk4_step(
@@ -182,7 +179,7 @@ std::size_t SimulatedRig::Impl::build_1065(double torque, std::span<std::uint8_t
   r.status_flags = static_cast<std::uint8_t>(
       (over_temperature_ ? k1065FlagOverTemperature : 0) |
       (under_voltage_ ? k1065FlagUnderVoltage : 0) |
-      (applied_duty_ > 0.0 ? k1065FlagActualDirection : 0) |
+      (duty_.applied() > 0.0 ? k1065FlagActualDirection : 0) |
       ((motor_output_.flags & k1065OutDirectionPositive) ? k1065FlagCommandedDirection : 0) |
       ((motor_output_.flags & k1065OutRatiometric) ? k1065FlagRatiometricEcho : 0) |
       ((motor_output_.flags & k1065OutBackEmfSensing) ? k1065FlagBackEmfSensingEcho : 0));
@@ -193,7 +190,7 @@ std::size_t SimulatedRig::Impl::build_1065(double torque, std::span<std::uint8_t
   r.encoder_position = static_cast<std::int32_t>(static_cast<std::uint32_t>(count));
   r.encoder_time_raw =
       static_cast<std::uint16_t>((b.encoder.last_edge_ns - b.power_up_ns) * 3 / 1'000'000);
-  r.applied_duty_raw = duty_raw_from_fraction(std::min(1.0, std::abs(applied_duty_)));
+  r.applied_duty_raw = duty_raw_from_fraction(std::min(1.0, std::abs(duty_.applied())));
   r.commanded_duty_raw = motor_output_.duty_raw;
   r.acceleration_raw = motor_output_.acceleration_raw;
   r.braking_raw = motor_output_.braking_raw;
@@ -255,7 +252,7 @@ void SimulatedRig::Impl::corrupt(PendingReport& report) {
 
 void SimulatedRig::Impl::generate(RigBoard board, std::int64_t generated_ns) {
   Board& b = board_of(board);
-  const double torque = drive_torque(applied_duty_, state_.dq1, applied_duty_ == 0.0);
+  const double torque = drive_torque(duty_.applied(), state_.dq1, duty_.applied() == 0.0);
 
   // Built on the stack and copied into the ring only if it is kept.
   PendingReport report;
@@ -291,7 +288,7 @@ void SimulatedRig::Impl::generate(RigBoard board, std::int64_t generated_ns) {
     t.generated_ns = generated_ns;
     t.report_index = index;
     t.state = state_;
-    t.applied_duty = applied_duty_;
+    t.applied_duty = duty_.applied();
     t.arm_torque_nm = torque;
     t.delivered = delivered;
     truth_.push_back(t);

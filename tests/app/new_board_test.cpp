@@ -40,11 +40,14 @@ class ReversedEncoderBoard final : public bridge::EncoderBoard {
   std::unique_ptr<bridge::EncoderBoard> inner_;
 };
 
+// Found on the bus where the board it wraps is.
 const bool registered = bridge::register_encoder_board(
-    "reversed-test-encoder", [](const bridge::DeviceInfo& device, int channel) {
-      return std::unique_ptr<bridge::EncoderBoard>(
-          std::make_unique<ReversedEncoderBoard>(device, channel));
-    });
+    "reversed-test-encoder", {.make =
+                                  [](const bridge::DeviceInfo& device, int channel) {
+                                    return std::unique_ptr<bridge::EncoderBoard>(
+                                        std::make_unique<ReversedEncoderBoard>(device, channel));
+                                  },
+                              .usb = bridge::encoder_board_kind("1047").usb});
 
 // The project's rig.toml with the encoder board's model replaced.
 fs::path config_with_encoder_model(const fs::path& dir, const std::string& model) {

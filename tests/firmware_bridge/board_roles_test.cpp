@@ -12,6 +12,7 @@
 
 #include "furuta/firmware_bridge/codec_1047.hpp"
 #include "furuta/firmware_bridge/codec_1065.hpp"
+#include "furuta/firmware_bridge/phidget_ids.hpp"
 
 namespace furuta::bridge {
 namespace {
@@ -159,14 +160,23 @@ TEST(BoardRoles, AnUnknownBoardIsRefusedNamingTheKnownOnesAndANewOneCanBeAdded) 
         << e.what();
   }
   EXPECT_FALSE(register_encoder_board(
-      "1047", [](const DeviceInfo&, int) -> std::unique_ptr<EncoderBoard> { return nullptr; }));
-  EXPECT_TRUE(
-      register_motor_board("board-roles-test", [](const DeviceInfo&, const MotorBoardSettings& s) {
-        return make_motor_board("1065", {}, s);
-      }));
+      "1047",
+      {.make = [](const DeviceInfo&, int) -> std::unique_ptr<EncoderBoard> { return nullptr; },
+       .usb = {}}));
+  EXPECT_FALSE(register_motor_board("board-roles-test-no-maker", {}));
+  MotorBoardKind kind = motor_board_kind("1065");
+  kind.make = [](const DeviceInfo&, const MotorBoardSettings& s) {
+    return make_motor_board("1065", {}, s);
+  };
+  kind.usb.product_id = 0x7777;
+  EXPECT_TRUE(register_motor_board("board-roles-test", kind));
   const auto kinds = motor_board_kinds();
   EXPECT_NE(std::find(kinds.begin(), kinds.end(), "board-roles-test"), kinds.end());
   EXPECT_TRUE(make_motor_board("board-roles-test", {}, {})->read(motor_report(1), 0));
+  EXPECT_EQ(motor_board_kind("board-roles-test").usb.product_id, 0x7777);
+  EXPECT_EQ(motor_board_kind("1065").usb.product_id, kProductMotorControl1065);
+  EXPECT_EQ(encoder_board_kind("1047").usb.product_id, kProductEncoder1047);
+  EXPECT_EQ(motor_board_kind("1065").max_acceleration_pct_per_s, k1065FullScaleAccelerationPctPerS);
 }
 
 }  // namespace

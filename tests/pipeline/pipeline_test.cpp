@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "furuta/config/rig_config.hpp"
+#include "furuta/pipeline/intake.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
@@ -330,6 +331,80 @@ TEST(PipelineSettings, FromTheConfiguration) {
   EXPECT_TRUE(has_data_error_bounds(sivia));
   EXPECT_EQ(data_error_bounds(sivia).tau.absolute, 0.01);
   EXPECT_EQ(data_error_bounds(sivia).tau.relative, 0.05);
+}
+
+TEST(Intake, ARequestOfNothingOrOfBothKindsIsRefusedSayingWhatToGive) {
+  Intake none = load_batch({});
+  EXPECT_FALSE(none.batch);
+  ASSERT_EQ(none.refusals.size(), 1u);
+  EXPECT_NE(none.refusals[0].find("at least one session log"), std::string::npos);
+
+  BatchRequest both;
+  both.logs = {"a.lcmlog"};
+  both.csvs = {"b.csv"};
+  both.import_spec = "spec.toml";
+  const Intake mixed = load_batch(both);
+  EXPECT_FALSE(mixed.batch);
+  ASSERT_EQ(mixed.refusals.size(), 1u);
+  EXPECT_NE(mixed.refusals[0].find("give one kind"), std::string::npos) << mixed.refusals[0];
+
+  BatchRequest csv_as_log;
+  csv_as_log.logs = {"run.CSV"};
+  const Intake named = load_batch(csv_as_log);
+  ASSERT_EQ(named.refusals.size(), 1u);
+  EXPECT_NE(named.refusals[0].find("run.CSV is a CSV file"), std::string::npos);
+}
+
+TEST(Intake, LogsAreLoadedWithTheirOwnRigAndTheCallersOverridesAndListedWhereAsked) {
+  TempDir dir;
+  std::vector<fs::path> paths;
+  for (std::int64_t seed = 1; seed <= 2; ++seed) {
+    paths.push_back(furuta::testing::simulated_session_log(dir.path() / "logs",
+                                                           "intake" + std::to_string(seed), seed));
+  }
+  BatchRequest request;
+  request.logs = {paths[0]};
+  request.validate = paths[1];
+  request.files_listed_in = "/srv/done";
+  request.overrides.cutoff_hz = 9.0;
+  request.overrides.no_output_error = true;
+  request.overrides.simulate = true;
+  request.overrides.simulate_seconds = 0.5;
+  const Intake intake = load_batch(request);
+  ASSERT_TRUE(intake.batch) << (intake.refusals.empty() ? "" : intake.refusals[0]);
+  EXPECT_TRUE(intake.refusals.empty());
+  const Batch& b = *intake.batch;
+  EXPECT_EQ(b.fit.size(), 1u);
+  ASSERT_TRUE(b.held_out);
+  EXPECT_EQ(b.config_carried_by, paths[0]);
+  EXPECT_EQ(b.files, (std::vector<fs::path>{paths[0], paths[1]}));
+  EXPECT_EQ(b.files_listed_in, fs::path("/srv/done"));
+  ASSERT_TRUE(b.truth) << "a simulated rig's sessions carry their truth";
+  EXPECT_GT(b.angle_resolution_rad, 0.0);
+  EXPECT_EQ(intake.settings.identify.preprocess.cutoff_hz, 9.0);
+  EXPECT_FALSE(intake.settings.output_error.run);
+  EXPECT_TRUE(intake.settings.simulation.run);
+  for (const auto& scenario : intake.settings.simulation.scenarios) {
+    EXPECT_EQ(scenario.duration_s, 0.5);
+  }
+
+  // SIVIA with the shipped configuration's bounds is taken; a log that is not there is thrown.
+  request.overrides.sivia = true;
+  EXPECT_TRUE(load_batch(request).batch);
+  request.logs = {dir.path() / "absent.lcmlog"};
+  EXPECT_ANY_THROW(load_batch(request));
+}
+
+TEST(Warnings, AStagesReasonIsItsLatestWarningOfThatKind) {
+  const std::vector<Warning> w = {
+      {Warning::Stage::sivia, Warning::Kind::note, "paving truncated"},
+      {Warning::Stage::sivia, Warning::Kind::skipped, "SIVIA skipped: first"},
+      {Warning::Stage::guaranteed, Warning::Kind::skipped, "guaranteed: skipped: other"},
+      {Warning::Stage::sivia, Warning::Kind::skipped, "SIVIA skipped: second"},
+      {Warning::Stage::sivia, Warning::Kind::failed, "empty set"}};
+  EXPECT_EQ(warning_text(w, Warning::Stage::sivia, Warning::Kind::skipped),
+            "SIVIA skipped: second");
+  EXPECT_EQ(warning_text(w, Warning::Stage::simulation, Warning::Kind::skipped), "");
 }
 
 // A split run's pieces hold each step once: all_steps rebuilds every piece's tube from the piece it

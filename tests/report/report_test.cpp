@@ -77,7 +77,7 @@ TEST(ReportHtml, EscapesEveryText) {
   in.title = "run <b>1</b> & \"2\"";
   in.experiment_names = {"<script>alert(1)</script>"};
   in.rig = {{"configuration", "lab's <rig>"}};
-  in.warnings = {{Warning::Stage::data, "seed1: lost <reports> & more"}};
+  in.warnings = {{Warning::Stage::data, Warning::Kind::data, "seed1: lost <reports> & more"}};
   SessionSummary s;
   s.file = "a<b>.lcmlog";
   s.fatal_faults = {"usb <gone>"};
@@ -92,6 +92,20 @@ TEST(ReportHtml, EscapesEveryText) {
   EXPECT_NE(html.find("fatal fault usb &lt;gone&gt;"), std::string::npos);
   EXPECT_EQ(escape_html("<a href='x'>&</a>"), "&lt;a href=&#39;x&#39;&gt;&amp;&lt;/a&gt;");
   expect_self_contained(html);
+}
+
+TEST(ReportHtml, AWarningThatAResultCannotBeUsedIsMarkedApartFromANote) {
+  ReportInput in = minimal_input();
+  in.warnings = {{Warning::Stage::output_error, Warning::Kind::failed, "did not converge: x"},
+                 {Warning::Stage::output_error, Warning::Kind::note, "started from CAD"}};
+  const std::string html = render_html(in);
+  const std::size_t failed = html.find("<li class=\"failed\">");
+  const std::size_t note = html.find("<li class=\"note\">");
+  ASSERT_NE(failed, std::string::npos);
+  ASSERT_NE(note, std::string::npos);
+  EXPECT_NE(html.find("did not converge: x", failed), std::string::npos);
+  EXPECT_LT(html.find("did not converge: x", failed), note);
+  EXPECT_NE(html.find(".warnings li.failed"), std::string::npos) << "styled apart";
 }
 
 TEST(ReportHtml, SaysWhatWasNotRun) {
@@ -192,8 +206,11 @@ TEST(ReportWarnings, LsmiWarningsAreExcitationTheDatasAreSession) {
   const ReportInput in = report_input(id);
   ASSERT_EQ(in.warnings.size(), 3u);
   EXPECT_EQ(topic(in.warnings[0].stage), "session");
-  EXPECT_EQ(topic(in.warnings[1].stage), "excitation");
-  EXPECT_EQ(topic(in.warnings[2].stage), "excitation");
+  EXPECT_EQ(in.warnings[0].kind, Warning::Kind::data);
+  EXPECT_EQ(topic(in.warnings[1].stage), "LSMI");
+  EXPECT_EQ(in.warnings[1].kind, Warning::Kind::suspect);
+  EXPECT_EQ(topic(in.warnings[2].stage), "LSMI");
+  EXPECT_EQ(in.warnings[2].kind, Warning::Kind::suspect);
   EXPECT_FALSE(in.validation);
 }
 

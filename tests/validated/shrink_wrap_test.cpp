@@ -16,7 +16,7 @@
 #include <random>
 #include <vector>
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 namespace {
 
 using interval::Interval;
@@ -242,4 +242,4 @@ TEST(ShrinkWrap, AtTheBasePointTheWrapHoldsAndWidensLess) {
 }
 
 }  // namespace
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

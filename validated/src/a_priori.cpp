@@ -9,7 +9,7 @@
 
 #include "reason.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 namespace {
 
 Box field(TaylorRunner<Interval>& runner, const Tape& tape, const Box& x) {
@@ -114,4 +114,4 @@ double next_step_size(const StepEnclosure& step, double h_next, const Integrator
   return std::min(options.h_max, std::max(options.h_min, step.h * grow));
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -14,7 +14,7 @@
 #include "furuta/validated/integrator.hpp"
 #include "furuta/validated/taylor.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 using interval::Box;
 using interval::Interval;
@@ -47,4 +47,4 @@ StepEnclosure enclose_step(TaylorRunner<Interval>& runner, const Tape& tape, con
 // times the step; h_next unchanged after a step capped at t_limit.
 double next_step_size(const StepEnclosure& step, double h_next, const IntegratorOptions& options);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

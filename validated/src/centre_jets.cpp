@@ -6,7 +6,7 @@
 
 #include "jets.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 namespace {
 
 template <std::size_t N>
@@ -45,4 +45,4 @@ void centre_coefficients(const Tape& tape, const std::vector<double>& m, int ord
   centre_dispatch(std::make_index_sequence<kMaxDimension>{}, tape, m, order, values, jac);
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

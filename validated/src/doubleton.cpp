@@ -9,7 +9,7 @@
 #include "lohner_frame.hpp"
 #include "quadratic_form.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 Doubleton initial_doubleton(const Box& x0, const IntegratorOptions& options) {
   const std::size_t n = x0.size();
@@ -136,4 +136,4 @@ Doubleton restart_doubleton(const std::vector<Tape>& tapes, const Tube& tube, st
   return state;
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -10,7 +10,7 @@
 #include "furuta/validated/integrator.hpp"
 #include "interval_matrix.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 using interval::Box;
 
@@ -38,4 +38,4 @@ Doubleton initial_doubleton(const Box& x0, const IntegratorOptions& options);
 Doubleton restart_doubleton(const std::vector<Tape>& tapes, const Tube& tube, std::size_t step,
                             const Box& piece, const IntegratorOptions& options);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

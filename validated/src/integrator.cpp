@@ -55,8 +55,8 @@
 namespace furuta::validated {
 namespace {
 
-using internal::describe;
-using internal::Doubleton;
+using detail::describe;
+using detail::Doubleton;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Components whose exact part is below this fraction of the widest one are left out of the
@@ -71,7 +71,7 @@ bool is_bounded(const Box& b) {
 void validate(const std::vector<Tape>& tapes, const std::vector<double>& switches, const Box& x0,
               const IntegratorOptions& o) {
   const std::size_t n = x0.size();
-  if (n == 0 || n > internal::kMaxDimension)
+  if (n == 0 || n > detail::kMaxDimension)
     throw std::invalid_argument("x0: dimension must be 1..16");
   if (x0.is_empty() || !is_bounded(x0)) throw std::invalid_argument("x0: empty or unbounded");
   if (tapes.size() != switches.size() + 1) throw std::invalid_argument("tapes: one per piece");
@@ -129,7 +129,7 @@ struct Stop {
 // The acceptance of the set at the end of a step (`next`, at next.set.t): not empty (both its
 // forms contain every solution), within max_width, and its error part within max_excess of its
 // exact part.
-std::optional<Stop> refused(const internal::LohnerStep& next, const IntegratorOptions& options) {
+std::optional<Stop> refused(const detail::LohnerStep& next, const IntegratorOptions& options) {
   const std::size_t n = next.set.m.size();
   const Box& x = next.set.x;
   const double t = next.set.t;
@@ -180,7 +180,7 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     return result;
   };
   const std::size_t n = result.tube.dimension;
-  const std::size_t pairs = internal::pair_count(n);
+  const std::size_t pairs = detail::pair_count(n);
   if (state.p.size() != n * pairs) state.p.assign(n * pairs, 0.0);
   // The error part B r is kept on the live components (those of nonzero field; the constant
   // ones, parameters carried as state, never get new errors): B = blockdiag(B_LL, I), r_K = 0.
@@ -188,8 +188,8 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
   // n + |L| coordinates instead of 2n. Without constant components L is everything (as before).
   // A start that does not have this form (a restart from a tube that fell back), or a step
   // whose constant rows are not exact, falls back to the full frame for the rest of the run.
-  internal::LiveSet live(tapes, n);
-  if (live.live.size() < n && !internal::confined_to_live(state.b, state.r, live.is_live)) {
+  detail::LiveSet live(tapes, n);
+  if (live.live.size() < n && !detail::confined_to_live(state.b, state.r, live.is_live)) {
     live.all();
   }
 
@@ -200,22 +200,22 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     const double t_limit =
         std::min(options.t_end, piece < switches.size() ? switches[piece] : kInf);
     // 1-2. A priori enclosure and remainder; the step shrinks until both are acceptable.
-    const internal::StepEnclosure enclosure = internal::enclose_step(
+    const detail::StepEnclosure enclosure = detail::enclose_step(
         runner, tape, state.x, state.t, t_limit, state.h_next, options, result.rejected);
     if (!enclosure.failure.empty()) {
       return finish(IntegrationResult::Status::step_not_validated, state.t, enclosure.failure);
     }
     // 3-4. The Taylor map: at the centre with its Jacobian, the second-order term over the set.
-    TubeStep step = internal::start_step(state, enclosure);
-    const internal::TaylorMap map =
-        internal::taylor_map(tape, state, live.live, enclosure, options, step);
+    TubeStep step = detail::start_step(state, enclosure);
+    const detail::TaylorMap map =
+        detail::taylor_map(tape, state, live.live, enclosure, options, step);
     // 5. Lohner's step on the doubleton, and the tight enclosure at t1.
-    internal::LohnerStep next = internal::lohner_step(state, map, step, enclosure, live, options);
+    detail::LohnerStep next = detail::lohner_step(state, map, step, enclosure, live, options);
     if (next.qr) ++result.qr_steps;
     // The step goes into the tube. Its box at t1 is the intersection of the three that hold every
     // solution there: the Lohner set's, the step's box over [t0, t1] and its Taylor form at h (the
     // Lohner box alone is at times wider than the box over the step); the next step starts from it.
-    internal::append_step(result.tube, std::move(step), enclosure.apriori, next.set.x);
+    detail::append_step(result.tube, std::move(step), enclosure.apriori, next.set.x);
     {
       TubeStep& stored = result.tube.steps.back();
       stored.end = intersect(intersect(stored.end, stored.over),
@@ -231,7 +231,7 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     ++result.steps;
     state = std::move(next.set);
     // 6. The next step size from this step's remainder.
-    state.h_next = internal::next_step_size(enclosure, state.h_next, options);
+    state.h_next = detail::next_step_size(enclosure, state.h_next, options);
   }
   result.seconds = elapsed();
   return result;
@@ -248,7 +248,7 @@ IntegrationResult integrate_tapes(const std::vector<Tape>& tapes,
   tube.order = options.order;
   tube.t_start = options.t_start;
   tube.initial = x0;
-  Doubleton start = internal::initial_doubleton(x0, options);
+  Doubleton start = detail::initial_doubleton(x0, options);
   tube.r0 = start.r0;
   return run(tapes, switches, std::move(tube), std::move(start), options);
 }
@@ -265,7 +265,7 @@ IntegrationResult integrate_sub_box(const std::vector<Tape>& tapes,
   if (step >= tube.steps.size()) throw std::invalid_argument("integrate_sub_box: no such step");
   if (tube.order != options.order) throw std::invalid_argument("integrate_sub_box: order differs");
 
-  Doubleton state = internal::restart_doubleton(tapes, tube, step, piece, options);
+  Doubleton state = detail::restart_doubleton(tapes, tube, step, piece, options);
   Tube prefix;
   prefix.dimension = n;
   prefix.order = tube.order;

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 IMatrix from_point(const Matrix& a) {
   const auto n = static_cast<std::size_t>(a.rows());
@@ -85,4 +85,4 @@ std::optional<IMatrix> frame_inverse(const Matrix& b) {
   return inverse_enclosure(b, approx, 0.5);
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -10,7 +10,7 @@
 
 #include "furuta/interval/interval.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 using interval::Interval;
 using Matrix = Eigen::MatrixXd;
@@ -39,4 +39,4 @@ std::optional<IMatrix> inverse_enclosure(const Matrix& q, const Matrix& x, doubl
 // An interval enclosure of b^-1 (b invertible in practice: a QR or parallelepiped frame).
 std::optional<IMatrix> frame_inverse(const Matrix& b);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -12,7 +12,7 @@
 #include "furuta/validated/taylor.hpp"
 #include "interval_matrix.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 using interval::Box;
 
@@ -58,4 +58,4 @@ void second_order_extended(const Tape& tape, const Box& y, const Matrix& c, cons
                            std::vector<Interval>& second, std::vector<Interval>& forms,
                            std::vector<Interval>& d2e);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -6,7 +6,7 @@
 #include <numeric>
 #include <optional>
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 Lohner lohner_candidate(const Matrix& b, const Matrix& b_inv, const IMatrix& jb,
                         const std::vector<Interval>& r, const std::vector<Interval>& rest) {
@@ -172,4 +172,4 @@ Frame choose_frame(const IMatrix& j, const IMatrix& jb, const std::vector<Interv
   return out;
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

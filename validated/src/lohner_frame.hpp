@@ -14,7 +14,7 @@
 #include "furuta/validated/taylor.hpp"
 #include "interval_matrix.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 // A candidate frame B' for the r part of the doubleton, r' and the box B' r'.
 struct Lohner {
@@ -82,4 +82,4 @@ struct Frame {
 Frame choose_frame(const IMatrix& j, const IMatrix& jb, const std::vector<Interval>& r,
                    const std::vector<Interval>& rest, LiveSet& live, double max_inflation);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

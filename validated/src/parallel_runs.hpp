@@ -9,7 +9,7 @@
 
 #include "furuta/common/tsan.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 // run(i) for i in [0, count) on the arena's threads, one index per task; returns when all are
 // done. Each run must touch only its own outputs: the result then does not depend on the schedule.
@@ -28,4 +28,4 @@ void parallel_runs(tbb::task_arena& arena, std::size_t count, const Run& run) {
   edges.finish();
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -8,7 +8,7 @@
 
 #include "furuta/interval/interval.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 using interval::Interval;
 
@@ -41,4 +41,4 @@ inline std::vector<Interval> forms_range(const std::vector<double>& p,
   return out;
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

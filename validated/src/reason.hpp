@@ -4,7 +4,7 @@
 #include <sstream>
 #include <string>
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 inline std::string describe(double value) {
   std::ostringstream out;
@@ -13,4 +13,4 @@ inline std::string describe(double value) {
   return out.str();
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -8,7 +8,7 @@
 
 #include "jets.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 namespace {
 
 // The second-order term over the set m + C r0 + B r inside the box y: second[i n + v] = half the
@@ -216,4 +216,4 @@ void second_order_extended(const Tape& tape, const Box& y, const Matrix& c, cons
                                  low, second, forms, d2e);
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

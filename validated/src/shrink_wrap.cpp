@@ -38,7 +38,7 @@
 #include <memory>
 #include <optional>
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 Eigen::MatrixXd linear_part(const std::vector<TaylorModel>& p, const std::vector<std::size_t>& rows,
                             const std::vector<std::size_t>& slots, std::size_t kept, double scale) {
@@ -436,4 +436,4 @@ ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>&
   return out;
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

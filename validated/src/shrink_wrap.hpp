@@ -12,7 +12,7 @@
 #include "furuta/validated/taylor_model.hpp"
 #include "interval_matrix.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 struct ShrinkWrap {
   bool done = false;
@@ -64,4 +64,4 @@ ShrinkWrap shrink_wrap(std::vector<TaylorModel>& p, const std::vector<Interval>&
                        const std::vector<std::size_t>& rows, const std::vector<std::size_t>& slots,
                        double max_delta, bool leave_out_slot, bool at_base_point = false);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -187,9 +187,9 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
     throw std::invalid_argument("split options: planned_split_s in [t_start, t_end)");
   }
   const auto started = std::chrono::steady_clock::now();
-  const std::vector<bool> read = internal::read_components(tapes, x0.size());
+  const std::vector<bool> read = detail::read_components(tapes, x0.size());
   std::vector<bool> moving(x0.size(), false);
-  for (std::size_t v : internal::live_components(tapes, x0.size())) moving[v] = true;
+  for (std::size_t v : detail::live_components(tapes, x0.size())) moving[v] = true;
   tbb::task_arena arena(split.threads > 0 ? split.threads : tbb::task_arena::automatic);
 
   SplitResult out;
@@ -243,7 +243,7 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
     // Each job's run depends only on the job: the generation's results do not depend on the
     // schedule.
     std::vector<std::shared_ptr<const IntegrationResult>> results(jobs.size());
-    internal::parallel_runs(arena, jobs.size(), [&](std::size_t i) {
+    detail::parallel_runs(arena, jobs.size(), [&](std::size_t i) {
       const Job& job = jobs[i];
       results[i] = std::make_shared<const IntegrationResult>(
           job.parent == nullptr

@@ -6,7 +6,7 @@
 #include "quadratic_form.hpp"
 #include "taylor_form.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 TaylorMap taylor_map(const Tape& tape, const Doubleton& set, const std::vector<std::size_t>& live,
                      const StepEnclosure& enclosure, const IntegratorOptions& options,
@@ -146,4 +146,4 @@ LohnerStep lohner_step(const Doubleton& set, const TaylorMap& map, const TubeSte
   return out;
 }
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

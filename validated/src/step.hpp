@@ -16,7 +16,7 @@
 #include "interval_matrix.hpp"
 #include "lohner_frame.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 // T(x0) = T(m) + J (C rho + P(rho) + e) + S(rho) + R over the set, S the second-order term.
 struct TaylorMap {
@@ -47,4 +47,4 @@ LohnerStep lohner_step(const Doubleton& set, const TaylorMap& map, const TubeSte
                        const StepEnclosure& enclosure, LiveSet& live,
                        const IntegratorOptions& options);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -11,7 +11,7 @@
 #include "furuta/validated/integrator.hpp"
 #include "interval_matrix.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 // sum_i s^i c[i stride + offset], i = 0..order.
 inline Interval horner(const std::vector<Interval>& c, std::size_t stride, std::size_t offset,
@@ -47,4 +47,4 @@ struct FormTerms {
 FormTerms form_terms(const TubeStep& step, std::size_t n, int order, const Interval& s,
                      const std::vector<Interval>& step_r0);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

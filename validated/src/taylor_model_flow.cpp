@@ -26,12 +26,12 @@
 
 namespace furuta::validated {
 
-using internal::IMatrix;
-using internal::Matrix;
+using detail::IMatrix;
+using detail::Matrix;
 
 namespace {
 
-constexpr std::size_t kN = internal::kMaxDimension;
+constexpr std::size_t kN = detail::kMaxDimension;
 
 bool is_bounded(const Box& b) {
   return std::all_of(b.begin(), b.end(), [](const Interval& x) { return x.is_bounded(); });
@@ -39,7 +39,7 @@ bool is_bounded(const Box& b) {
 
 // The box of p(z) + B r.
 Box box_of(const std::vector<TaylorModel>& p, const Matrix& b, const std::vector<Interval>& r) {
-  const std::vector<Interval> br = internal::from_point(b) * r;
+  const std::vector<Interval> br = detail::from_point(b) * r;
   Box x(p.size());
   for (std::size_t v = 0; v < p.size(); ++v) x[v] = p[v].bound() + br[v];
   return x;
@@ -71,7 +71,7 @@ void tighten_jacobians(TaylorRunner<Grad<kN, TaylorModel>>& runner, const Tape& 
                        const std::shared_ptr<const MonomialSpace>& jacobian_space, int k,
                        const Interval& hi, IMatrix& j, IMatrix& j_over) {
   const std::size_t n = p.size();
-  const std::vector<Interval> br = internal::from_point(b) * r;
+  const std::vector<Interval> br = detail::from_point(b) * r;
   std::vector<Grad<kN, TaylorModel>> g(n);
   for (std::size_t v = 0; v < n; ++v) {
     TaylorModel x = p[v].reduced_to(jacobian_space);
@@ -123,7 +123,7 @@ Tube as_tube(const TaylorModelFlowResult& result) {
   return tube;
 }
 
-namespace internal {
+namespace detail {
 
 TaylorModelFlowSetup::TaylorModelFlowSetup(const std::vector<Tape>& tapes_,
                                            const std::vector<double>& switches_, const Box& x0,
@@ -294,20 +294,20 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
   return std::nullopt;
 }
 
-}  // namespace internal
+}  // namespace detail
 
 TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
                                               const std::vector<double>& switches, const Box& x0,
                                               const TaylorModelFlowOptions& options) {
-  const internal::TaylorModelFlowSetup setup(tapes, switches, x0, options);
+  const detail::TaylorModelFlowSetup setup(tapes, switches, x0, options);
   const auto started = std::chrono::steady_clock::now();
   TaylorModelFlowResult result;
   result.initial = x0;
   result.t_start = options.integrator.t_start;
-  internal::TaylorModelFlowState state = internal::initial_flow_state(setup, x0);
-  internal::TaylorModelFlowRunners runners;
+  detail::TaylorModelFlowState state = detail::initial_flow_state(setup, x0);
+  detail::TaylorModelFlowRunners runners;
   while (state.t < options.integrator.t_end) {
-    if (auto failure = internal::taylor_model_flow_step(setup, runners, state, result)) {
+    if (auto failure = detail::taylor_model_flow_step(setup, runners, state, result)) {
       result.status = failure->status;
       result.reason = std::move(failure->reason);
       break;

@@ -15,7 +15,7 @@
 #include "jets.hpp"
 #include "lohner_frame.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 // What every run from one x0 shares, read only: the checked arguments and the models' spaces
 // (every state's models live in `space`).
@@ -67,4 +67,4 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
                                                              TaylorModelFlowState& state,
                                                              TaylorModelFlowResult& result);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

@@ -19,7 +19,7 @@
 namespace furuta::validated {
 namespace {
 
-using internal::TaylorModelFlowState;
+using detail::TaylorModelFlowState;
 
 // A piece to run: the state it starts from and the steps before it (its ancestors').
 struct TaylorModelJob {
@@ -65,7 +65,7 @@ struct Run {
   std::vector<std::pair<std::size_t, TaylorModelFlowState>> restarts;
 };
 
-Run run_job(const internal::TaylorModelFlowSetup& setup, const Box& x0, const TaylorModelJob& job,
+Run run_job(const detail::TaylorModelFlowSetup& setup, const Box& x0, const TaylorModelJob& job,
             const std::vector<bool>& weigh) {
   const auto started = std::chrono::steady_clock::now();
   Run run;
@@ -73,9 +73,9 @@ Run run_job(const internal::TaylorModelFlowSetup& setup, const Box& x0, const Ta
   run.result.t_start = setup.options.integrator.t_start;
   run.result.steps = job.steps;
   TaylorModelFlowState state = job.state;
-  internal::TaylorModelFlowRunners runners;
+  detail::TaylorModelFlowRunners runners;
   while (state.t < setup.options.integrator.t_end) {
-    if (auto failure = internal::taylor_model_flow_step(setup, runners, state, run.result)) {
+    if (auto failure = detail::taylor_model_flow_step(setup, runners, state, run.result)) {
       run.result.status = failure->status;
       run.result.reason = std::move(failure->reason);
       break;
@@ -125,7 +125,7 @@ std::size_t cut_variable(const std::vector<TaylorModel>& p, const std::vector<bo
   const MonomialSpace& space = *p.front().space();
   const std::size_t n = space.variables();
   // As in the wrap (shrink_wrap.cpp): a singular L has no useful inverse to weigh the rows by.
-  const std::optional<Eigen::MatrixXd> l_inverse = internal::linear_part_inverse(p, rows, slots);
+  const std::optional<Eigen::MatrixXd> l_inverse = detail::linear_part_inverse(p, rows, slots);
   if (!l_inverse) return widest_variable(p, weigh);
   const Eigen::MatrixXd a = l_inverse->cwiseAbs();
   std::vector<double> share(n, 0.0);
@@ -175,15 +175,15 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
                                                      const Box& x0,
                                                      const TaylorModelFlowOptions& options,
                                                      const TaylorModelSplitOptions& split) {
-  const internal::TaylorModelFlowSetup setup(tapes, switches, x0, options);
+  const detail::TaylorModelFlowSetup setup(tapes, switches, x0, options);
   if (split.max_pieces == 0) throw std::invalid_argument("split.max_pieces: at least 1");
   if (split.max_depth < 0) throw std::invalid_argument("split.max_depth: at least 0");
   if (!(split.restart_back >= 0.0 && split.restart_back <= 1.0)) {
     throw std::invalid_argument("split.restart_back: in [0, 1]");
   }
   const auto started = std::chrono::steady_clock::now();
-  std::vector<bool> weigh = internal::read_components(tapes, setup.n);
-  const internal::LiveSet live(tapes, setup.n);
+  std::vector<bool> weigh = detail::read_components(tapes, setup.n);
+  const detail::LiveSet live(tapes, setup.n);
   for (std::size_t v = 0; v < setup.n; ++v) weigh[v] = weigh[v] && live.is_live[v];
   tbb::task_arena arena(split.threads > 0 ? split.threads : tbb::task_arena::automatic);
 
@@ -191,12 +191,12 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
   out.cuts.assign(setup.n, 0);
   std::vector<std::pair<std::string, TaylorModelFlowResult>> done;
   std::vector<TaylorModelJob> jobs{
-      TaylorModelJob{internal::initial_flow_state(setup, x0), {}, 0, ""}};
+      TaylorModelJob{detail::initial_flow_state(setup, x0), {}, 0, ""}};
   std::size_t leaves = 1;
   while (!jobs.empty()) {
     std::vector<Run> runs(jobs.size());
-    internal::parallel_runs(arena, jobs.size(),
-                            [&](std::size_t i) { runs[i] = run_job(setup, x0, jobs[i], weigh); });
+    detail::parallel_runs(arena, jobs.size(),
+                          [&](std::size_t i) { runs[i] = run_job(setup, x0, jobs[i], weigh); });
     double longest = 0.0;
     for (const Run& run : runs) longest = std::max(longest, run.result.seconds);
     out.critical_path_seconds += longest;

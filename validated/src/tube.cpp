@@ -13,9 +13,9 @@
 
 namespace furuta::validated {
 
-using internal::form_terms;
-using internal::FormTerms;
-using internal::from_point;
+using detail::form_terms;
+using detail::FormTerms;
+using detail::from_point;
 
 Box Tube::step_form(std::size_t index, const Interval& s) const {
   const TubeStep& step = steps.at(index);
@@ -66,7 +66,7 @@ Box Tube::enclosure_over(double ta, double tb) const {
   return hull_box;
 }
 
-namespace internal {
+namespace detail {
 
 FormTerms form_terms(const TubeStep& step, std::size_t n, int order, const Interval& s,
                      const std::vector<Interval>& step_r0) {
@@ -111,5 +111,5 @@ void append_step(Tube& tube, TubeStep step, const Box& apriori, const Box& end) 
   stored.over = intersect(tube.step_form(tube.steps.size() - 1, Interval(0.0, h.hi())), apriori);
 }
 
-}  // namespace internal
+}  // namespace detail
 }  // namespace furuta::validated

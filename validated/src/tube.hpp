@@ -7,7 +7,7 @@
 #include "furuta/interval/box.hpp"
 #include "furuta/validated/integrator.hpp"
 
-namespace furuta::validated::internal {
+namespace furuta::validated::detail {
 
 // A step over [set.t, enclosure.t1] from the set at its start: the set (C, B, r, r0, origin, P)
 // and the remainder coefficient; the Taylor form's coefficients are filled in by taylor_map().
@@ -17,4 +17,4 @@ TubeStep start_step(const Doubleton& set, const StepEnclosure& enclosure);
 // (its Taylor form over [0, h] inside the a priori box).
 void append_step(Tube& tube, TubeStep step, const Box& apriori, const Box& end);
 
-}  // namespace furuta::validated::internal
+}  // namespace furuta::validated::detail

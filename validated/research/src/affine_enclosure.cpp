@@ -8,10 +8,10 @@
 
 namespace furuta::validated::research {
 
-using internal::form_terms;
-using internal::FormTerms;
-using internal::from_point;
-using internal::IMatrix;
+using detail::form_terms;
+using detail::FormTerms;
+using detail::from_point;
+using detail::IMatrix;
 
 AffineEnclosure affine_at(const Tube& tube, double t) {
   if (!(t >= tube.t_start && t <= tube.t_end()) || tube.steps.empty()) {

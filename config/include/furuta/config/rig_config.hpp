@@ -169,6 +169,11 @@ struct AutomationConfig {
   std::string identifications_dir = "/var/lib/furuta/identifications";
 };
 
+// The excitation profiles [excitation] profile may name, in daemon::ProfileKind's order: the one
+// list the configuration, the daemon and the start command's checks take their names from.
+inline constexpr std::array<const char*, 6> kExcitationProfiles = {
+    "bang_bang", "free_decay", "step", "prbs", "chirp", "multisine"};
+
 struct ExcitationConfig {
   std::string profile = "bang_bang";
   double amplitude_duty = 0.3;
@@ -192,8 +197,12 @@ struct ExcitationConfig {
 struct RigConfig {
   std::string name;
   UsbBackend backend = UsbBackend::simulated;
-  BoardSelection motor_board{.model = "1065", .serial = {}, .allow_untested_firmware = false};
-  BoardSelection encoder_board{.model = "1047", .serial = {}, .allow_untested_firmware = false};
+  BoardSelection motor_board{.model = std::string(bridge::kShippedMotorBoard),
+                             .serial = {},
+                             .allow_untested_firmware = false};
+  BoardSelection encoder_board{.model = std::string(bridge::kShippedEncoderBoard),
+                               .serial = {},
+                               .allow_untested_firmware = false};
   int pendulum_channel = 0;
   bridge::EncoderGeometry arm_encoder;  // gear_ratio = motor.total_ratio()
   bridge::EncoderGeometry pendulum_encoder;

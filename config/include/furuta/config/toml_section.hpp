@@ -15,6 +15,7 @@
 #include <initializer_list>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,8 @@ class Section {
   // A string that must be one of `allowed`, kept as it is written.
   std::string choice(const std::string& key, const std::string& fallback,
                      std::initializer_list<const char*> allowed);
+  std::string choice(const std::string& key, const std::string& fallback,
+                     std::span<const char* const> allowed);
   // A string that must be one of the choices' names, read as that choice's value; otherwise the
   // error "'<value>' is not one of: <names>".
   template <typename T>
@@ -84,6 +87,8 @@ class Section {
   // An array of strings, each one of `allowed`, no repeats.
   std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
                                    std::initializer_list<const char*> allowed);
+  std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
+                                   std::span<const char* const> allowed);
   // An array of free-form names (labels): each non-empty, no repeats.
   std::vector<std::string> names(const std::string& key, const std::vector<std::string>& fallback);
 

@@ -53,8 +53,8 @@ struct LoopSettings {
   bridge::EncoderGeometry arm_encoder;  // counts_per_rev of the motor shaft, gear ratio Nm*Ng
   bridge::EncoderGeometry pendulum_encoder;
   // The boards' adapters by their configuration names (bridge::make_motor_board, ...).
-  std::string motor_board = "1065";
-  std::string encoder_board = "1047";
+  std::string motor_board{bridge::kShippedMotorBoard};
+  std::string encoder_board{bridge::kShippedEncoderBoard};
   int pendulum_channel = 0;
   double stop_braking_fraction = 1.0;  // braking applied with the zero command on every stop
   // The motor board's duty ramp (% of full duty per s; 0: its fastest). A gentler ramp keeps the

@@ -104,16 +104,42 @@ using MotorBoardMaker = std::unique_ptr<MotorBoard> (*)(const DeviceInfo& device
                                                         const MotorBoardSettings& settings);
 using EncoderBoardMaker = std::unique_ptr<EncoderBoard> (*)(const DeviceInfo& device, int channel);
 
-// The adapter named `kind` (a configuration value: "1065", "1047", or one registered), for the
-// opened device. Throws std::invalid_argument naming the kinds there are for an unknown one.
+// Where the host finds a board on the bus.
+struct UsbIdentity {
+  std::uint16_t vendor_id = 0;
+  std::uint16_t product_id = 0;
+};
+
+// A motor board model as the host knows it before one is opened: its adapter, where it is found,
+// and the duty ramps it can be set to (% of full duty per s).
+struct MotorBoardKind {
+  MotorBoardMaker make = nullptr;
+  UsbIdentity usb;
+  double min_acceleration_pct_per_s = 0;
+  double max_acceleration_pct_per_s = 0;
+};
+struct EncoderBoardKind {
+  EncoderBoardMaker make = nullptr;
+  UsbIdentity usb;
+};
+
+// The board models the project ships adapters for, as configuration values name them.
+inline constexpr std::string_view kShippedMotorBoard = "1065";
+inline constexpr std::string_view kShippedEncoderBoard = "1047";
+
+// The kind registered under `kind` (a configuration value); std::invalid_argument naming the
+// kinds there are for an unknown one.
+MotorBoardKind motor_board_kind(std::string_view kind);
+EncoderBoardKind encoder_board_kind(std::string_view kind);
+// The adapter of `kind` for the opened device (throws as motor_board_kind does).
 std::unique_ptr<MotorBoard> make_motor_board(std::string_view kind, const DeviceInfo& device,
                                              const MotorBoardSettings& settings);
 std::unique_ptr<EncoderBoard> make_encoder_board(std::string_view kind, const DeviceInfo& device,
                                                  int channel);
-// A new board is an adapter registered under its configuration name before the rig is opened;
+// A new board is a kind registered under its configuration name before the rig is opened;
 // false when the name is taken.
-bool register_motor_board(std::string_view kind, MotorBoardMaker maker);
-bool register_encoder_board(std::string_view kind, EncoderBoardMaker maker);
+bool register_motor_board(std::string_view kind, const MotorBoardKind& board);
+bool register_encoder_board(std::string_view kind, const EncoderBoardKind& board);
 std::vector<std::string> motor_board_kinds();
 std::vector<std::string> encoder_board_kinds();
 

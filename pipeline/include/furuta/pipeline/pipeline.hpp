@@ -50,8 +50,8 @@ struct SessionSummary {
   std::int64_t seed = 0;
   std::size_t samples = 0;
   std::size_t missing_samples = 0;        // sequence numbers absent between the first and the last
-  std::int64_t motor_lost_reports = 0;    // 1065
-  std::int64_t encoder_lost_reports = 0;  // 1047
+  std::int64_t motor_lost_reports = 0;    // the motor board's
+  std::int64_t encoder_lost_reports = 0;  // the encoder board's
   std::int64_t overruns = 0;              // missed loop cycles
   std::size_t faults = 0;
   std::vector<std::string> fatal_faults;  // "reason (detail)"
@@ -309,14 +309,27 @@ struct OutputError {
   std::array<double, 2> counts_per_rev = {0, 0};
 };
 
-// Something that happened that a reader should know of, beyond the numbers.
+// Something that happened that a reader should know of, beyond the numbers: where (the stage),
+// what sort of thing (the kind), and the words.
 struct Warning {
   // physical: the LSMI estimate is outside the physical region (docs/model.md), or its
   // magnitudes are no rig's; the text names the likely recording mistake.
   enum class Stage { data, lsmi, physical, output_error, sivia, guaranteed, simulation };
+  enum class Kind {
+    data,     // the recording is short of what it should be: lost, missing, damaged, cut
+    skipped,  // the stage did not run; the text says why
+    failed,   // the stage ran and its result cannot be used: no convergence, an empty set, a tube
+              // that ended early
+    suspect,  // a result to doubt: not physical, poorly excited, a misfit, at odds with another
+    note,     // how the stage ran, where the reader would otherwise assume the default
+  };
   Stage stage = Stage::data;
+  Kind kind = Kind::note;
   std::string text;
 };
+// The stage's latest warning of `kind` (a skipped stage's reason); "" when there is none.
+std::string warning_text(const std::vector<Warning>& warnings, Warning::Stage stage,
+                         Warning::Kind kind);
 
 // An identification's own warnings with their stage: LSMI's (identify() prefixes them with the
 // experiment's name, or "all experiments") and the data's (lost reports, missing samples, a

@@ -30,11 +30,13 @@ namespace furuta::report {
 using pipeline::SessionSummary;
 using pipeline::summarize_session;
 
-// One vocabulary from the pipeline to the page: a warning is its stage and its text.
+// One vocabulary from the pipeline to the page: a warning is its stage, its kind and its text.
 using pipeline::Warning;
-// The heading a stage's warnings are shown under: "session" (the data), "excitation" (LSMI),
+// The heading a stage's warnings are shown under: "session" (the data), "LSMI",
 // "physical" (also shown above everything), "output error", "SIVIA", "guaranteed", "simulation".
 std::string topic(Warning::Stage stage);
+// The kind as one word ("data", "skipped", "failed", "suspect", "note"): the HTML's class for it.
+std::string kind_name(Warning::Kind kind);
 
 // A row of Table II: the interval a parameter enters SIVIA with, and what SIVIA made of it.
 struct IntervalRow {
