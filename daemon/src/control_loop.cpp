@@ -32,9 +32,11 @@ void EventQueue::notify() noexcept {
   [[maybe_unused]] const ssize_t written = ::write(fd_, &one, sizeof one);
 }
 
-void EventQueue::wait_for(std::chrono::milliseconds timeout) noexcept {
+void EventQueue::wait_for(std::chrono::nanoseconds timeout) noexcept {
   pollfd p{fd_, POLLIN, 0};
-  if (::poll(&p, 1, static_cast<int>(timeout.count())) > 0) {
+  const auto ns = std::max<std::int64_t>(0, timeout.count());
+  const timespec ts{static_cast<time_t>(ns / 1'000'000'000), static_cast<long>(ns % 1'000'000'000)};
+  if (::ppoll(&p, 1, &ts, nullptr) > 0) {
     std::uint64_t count = 0;
     [[maybe_unused]] const ssize_t read = ::read(fd_, &count, sizeof count);
   }

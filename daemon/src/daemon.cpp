@@ -1,8 +1,11 @@
 #include "furuta/daemon/daemon.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <ctime>
 #include <future>
+#include <optional>
+#include <thread>
 
 #include "furuta/common/wire_text.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -14,6 +17,12 @@ namespace {
 // The longest the publisher/logger sleeps without an event: the bound on how late a due status or
 // log sync may be (the loop's events wake it at once).
 constexpr std::chrono::milliseconds kIoIdleWait{20};
+// How long before the next sample is due the publisher stops sleeping and watches the queue, and
+// how long after it watches before it sleeps again: a thread woken from an idle CPU starts late
+// (on a VM by far more than the loop's own cycle), and a sample should reach its subscribers as
+// soon as the loop made it. Watching costs this share of a CPU per period.
+constexpr std::chrono::microseconds kWatchBeforeSample{400};
+constexpr std::chrono::microseconds kWatchAfterSample{600};
 
 void copy_to(std::array<char, kNameChars>& to, const std::string& from) {
   copy_text(to, from.c_str());
@@ -243,9 +252,15 @@ void Daemon::io_thread_main() {
     refresh_snapshot();
     publish(status_message());
   };
+  // When the next sample is due, on this thread's clock: a period after the last one came.
+  const auto period = std::chrono::nanoseconds(settings_.loop.period_ns);
+  std::optional<std::chrono::steady_clock::time_point> next_sample;
   for (;;) {
     bool any = false;
     while (events_.pop(event)) {
+      if (event.kind == LoopEvent::Kind::sample) {
+        next_sample = std::chrono::steady_clock::now() + period;
+      }
       recorder_->handle(event);
       any = true;
       // A status reply names the session and the last fault from the snapshot: bring it up to date
@@ -265,10 +280,30 @@ void Daemon::io_thread_main() {
       ready_.store(true);
     }
     if (io_stop_.load() && events_.read_available() == 0) break;
-    // Until the loop queues an event (it wakes this thread), or the next status or sync is due.
-    if (!any) events_.wait_for(kIoIdleWait);
+    // Until the loop queues an event (it wakes this thread), or the next status or sync is due;
+    // close to the next sample, watching the queue instead of sleeping.
+    if (!any) wait_for_event(next_sample);
   }
   publish_status();
+}
+
+void Daemon::wait_for_event(std::optional<std::chrono::steady_clock::time_point> next_sample) {
+  using Clock = std::chrono::steady_clock;
+  const auto period = std::chrono::nanoseconds(settings_.loop.period_ns);
+  // A bounded share of each period: at short periods the publisher is rarely asleep long anyway.
+  const auto before = std::min<std::chrono::nanoseconds>(kWatchBeforeSample, period / 20);
+  const auto after = std::min<std::chrono::nanoseconds>(kWatchAfterSample, period / 20);
+  const auto now = Clock::now();
+  if (!next_sample || now >= *next_sample + after) {
+    events_.wait_for(kIoIdleWait);
+  } else if (now < *next_sample - before) {
+    events_.wait_for(std::min<std::chrono::nanoseconds>(kIoIdleWait, *next_sample - before - now));
+  } else {
+    while (events_.read_available() == 0 && !io_stop_.load() &&
+           Clock::now() < *next_sample + after) {
+      std::this_thread::yield();
+    }
+  }
 }
 
 void Daemon::lcm_thread_main() {

@@ -41,7 +41,7 @@ class EventQueue : public boost::lockfree::spsc_queue<LoopEvent> {
   // Producer, or whoever asks the consumer to look (a stop): wakes a wait_for.
   void notify() noexcept;
   // Consumer: returns once notified since the last return, or after `timeout`.
-  void wait_for(std::chrono::milliseconds timeout) noexcept;
+  void wait_for(std::chrono::nanoseconds timeout) noexcept;
 
  private:
   int fd_ = -1;

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -124,6 +125,9 @@ class Daemon {
   // statvfs), so `furuta status` says so before a start is refused for it.
   void check_logs_dir();
   void io_thread_main();
+  // Sleeps until the loop queues an event or a status is due; from shortly before the next sample
+  // is due (a period after the last) until shortly after, watches the queue instead.
+  void wait_for_event(std::optional<std::chrono::steady_clock::time_point> next_sample);
   void lcm_thread_main();
   // Raw handlers: oversized and undecodable messages are counted as malformed, never decoded or
   // printed (LCM's typed handlers print every decoding error).
