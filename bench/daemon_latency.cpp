@@ -32,10 +32,14 @@ namespace {
 using namespace furuta;
 
 struct SubscriberLatency {
-  explicit SubscriberLatency(std::size_t samples) : queued_ns(samples) {}
-  daemon::LatencyHistogram histogram;                // from the loop's queueing of the sample
-  daemon::LatencyHistogram from_deadline;            // from the sample's cycle deadline
-  std::vector<std::atomic<std::int64_t>> queued_ns;  // by seq, from the recorder's probe
+  explicit SubscriberLatency(std::size_t samples) : queued_ns(samples), published_ns(samples) {}
+  daemon::LatencyHistogram histogram;      // from the loop's queueing of the sample
+  daemon::LatencyHistogram from_deadline;  // from the sample's cycle deadline
+  // The two hops: queued -> the publisher has it (the I/O thread's hand-off), and the publisher
+  // has it -> the subscriber has it (encoding, UDP, the subscriber's wake-up).
+  daemon::LatencyHistogram to_publisher, from_publisher;
+  std::vector<std::atomic<std::int64_t>> queued_ns;     // by seq, from the recorder's probe
+  std::vector<std::atomic<std::int64_t>> published_ns;  // by seq, when the probe ran
   std::int64_t received = 0;
   void on_sample(const lcm::ReceiveBuffer*, const std::string&, const furuta::rig_sample_t* m) {
     const std::int64_t now = bridge::MonotonicClock{}.now_ns();
@@ -43,6 +47,7 @@ struct SubscriberLatency {
     const auto seq = static_cast<std::size_t>(m->seq);
     if (seq < queued_ns.size() && queued_ns[seq].load() != 0) {
       histogram.record(now - queued_ns[seq].load());
+      from_publisher.record(now - published_ns[seq].load());
     }
     ++received;
   }
@@ -136,7 +141,11 @@ int main(int argc, char** argv) {
     daemon::Daemon d(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, daemon_lcm);
     d.recorder().on_publish([&subscriber](const daemon::RigSample& s) {
       const auto seq = static_cast<std::size_t>(s.seq);
-      if (seq < subscriber.queued_ns.size()) subscriber.queued_ns[seq].store(s.queued_ns);
+      if (seq >= subscriber.queued_ns.size()) return;
+      const std::int64_t now = bridge::MonotonicClock{}.now_ns();
+      subscriber.to_publisher.record(now - s.queued_ns);
+      subscriber.published_ns[seq].store(now);
+      subscriber.queued_ns[seq].store(s.queued_ns);
     });
     furuta::rig_command_t start{};
     start.kind = furuta::rig_command_t::KIND_START_SESSION;
@@ -210,7 +219,9 @@ int main(int argc, char** argv) {
             << quantiles(subscriber.histogram) << "\n"
             << "sample -> subscriber [us], from its cycle's deadline: "
             << quantiles(subscriber.from_deadline) << " (" << subscriber.received << " of "
-            << samples_logged << " samples received)\n";
+            << samples_logged << " samples received)\n"
+            << "  of which queued -> publisher: " << quantiles(subscriber.to_publisher)
+            << "; publisher -> subscriber: " << quantiles(subscriber.from_publisher) << "\n";
   std::cout << "session ended: " << stop_reason << "\n";
 
   if (!json_path.empty()) {
@@ -228,6 +239,8 @@ int main(int argc, char** argv) {
          << ",\"max_us\":" << subscriber.histogram.max_us()
          << ",\"from_deadline_p50_us\":" << subscriber.from_deadline.quantile_us(0.5)
          << ",\"from_deadline_p99_us\":" << subscriber.from_deadline.quantile_us(0.99)
+         << ",\"to_publisher_p99_us\":" << subscriber.to_publisher.quantile_us(0.99)
+         << ",\"from_publisher_p99_us\":" << subscriber.from_publisher.quantile_us(0.99)
          << ",\"received\":" << subscriber.received << ",\"published\":" << samples_logged
          << "}}\n";
   }

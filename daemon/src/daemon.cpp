@@ -252,14 +252,20 @@ void Daemon::io_thread_main() {
     refresh_snapshot();
     publish(status_message());
   };
-  // When the next sample is due, on this thread's clock: a period after the last one came.
+  // When the next sample is due, on this thread's clock.
   const auto period = std::chrono::nanoseconds(settings_.loop.period_ns);
   std::optional<std::chrono::steady_clock::time_point> next_sample;
   for (;;) {
     bool any = false;
     while (events_.pop(event)) {
       if (event.kind == LoopEvent::Kind::sample) {
-        next_sample = std::chrono::steady_clock::now() + period;
+        // The loop's samples keep its period: one seen later than due (this thread was late) was
+        // still due then, and the next is a period after that; one seen early, or far off the
+        // schedule (a new session), sets it.
+        const auto seen = std::chrono::steady_clock::now();
+        const bool on_schedule =
+            next_sample && seen > *next_sample && seen - *next_sample < period / 2;
+        next_sample = (on_schedule ? *next_sample : seen) + period;
       }
       recorder_->handle(event);
       any = true;
