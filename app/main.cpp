@@ -4,6 +4,7 @@
 #include <iostream>
 #include <string>
 
+#include "cli_numbers.hpp"
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/rig_connection.hpp"
@@ -35,7 +36,7 @@ int main(int argc, char** argv) {
     cmd->add_option("-c,--config", remote.config_path, "Rig configuration (TOML)")
         ->check(CLI::ExistingFile);
     cmd->add_option("--timeout", remote.reply_timeout_s, "Seconds to wait for the daemon's answer")
-        ->check(CLI::Range(0.1, 60.0));
+        ->check(furuta::app::finite_in(0.1, 60.0));
     cmd->add_option("--daemon-public-key", remote.daemon_public_key,
                     "The key the daemon's answers are checked with (default: the "
                     "configuration's [daemon] daemon_public_key_file)");
@@ -55,7 +56,7 @@ int main(int argc, char** argv) {
   auto add_wait = [&](CLI::App* cmd, const std::string& what) {
     auto* wait = cmd->add_option("--wait", remote.wait_s,
                                  "Seconds to wait for " + what + " (exit 2 if it has not by then)")
-                     ->check(CLI::Range(0.1, 600.0));
+                     ->check(furuta::app::finite_in(0.1, 600.0));
     cmd->add_flag("--no-wait", no_wait, "Return once the daemon has accepted the command")
         ->excludes(wait);
   };
@@ -144,13 +145,15 @@ int main(int argc, char** argv) {
   identify_cmd->add_option("-o,--output", identify.output_dir,
                            "Directory for results and figures, replaced whole: new, empty or a "
                            "previous run's (default: identification)");
-  identify_cmd->add_option("--cutoff", identify.cutoff_hz,
-                           "Low-pass cut-off [Hz] (default: the configuration's; 15 without one)");
+  identify_cmd
+      ->add_option("--cutoff", identify.cutoff_hz,
+                   "Low-pass cut-off [Hz] (default: the configuration's; 15 without one)")
+      ->check(furuta::app::finite_in(0.01, 1000.0));
   auto* lag_option = identify_cmd->add_option(
       "--input-lag-ms", identify.input_lag_ms,
       "Input-to-angle lag [ms], not negative: the angles cannot lead the input (default: the "
       "configuration's, else estimated; CSVs: 0)");
-  lag_option->check(CLI::NonNegativeNumber);
+  lag_option->check(furuta::app::finite_in(0.0, 1000.0));
   identify_cmd
       ->add_flag("--estimate-input-lag", identify.estimate_input_lag,
                  "Estimate the lag from the data (to calibrate the configuration's)")
@@ -169,7 +172,7 @@ int main(int argc, char** argv) {
       "Guaranteed set by windowed set inversion around the output-error estimate ([guaranteed]; "
       "a CSV's bounds from its import spec's [guaranteed]; minutes)");
   identify_cmd->add_option("--threads", identify.threads, "SIVIA threads (0: all cores)")
-      ->check(CLI::Range(0, 1024));
+      ->check(furuta::app::whole_in(0, 1024));
 
   identify_cmd->add_flag("--use-intact-part", identify.use_intact_part,
                          "Fit a damaged, truncated or cut-short log's intact parts (each run of "
@@ -180,7 +183,7 @@ int main(int argc, char** argv) {
   identify_cmd
       ->add_option("--simulate-seconds", identify.simulate_seconds,
                    "Each scenario's duration [s] (default: the paper's 4)")
-      ->check(CLI::Range(0.01, 60.0));
+      ->check(furuta::app::finite_in(0.01, 60.0));
 
   furuta::app::SimulateCommandOptions simulate;
   CLI::App* simulate_cmd = app.add_subcommand(
@@ -197,13 +200,19 @@ int main(int argc, char** argv) {
       ->add_flag("--truth", simulate.truth,
                  "The simulated rig's truth as point parameters (the default without --results)")
       ->excludes(results_option);
-  simulate_cmd->add_option("--relative", simulate.relative_pct,
-                           "With the truth: also the truth +- this percent as interval parameters");
-  simulate_cmd->add_option("--seconds", simulate.seconds,
-                           "Each scenario's duration [s] (default: the paper's 4)");
-  simulate_cmd->add_option("--pieces", simulate.pieces,
-                           "Tubes per run: 1 (default), or 2, 4, ... 64: the initial box split "
-                           "at 0.5 s, tighter tubes for that many times the work");
+  simulate_cmd
+      ->add_option("--relative", simulate.relative_pct,
+                   "With the truth: also the truth +- this percent as interval parameters")
+      ->check(furuta::app::finite_in(0.0, 100.0));
+  simulate_cmd
+      ->add_option("--seconds", simulate.seconds,
+                   "Each scenario's duration [s] (default: the paper's 4)")
+      ->check(furuta::app::finite_in(0.01, 60.0));
+  simulate_cmd
+      ->add_option("--pieces", simulate.pieces,
+                   "Tubes per run: 1 (default), or 2, 4, ... 64: the initial box split at 0.5 s, "
+                   "tighter tubes for that many times the work")
+      ->check(furuta::app::whole_in(1, 64));
   simulate_cmd->add_option("-o,--output", simulate.output_dir,
                            "Directory for results and figures, replaced whole: new, empty or a "
                            "previous run's (default: simulation)");

@@ -54,6 +54,28 @@ bool same_rig_as_first(const std::vector<session_log::SessionLog>& logs,
   return same;
 }
 
+// The differentiator's stop band (twice the cut-off) must fit below every recording's Nyquist
+// frequency; a recording slower than the rig's loop needs a lower cut-off than its default.
+bool cutoff_fits(const Batch& in, const BatchRequest& request, Refusals& refusals) {
+  const double cutoff_hz = request.overrides.cutoff_hz.value_or(in.rig.identification.cutoff_hz);
+  std::vector<const identification::RawExperiment*> all;
+  for (const auto& r : in.fit) all.push_back(&r.experiment);
+  if (in.held_out) all.push_back(&in.held_out->experiment);
+  for (const auto* e : all) {
+    const double nyquist_hz = 0.5 / e->sample_period_s;
+    if (!(2 * cutoff_hz < nyquist_hz)) {
+      std::ostringstream text;
+      text << e->name << ": the cut-off " << cutoff_hz
+           << " Hz puts the differentiator's stop band (" << 2 * cutoff_hz
+           << " Hz) above the Nyquist frequency " << nyquist_hz << " Hz; pass --cutoff below "
+           << nyquist_hz / 2;
+      refusals.push_back(text.str());
+      return false;
+    }
+  }
+  return true;
+}
+
 // Session logs: the rig is the one the first log carries, unless a configuration is named. A log
 // that is not intact is refused (or, with use_intact_part, cut at its gaps); one too short for
 // every method that would run is refused, naming the file and the length needed.
@@ -161,6 +183,7 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
     in.files.push_back(request.validate);
   }
   if (refused) return std::nullopt;
+  if (!cutoff_fits(in, request, refusals)) return std::nullopt;
   in.nominal = in.rig.nominal;
   if (in.rig.backend == config::UsbBackend::simulated) in.truth = in.rig.simulation.parameters;
   in.angle_resolution_rad = config::pendulum_resolution_rad(in.rig);
@@ -252,24 +275,7 @@ std::optional<Batch> batch_from_csvs(const BatchRequest& request, Refusals& refu
   in.encoder_resolution_rad = spec.resolution_rad;
   in.recording_bounds = spec.bounds;
 
-  // The differentiator's stop band (twice the cut-off) must fit below every file's Nyquist
-  // frequency; a recording slower than the rig's loop needs a lower cut-off than its default.
-  const double cutoff_hz = request.overrides.cutoff_hz.value_or(in.rig.identification.cutoff_hz);
-  std::vector<const identification::RawExperiment*> all;
-  for (const auto& r : in.fit) all.push_back(&r.experiment);
-  if (in.held_out) all.push_back(&in.held_out->experiment);
-  for (const auto* e : all) {
-    const double nyquist_hz = 0.5 / e->sample_period_s;
-    if (!(2 * cutoff_hz < nyquist_hz)) {
-      std::ostringstream text;
-      text << e->name << ": the cut-off " << cutoff_hz
-           << " Hz puts the differentiator's stop band (" << 2 * cutoff_hz
-           << " Hz) above the Nyquist frequency " << nyquist_hz << " Hz; pass --cutoff below "
-           << nyquist_hz / 2;
-      refusals.push_back(text.str());
-      return std::nullopt;
-    }
-  }
+  if (!cutoff_fits(in, request, refusals)) return std::nullopt;
   return in;
 }
 

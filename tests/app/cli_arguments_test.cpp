@@ -77,6 +77,18 @@ TEST(CliArguments, FurutaRejectsMalformedArgumentsBeforeDoingAnything) {
       {std::string(FURUTA_CLI) + " status --no-such-option", "--no-such-option"},
       {std::string(FURUTA_CLI) + " identify --input-lag-ms -2 " FURUTA_SOURCE_DIR "/README.md",
        "--input-lag-ms"},
+      // NaN passes every comparison, and -1 reads as an unsigned type's largest value: each
+      // number is checked finite and in range where it enters.
+      {std::string(FURUTA_CLI) + " identify --input-lag-ms nan " FURUTA_SOURCE_DIR "/README.md",
+       "--input-lag-ms: nan is not a finite number"},
+      {std::string(FURUTA_CLI) + " identify --cutoff inf " FURUTA_SOURCE_DIR "/README.md",
+       "--cutoff: inf is not a finite number"},
+      {std::string(FURUTA_CLI) + " identify --simulate-seconds nan " FURUTA_SOURCE_DIR "/README.md",
+       "--simulate-seconds: nan is not a finite number"},
+      {std::string(FURUTA_CLI) + " status --timeout nan", "--timeout: nan is not a finite number"},
+      {std::string(FURUTA_CLI) + " simulate --pieces -1", "--pieces: -1 is not in [1, 64]"},
+      {std::string(FURUTA_CLI) + " simulate --seconds nan",
+       "--seconds: nan is not a finite number"},
   };
   for (const auto& [line, mention] : cases) {
     const Outcome o = run(line);
@@ -154,10 +166,10 @@ TEST(CliArguments, HelpDescribesPositionalsShowsDefaultsAndTheExitRule) {
     EXPECT_TRUE(has(o, text)) << command << "\n" << o.output;
   }
   const std::pair<const char*, const char*> defaults[] = {
-      {"status", "--timeout FLOAT:FLOAT in [0.1 - 60]=2"},
+      {"status", "--timeout FLOAT:NUMBER in [0.1, 60]=2"},
       {"identify", "-o,--output TEXT=identification"},
       {"simulate", "-o,--output TEXT=simulation"},
-      {"simulate", "--pieces UINT=1"},
+      {"simulate", "--pieces UINT:INTEGER in [1, 64]=1"},
   };
   for (const auto& [command, text] : defaults) {
     const Outcome o = run(cli + " " + command + " --help");

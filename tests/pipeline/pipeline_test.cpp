@@ -391,6 +391,14 @@ TEST(Intake, LogsAreLoadedWithTheirOwnRigAndTheCallersOverridesAndListedWhereAsk
   // SIVIA with the shipped configuration's bounds is taken; a log that is not there is thrown.
   request.overrides.sivia = true;
   EXPECT_TRUE(load_batch(request).batch);
+  // A cut-off whose stop band is above the loop's Nyquist frequency (31.25 Hz at 16 ms).
+  request.overrides.cutoff_hz = 16.0;
+  const Intake too_high = load_batch(request);
+  EXPECT_FALSE(too_high.batch);
+  ASSERT_EQ(too_high.refusals.size(), 1u);
+  EXPECT_NE(too_high.refusals[0].find("pass --cutoff below 15.625"), std::string::npos)
+      << too_high.refusals[0];
+  request.overrides.cutoff_hz.reset();
   request.logs = {dir.path() / "absent.lcmlog"};
   EXPECT_ANY_THROW(load_batch(request));
 }
