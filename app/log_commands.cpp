@@ -2,6 +2,7 @@
 // and its USB traffic replayed through the daemon.
 #include <unistd.h>
 
+#include <bit>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -80,6 +81,45 @@ int report_integrity(const char* command, const session_log::SessionLog& log, st
   return foreign ? 2 : 1;
 }
 
+// The first field in which a replayed sample differs from the logged one, or "" when none does:
+// every field the sample carries, except the session's name (a replay is a session of its own)
+// and the wall clock (for people only; a replay runs in virtual time).
+std::string_view first_differing_field(const furuta::rig_sample_t& a,
+                                       const furuta::rig_sample_t& b) {
+  // Doubles compare by their bits: a NaN logged must come back a NaN, and 0.0 is not -0.0.
+  const auto same = [](double x, double y) {
+    return std::bit_cast<std::uint64_t>(x) == std::bit_cast<std::uint64_t>(y);
+  };
+  const std::pair<std::string_view, bool> fields[] = {
+      {"seq", a.seq == b.seq},
+      {"monotonic_ns", a.monotonic_ns == b.monotonic_ns},
+      {"arm_counts", a.arm_counts == b.arm_counts},
+      {"pendulum_counts", a.pendulum_counts == b.pendulum_counts},
+      {"arm_angle_rad", same(a.arm_angle_rad, b.arm_angle_rad)},
+      {"pendulum_angle_rad", same(a.pendulum_angle_rad, b.pendulum_angle_rad)},
+      {"commanded_duty", same(a.commanded_duty, b.commanded_duty)},
+      {"applied_duty", same(a.applied_duty, b.applied_duty)},
+      {"motor_current_a", same(a.motor_current_a, b.motor_current_a)},
+      {"supply_voltage_v", same(a.supply_voltage_v, b.supply_voltage_v)},
+      {"motor_status_flags", a.motor_status_flags == b.motor_status_flags},
+      {"encoder_flags", a.encoder_flags == b.encoder_flags},
+      {"motor_report_host_ns", a.motor_report_host_ns == b.motor_report_host_ns},
+      {"motor_packet_counter", a.motor_packet_counter == b.motor_packet_counter},
+      {"motor_encoder_time", a.motor_encoder_time == b.motor_encoder_time},
+      {"encoder_report_host_ns", a.encoder_report_host_ns == b.encoder_report_host_ns},
+      {"encoder_packet_ticks", a.encoder_packet_ticks == b.encoder_packet_ticks},
+      {"encoder_delta_counts", a.encoder_delta_counts == b.encoder_delta_counts},
+      {"motor_lost_reports", a.motor_lost_reports == b.motor_lost_reports},
+      {"encoder_lost_reports", a.encoder_lost_reports == b.encoder_lost_reports},
+      {"overruns", a.overruns == b.overruns},
+      {"flags", a.flags == b.flags},
+  };
+  for (const auto& [name, equal] : fields) {
+    if (!equal) return name;
+  }
+  return {};
+}
+
 }  // namespace
 
 int run_log_info_command(const std::filesystem::path& path, std::ostream& out, std::ostream& err) {
@@ -120,7 +160,20 @@ int run_log_info_command(const std::filesystem::path& path, std::ostream& out, s
   }
   if (st.truncated_tail) out << ", truncated tail";
   if (log.undecodable_events > 0) out << ", " << log.undecodable_events << " undecodable";
+  out << "\n  digest    sha256:" << log.digest_hex << " over " << log.digested_events << " events";
+  if (log.seal) {
+    out << (log.seal_digest_matches ? ", as sealed" : ", NOT the sealed one");
+  } else {
+    out << ", no seal";
+  }
   out << "\n";
+  if (log.seal && !log.seal->source.empty()) {
+    out << "  source    a replay of " << log.seal->source << " (" << log.seal->source_integrity
+        << ")\n";
+  }
+  for (const std::string& note : session_log::integrity_notes(log)) {
+    out << "  note      " << note << "\n";
+  }
   return report_integrity("log info", log, out, err);
 }
 
@@ -261,19 +314,18 @@ int run_replay_command(const std::filesystem::path& path, const std::filesystem:
   for (const auto& b : again.samples) replayed.emplace(b.seq, &b);
   std::size_t compared = 0, differing = 0;
   std::optional<std::int64_t> first_difference;
+  std::string first_field;
   for (const auto& a : log.samples) {
     const auto found = replayed.find(a.seq);
     if (found == replayed.end()) continue;
-    const auto& b = *found->second;
     ++compared;
-    const bool same = a.monotonic_ns == b.monotonic_ns && a.arm_counts == b.arm_counts &&
-                      a.pendulum_counts == b.pendulum_counts &&
-                      a.commanded_duty == b.commanded_duty && a.applied_duty == b.applied_duty &&
-                      a.motor_report_host_ns == b.motor_report_host_ns &&
-                      a.encoder_delta_counts == b.encoder_delta_counts && a.flags == b.flags;
-    if (!same) {
+    const std::string_view field = first_differing_field(a, *found->second);
+    if (!field.empty()) {
       ++differing;
-      if (!first_difference) first_difference = a.seq;
+      if (!first_difference) {
+        first_difference = a.seq;
+        first_field = field;
+      }
     }
   }
   const std::size_t logged = log.samples.size();
@@ -282,7 +334,8 @@ int run_replay_command(const std::filesystem::path& path, const std::filesystem:
     out << " (and " << again.samples.size() - compared << " the log does not have)";
   }
   if (differing > 0) {
-    out << ": " << differing << " differ (first at seq " << *first_difference << ")\n";
+    out << ": " << differing << " differ (first at seq " << *first_difference << ", in "
+        << first_field << ")\n";
   } else if (compared == logged && again.samples.size() == logged && problems.empty()) {
     out << ": identical\n";
     return 0;

@@ -17,6 +17,7 @@
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/session_log/lcm_log.hpp"
+#include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace {
@@ -40,6 +41,7 @@ int main(int argc, char** argv) {
   std::string config_path = config::default_rig_config_path().string();
   bool simulated = false;
   std::string replay_log;
+  bool replay_not_intact = false;
   bool require_rt = false;
   std::string logs_dir;
   std::string lcm_url;
@@ -53,6 +55,9 @@ int main(int argc, char** argv) {
                  "Run a logged session again against its recorded USB traffic, in real time, then "
                  "exit")
       ->check(CLI::ExistingFile);
+  app.add_flag("--replay-not-intact", replay_not_intact,
+               "Replay a log that is not intact (refused otherwise); the new log's seal records "
+               "the source's problems, so it is not taken for a whole session either");
   app.add_flag("--require-rt", require_rt, "Fail if the real-time set-up is refused");
   app.add_option("--logs-dir", logs_dir, "Where session logs go (overrides the configuration)");
   app.add_option("--lcm-url", lcm_url, "LCM URL (overrides the configuration)");
@@ -198,7 +203,24 @@ int main(int argc, char** argv) {
     std::optional<session_log::SessionLog> replayed;
     if (!replay_log.empty()) {
       replayed = session_log::load_session_log(replay_log);
+      const auto problems = session_log::integrity_problems(*replayed);
       if (!replayed->start) throw std::runtime_error(replay_log + ": no session start record");
+      if (replayed->samples.empty()) {
+        std::cerr << "furutad: --replay " << replay_log << ": the log holds no samples to replay\n";
+        return 2;
+      }
+      if (!problems.empty() && !replay_not_intact) {
+        std::cerr << "furutad: --replay " << replay_log
+                  << " is not intact: " << session_log::describe(problems)
+                  << "; refused (--replay-not-intact replays it, recording that in the new "
+                     "log)\n";
+        return 2;
+      }
+      // The new log says where its data came from and in what state, so that a replay of a
+      // damaged log never passes for a whole session.
+      settings.recorder.seal_source = {
+          replay_log + " sha256:" + replayed->digest_hex,
+          problems.empty() ? std::string(session_log::kIntact) : session_log::describe(problems)};
       connect.backend = daemon::BackendChoice::replay;
       connect.replay_log = replay_log;
       // The loop's first cycle is the recorded session's first: the rest check passed back then.

@@ -144,6 +144,7 @@ void SessionRecorder::start_session(const SessionStartEvent& start) {
   log_failed_ = false;
   log_failure_.clear();
   log_.reset();
+  samples_logged_ = 0;
   if (!settings_.logs_dir.empty()) {
     try {
       log_ = std::make_unique<session_log::LcmLogWriter>(
@@ -219,6 +220,7 @@ void SessionRecorder::record_sample(const RigSample& s) {
                 : +furuta::rig_usb_report_t::KIND_ERROR);
   }
   log_bytes(session_log::kChannelSample, sample_buffer_, s.monotonic_ns);
+  if (log_ && !log_failed_) ++samples_logged_;
   ++samples_published_;
 }
 
@@ -280,6 +282,10 @@ void SessionRecorder::end_session(const SessionEndEvent& e) {
   const std::string detail = text_of(e.detail);
   if (!detail.empty()) m.end_reason += ": " + detail;
   publish_and_log(session_log::kChannelSession, m, e.monotonic_ns);
+  if (log_ && !log_failed_) {
+    on_log_status(session_log::write_seal(*log_, m.session, samples_logged_, e.monotonic_ns / 1000,
+                                          settings_.seal_source));
+  }
   if (log_ && !log_failed_) {
     std::filesystem::path final_path;
     if (log_->finish(&final_path) == session_log::LogWriteStatus::ok) {

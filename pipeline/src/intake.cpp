@@ -54,6 +54,34 @@ bool same_rig_as_first(const std::vector<session_log::SessionLog>& logs,
   return same;
 }
 
+// Each log once: by its digest (SessionLog::digest_hex), whatever its file is called. A log fitted
+// twice counts its data twice (the standard deviations shrink by the square root of two for
+// nothing); a held-out log that was fitted makes the hold-out's error the fit's own.
+bool distinct_logs(const std::vector<session_log::SessionLog>& logs,
+                   const std::optional<session_log::SessionLog>& held_out, Refusals& refusals) {
+  bool distinct = true;
+  for (std::size_t i = 0; i < logs.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (logs[i].digest_hex != logs[j].digest_hex) continue;
+      refusals.push_back(logs[i].path.string() + " is the same log as " + logs[j].path.string() +
+                         " (sha256:" + logs[i].digest_hex.substr(0, 16) +
+                         "...): fitted twice, its data would count twice and the standard "
+                         "deviations shrink for nothing; give each log once");
+      distinct = false;
+      break;
+    }
+    if (held_out && logs[i].digest_hex == held_out->digest_hex) {
+      refusals.push_back("the held-out " + held_out->path.string() +
+                         " is the same log as the fitted " + logs[i].path.string() +
+                         " (sha256:" + logs[i].digest_hex.substr(0, 16) +
+                         "...): its error would be the fit's own, not a hold-out's; hold out a "
+                         "session the fit does not see");
+      distinct = false;
+    }
+  }
+  return distinct;
+}
+
 // The differentiator's stop band (twice the cut-off) must fit below every recording's Nyquist
 // frequency; a recording slower than the rig's loop needs a lower cut-off than its default.
 bool cutoff_fits(const Batch& in, const BatchRequest& request, Refusals& refusals) {
@@ -86,24 +114,34 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
   if (!request.validate.empty()) held_out_log = session_log::load_session_log(request.validate);
 
   bool refused = false;
+  bool gaps_only = true;  // every refusal so far is one --use-intact-part would take
   const auto check_intact = [&](const session_log::SessionLog& log) {
     const auto problems = session_log::integrity_problems(log);
-    if (problems.empty() || request.use_intact_part) return;
+    if (problems.empty()) return;
+    const bool in_part = session_log::usable_in_part(problems);
+    if (request.use_intact_part && in_part) return;
     const bool foreign =
         session_log::has_problem(problems, session_log::LogProblem::Kind::not_a_session_log);
     refusals.push_back(log.path.string() + (foreign ? ": " : " is not intact: ") +
-                       session_log::describe(problems));
+                       session_log::describe(problems) +
+                       (in_part ? ""
+                                : "; no part of it is known to be what was recorded, so "
+                                  "--use-intact-part cannot use it either"));
+    gaps_only = gaps_only && in_part;
     refused = true;
   };
   for (const auto& log : logs) check_intact(log);
   if (held_out_log) check_intact(*held_out_log);
   if (refused) {
-    refusals.push_back(
-        "refused: filtering and differentiating across a gap gives wrong parameters without a "
-        "sign of it. Pass --use-intact-part to fit only the intact parts (each run of samples "
-        "between gaps on its own), or leave the log out");
+    if (gaps_only) {
+      refusals.push_back(
+          "refused: filtering and differentiating across a gap gives wrong parameters without a "
+          "sign of it. Pass --use-intact-part to fit only the intact parts (each run of samples "
+          "between gaps on its own), or leave the log out");
+    }
     return std::nullopt;
   }
+  if (!distinct_logs(logs, held_out_log, refusals)) return std::nullopt;
 
   if (!logs.front().start && request.config_path.empty()) {
     refusals.push_back(request.logs.front().string() +
@@ -131,6 +169,7 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
   // Each log as one recording, or as its intact parts; nothing when it cannot be used.
   const auto recordings = [&](const session_log::SessionLog& log, Role role) {
     std::vector<Recording> out;
+    // Refused above unless every problem leaves parts that can be trusted.
     if (request.use_intact_part && !session_log::integrity_problems(log).empty()) {
       // Runs LSMI can take; only when there is none, the shorter ones the refinement can.
       IntactParts parts =

@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "furuta/session_log/log_integrity.hpp"
 #include "stages.hpp"
 
 namespace furuta::pipeline {
@@ -20,9 +21,13 @@ std::string warning_text(const std::vector<Warning>& warnings, Warning::Stage st
 
 Recording log_recording(const session_log::SessionLog& log, Role role,
                         const config::RigConfig& rig) {
-  return Recording{identification::experiment_from_log(log),
-                   summarize_session(log, role == Role::fit ? "fit" : "held out"),
-                   identification::oe_experiment_from_log(log, rig)};
+  Recording recording{identification::experiment_from_log(log),
+                      summarize_session(log, role == Role::fit ? "fit" : "held out"),
+                      identification::oe_experiment_from_log(log, rig)};
+  for (const std::string& note : session_log::integrity_notes(log)) {
+    recording.experiment.warnings.push_back(log.path.filename().string() + ": " + note);
+  }
+  return recording;
 }
 
 Settings settings_for(const config::RigConfig& rig) {

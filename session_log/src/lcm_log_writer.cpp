@@ -20,6 +20,7 @@
 
 #include "furuta/session_log/lcm_log.hpp"
 #include "lcm_log_format.hpp"
+#include "log_digest.hpp"
 
 namespace furuta::session_log {
 
@@ -167,6 +168,7 @@ class LcmLogWriter::Impl {
     event.data = const_cast<std::uint8_t*>(data.data());
     errno = 0;
     if (lcm_eventlog_write_event(file_.get(), &event) != 0) return fail(errno);
+    digest_.add(static_cast<std::int64_t>(events_written_), utime, channel, data);
     ++events_written_;
     if (!dirty_) first_unsynced_utime_ = utime;
     dirty_ = true;
@@ -215,6 +217,10 @@ class LcmLogWriter::Impl {
 
   const fs::path& partial_path() const { return partial_path_; }
   std::uint64_t events_written() const { return events_written_; }
+  std::vector<std::uint8_t> digest() const {
+    const detail::Digest d = digest_.value();
+    return {d.begin(), d.end()};
+  }
   const std::string& removal_save_error() const { return removal_save_error_; }
   bool is_open() const { return file_ != nullptr; }
 
@@ -284,6 +290,7 @@ class LcmLogWriter::Impl {
   fs::path final_path_;
   EventLog file_;
   std::uint64_t events_written_ = 0;
+  detail::LogDigest digest_;
   std::string removal_save_error_;
   std::int64_t flush_interval_us() const {
     return std::chrono::duration_cast<std::chrono::microseconds>(options_.flush_interval).count();
@@ -344,6 +351,10 @@ const std::filesystem::path& LcmLogWriter::partial_path() const {
 
 std::uint64_t LcmLogWriter::events_written() const {
   return impl_->events_written();
+}
+
+std::vector<std::uint8_t> LcmLogWriter::digest() const {
+  return impl_->digest();
 }
 
 bool LcmLogWriter::is_open() const {

@@ -70,7 +70,95 @@ std::vector<LogProblem> integrity_problems(const SessionLog& log) {
     t << "cut short: no session end record (as in a log recovered after a crash)";
     add(Kind::cut_short, t);
   }
+  if (log.start_records > 1 || log.end_records > 1 || log.events_after_seal > 0 ||
+      log.foreign_samples > 0) {
+    std::ostringstream t;
+    t << "joined: more than one session in one file (" << log.start_records << " start and "
+      << log.end_records << " end records, " << log.foreign_samples
+      << " sample(s) of another session, " << log.events_after_seal
+      << " event(s) after the log's seal)";
+    add(Kind::joined, t);
+  }
+  for (std::size_t i = 1; i < log.samples.size(); ++i) {
+    const auto& before = log.samples[i - 1];
+    const auto& s = log.samples[i];
+    if (s.seq <= before.seq) {
+      std::ostringstream t;
+      t << "out of order: sample seq " << s.seq << " follows seq " << before.seq
+        << (s.seq == before.seq ? " (a sample repeated)" : "");
+      add(Kind::out_of_order, t);
+      break;
+    }
+  }
+  for (std::size_t i = 1; i < log.samples.size(); ++i) {
+    const auto& before = log.samples[i - 1];
+    const auto& s = log.samples[i];
+    if (s.monotonic_ns <= before.monotonic_ns) {
+      std::ostringstream t;
+      t << "time goes back: sample seq " << s.seq << " is timed ";
+      if (s.monotonic_ns == before.monotonic_ns) {
+        t << "at the same time as";
+      } else {
+        t << static_cast<double>(before.monotonic_ns - s.monotonic_ns) * 1e-9 << " s before";
+      }
+      t << " seq " << before.seq << " that precedes it";
+      add(Kind::time_goes_back, t);
+      break;
+    }
+  }
+  if (log.end) {
+    std::int64_t last_seq = -1;
+    for (const auto& s : log.samples) last_seq = std::max(last_seq, s.seq);
+    // Missing, repeated or reordered samples are named above; this is the count itself.
+    if (log.end->samples != last_seq + 1) {
+      std::ostringstream t;
+      t << "count mismatch: the end record counts " << log.end->samples
+        << " sample(s), the log holds " << log.samples.size();
+      if (!log.samples.empty()) t << " (the last is seq " << last_seq << ")";
+      add(Kind::count_mismatch, t);
+    }
+  }
+  // Damage or a cut tail already says the bytes are not what was written; the seal would only
+  // repeat it.
+  if (log.seal && stats.damaged_regions == 0 && !stats.truncated_tail) {
+    const auto& seal = *log.seal;
+    const bool same_counts = seal.events == static_cast<std::int64_t>(log.digested_events) &&
+                             seal.samples == static_cast<std::int64_t>(log.digested_samples);
+    const bool same_session = !log.start || seal.session == log.start->session;
+    if (!log.seal_digest_matches || !same_counts || !same_session) {
+      std::ostringstream t;
+      t << "altered: the events are not the ones the log's seal was made over (sealed "
+        << seal.events << " events with " << seal.samples << " samples, read "
+        << log.digested_events << " with " << log.digested_samples << "; the "
+        << seal.digest_algorithm << " digest " << (log.seal_digest_matches ? "matches" : "differs")
+        << "): changed, added, removed or reordered after the session was written";
+      add(Kind::altered, t);
+    }
+  }
+  if (log.seal && !log.seal->source_integrity.empty() && log.seal->source_integrity != kIntact) {
+    std::ostringstream t;
+    t << "replayed from a log that was not intact (" << log.seal->source
+      << "): " << log.seal->source_integrity;
+    add(Kind::damaged_source, t);
+  }
   return problems;
+}
+
+bool usable_in_part(const std::vector<LogProblem>& problems) {
+  using Kind = LogProblem::Kind;
+  return !has_problem(problems, Kind::not_a_session_log) && !has_problem(problems, Kind::joined) &&
+         !has_problem(problems, Kind::altered) && !has_problem(problems, Kind::damaged_source);
+}
+
+std::vector<std::string> integrity_notes(const SessionLog& log) {
+  std::vector<std::string> notes;
+  if (log.complete() && !log.seal && log.read_stats.damaged_regions == 0 &&
+      !log.read_stats.truncated_tail) {
+    notes.push_back(
+        "no seal: written before session logs were sealed, so its integrity rests on its sequence "
+        "numbers, times and counts alone (a changed value inside a sample cannot be seen)");
+  }
+  return notes;
 }
 
 std::string describe(const std::vector<LogProblem>& problems) {
@@ -93,7 +181,8 @@ std::vector<SampleRun> contiguous_sample_runs(const SessionLog& log) {
   for (std::size_t i = 1; i < samples.size(); ++i) {
     while (damage != log.damage_before_sample.end() && *damage < i) ++damage;
     const bool damaged_here = damage != log.damage_before_sample.end() && *damage == i;
-    if (damaged_here || samples[i].seq != samples[i - 1].seq + 1) {
+    if (damaged_here || samples[i].seq != samples[i - 1].seq + 1 ||
+        samples[i].monotonic_ns <= samples[i - 1].monotonic_ns) {
       runs.push_back({begin, i});
       begin = i;
     }

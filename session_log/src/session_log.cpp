@@ -7,6 +7,7 @@
 #include <string_view>
 
 #include "furuta/firmware_bridge/board_roles.hpp"
+#include "log_digest.hpp"
 
 namespace furuta::session_log {
 
@@ -42,6 +43,8 @@ std::vector<std::int64_t> SessionLog::missing_sequence_numbers() const {
   seen.erase(std::unique(seen.begin(), seen.end()), seen.end());
 
   std::vector<std::int64_t> missing;
+  // A session numbers its samples from 0.
+  if (!seen.empty() && seen.front() > 0) seen.insert(seen.begin(), -1);
   for (std::size_t i = 1; i < seen.size(); ++i) {
     for (std::int64_t seq = seen[i - 1] + 1; seq < seen[i]; ++seq) {
       if (missing.size() >= kMaxMissingListed) return missing;
@@ -57,7 +60,15 @@ SessionLog load_session_log(const std::filesystem::path& path) {
   LcmLogReader reader(path);
   LogEvent event;
   std::uint64_t damaged_so_far = 0;
+  detail::LogDigest digest;
   while (reader.next(event)) {
+    const std::string_view channel = event.channel;
+    if (log.seal) {
+      ++log.events_after_seal;
+    } else if (channel != kChannelSeal) {
+      digest.add(event.event_number, event.utime, channel, event.data);
+      if (channel == kChannelSample) ++log.digested_samples;
+    }
     if (reader.stats().damaged_regions != damaged_so_far) {
       damaged_so_far = reader.stats().damaged_regions;
       if (!log.samples.empty() && (log.damage_before_sample.empty() ||
@@ -65,15 +76,28 @@ SessionLog load_session_log(const std::filesystem::path& path) {
         log.damage_before_sample.push_back(log.samples.size());
       }
     }
-    const std::string_view channel = event.channel;
     bool decoded = true;
-    if (channel == kChannelSession) {
+    if (channel == kChannelSeal) {
+      furuta::rig_log_seal_t seal;
+      decoded = decode_exactly(event.data, seal);
+      if (decoded && !log.seal) {
+        log.seal = std::move(seal);
+        log.digested_events = digest.events();
+        const detail::Digest value = digest.value();
+        log.digest_hex = detail::hex(value);
+        log.seal_digest_matches = log.seal->digest_algorithm == detail::kDigestAlgorithm &&
+                                  std::equal(log.seal->digest.begin(), log.seal->digest.end(),
+                                             value.begin(), value.end());
+      }
+    } else if (channel == kChannelSession) {
       furuta::rig_session_t session;
       decoded = decode_exactly(event.data, session);
       if (decoded) {
         if (session.event == furuta::rig_session_t::EVENT_START) {
+          ++log.start_records;
           if (!log.start) log.start = std::move(session);
         } else if (session.event == furuta::rig_session_t::EVENT_END) {
+          ++log.end_records;
           log.end = std::move(session);
         } else {
           decoded = false;  // a session record that is neither start nor end means nothing
@@ -82,7 +106,10 @@ SessionLog load_session_log(const std::filesystem::path& path) {
     } else if (channel == kChannelSample) {
       furuta::rig_sample_t sample;
       decoded = decode_exactly(event.data, sample);
-      if (decoded) log.samples.push_back(std::move(sample));
+      if (decoded) {
+        if (log.start && sample.session != log.start->session) ++log.foreign_samples;
+        log.samples.push_back(std::move(sample));
+      }
     } else if (channel == kChannelUsb) {
       furuta::rig_usb_report_t report;
       decoded = decode_exactly(event.data, report);
@@ -101,7 +128,27 @@ SessionLog load_session_log(const std::filesystem::path& path) {
     if (!decoded) ++log.undecodable_events;
   }
   log.read_stats = reader.stats();
+  if (!log.seal) {
+    log.digested_events = digest.events();
+    log.digest_hex = detail::hex(digest.value());
+  }
   return log;
+}
+
+LogWriteStatus write_seal(LcmLogWriter& log, const std::string& session, std::int64_t samples,
+                          std::int64_t utime, const SealSource& source) {
+  furuta::rig_log_seal_t seal;
+  seal.session = session;
+  seal.events = static_cast<std::int64_t>(log.events_written());
+  seal.samples = samples;
+  seal.digest_algorithm = detail::kDigestAlgorithm;
+  seal.digest = log.digest();
+  seal.digest_size = static_cast<std::int32_t>(seal.digest.size());
+  seal.source = source.source;
+  seal.source_integrity = source.integrity;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(seal.getEncodedSize()));
+  seal.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return log.write(kChannelSeal, utime, bytes);
 }
 
 double BoardTimeline::motor_report(std::int16_t packet_counter) {

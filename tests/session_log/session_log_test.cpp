@@ -221,8 +221,11 @@ TEST(SessionLog, FindsMissingSequenceNumbers) {
 
   SessionLog synthetic;
   EXPECT_TRUE(synthetic.missing_sequence_numbers().empty());
-  for (const std::int64_t seq : {12, 10, 10, 15}) synthetic.samples.push_back(sample(seq));
-  EXPECT_EQ(synthetic.missing_sequence_numbers(), (std::vector<std::int64_t>{11, 13, 14}));
+  for (const std::int64_t seq : {2, 0, 0, 5}) synthetic.samples.push_back(sample(seq));
+  EXPECT_EQ(synthetic.missing_sequence_numbers(), (std::vector<std::int64_t>{1, 3, 4}));
+  // A session numbers its samples from 0: a log whose first sample is 3 lacks 0, 1 and 2.
+  synthetic.samples = {sample(3), sample(4)};
+  EXPECT_EQ(synthetic.missing_sequence_numbers(), (std::vector<std::int64_t>{0, 1, 2}));
 }
 
 TEST(SessionLog, ASessionCutShortHasNoEnd) {

@@ -22,6 +22,7 @@
 #include "furuta/rig_sample_t.hpp"
 #include "furuta/rig_usb_report_t.hpp"
 #include "furuta/session_log/lcm_log.hpp"
+#include "furuta/session_log/session_log.hpp"
 
 namespace furuta::daemon {
 
@@ -36,6 +37,8 @@ struct RecorderSettings {
   // session (some 30 KiB/s at 16 ms), so a full disk refuses instead of starting the motor for a
   // log that fails at once.
   std::uint64_t min_free_bytes_to_start = 256 * 1024;
+  // What each log's seal says its data came from: empty on the rig, the replayed log in a replay.
+  session_log::SealSource seal_source;
 };
 
 class SessionRecorder {
@@ -111,6 +114,7 @@ class SessionRecorder {
   std::string session_;
   std::optional<std::filesystem::path> last_log_;
   std::int64_t samples_published_ = 0;
+  std::int64_t samples_logged_ = 0;  // in the running session's log, for its seal
   std::function<void(const RigSample&)> publish_observer_;
   LatencyHistogram wake_latency_;
   std::string last_fault_;

@@ -91,6 +91,9 @@ class LcmLogWriter {
 
   const std::filesystem::path& partial_path() const;
   std::uint64_t events_written() const;
+  // SHA-256 over every event written so far, each as its event number, utime, channel and data
+  // (the digest a session log's seal carries; session_log.hpp, write_seal).
+  std::vector<std::uint8_t> digest() const;
   // After file_removed: empty when what was synced was written again to partial_path(), else
   // why it could not be (the session's data is then lost).
   const std::string& removal_save_error() const;

@@ -3,7 +3,9 @@
 // rule `furuta log info`, `log export-csv`, `replay`, `identify` and `process-logs` all apply.
 //
 // Intact: a session start record, a session end record, no damaged region, no truncated tail, no
-// event that fails to decode, no sample sequence number missing between the first and the last.
+// event that fails to decode, one session only, sample sequence numbers 0, 1, 2, ... up to the
+// count the end record gives, sample times increasing, and, in a sealed log, every event as the
+// seal says it was written.
 
 #include <cstddef>
 #include <cstdint>
@@ -14,6 +16,9 @@
 
 namespace furuta::session_log {
 
+// A replayed log's seal says "intact" of a source that was (rig_log_seal_t::source_integrity).
+inline constexpr const char* kIntact = "intact";
+
 struct LogProblem {
   enum class Kind : std::uint8_t {
     not_a_session_log,  // no session start record: whatever the file is, it is not one of ours
@@ -22,6 +27,12 @@ struct LogProblem {
     undecodable,        // intact on disk, but not a message of its channel's type
     missing_samples,    // sequence numbers absent between the first sample and the last
     cut_short,          // no session end record
+    joined,             // more than one session in the file, or events after its seal
+    out_of_order,       // a sample sequence number repeated or going back
+    time_goes_back,     // a sample's time not after the one before it
+    count_mismatch,     // the end record counts other samples than the log holds
+    altered,            // well-formed events, but not the ones the seal was made over
+    damaged_source,     // a replay of a log that was not intact (its seal says so)
   };
   Kind kind;
   std::string text;  // e.g. "damaged: 1 unreadable region(s), 64 bytes skipped"
@@ -32,15 +43,25 @@ std::vector<LogProblem> integrity_problems(const SessionLog& log);
 // The problems joined by "; ".
 std::string describe(const std::vector<LogProblem>& problems);
 bool has_problem(const std::vector<LogProblem>& problems, LogProblem::Kind kind);
+// Whether a log with these problems still has parts that can be trusted on their own (the runs of
+// contiguous_sample_runs): not when it is not a session log, holds another session's events, or
+// was changed after it was written, or replays a log that was not intact, since no part of it is
+// then known to be what was recorded.
+bool usable_in_part(const std::vector<LogProblem>& problems);
+
+// What a reader should know about a log that is not a problem with it: a whole log written before
+// logs carried a seal, whose integrity rests on its sequence numbers, times and counts alone.
+std::vector<std::string> integrity_notes(const SessionLog& log);
 
 // A run of samples [begin, end) (indices into SessionLog::samples) with consecutive sequence
-// numbers and no damaged region inside: what can be filtered and differentiated as one signal.
+// numbers, increasing times and no damaged region inside: what can be filtered and differentiated
+// as one signal.
 struct SampleRun {
   std::size_t begin = 0, end = 0;
   std::size_t size() const { return end - begin; }
 };
-// The log's samples cut at every gap (a missing or out-of-order sequence number, a damaged
-// region). One run for an intact log with samples; none for a log without samples.
+// The log's samples cut at every gap (a missing or out-of-order sequence number, a time going
+// back, a damaged region). One run for an intact log with samples; none for a log without samples.
 std::vector<SampleRun> contiguous_sample_runs(const SessionLog& log);
 
 }  // namespace furuta::session_log

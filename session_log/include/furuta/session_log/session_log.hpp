@@ -10,6 +10,7 @@
 
 #include "furuta/firmware_bridge/usb_trace.hpp"
 #include "furuta/rig_fault_t.hpp"
+#include "furuta/rig_log_seal_t.hpp"
 #include "furuta/rig_sample_t.hpp"
 #include "furuta/rig_session_t.hpp"
 #include "furuta/rig_signed_command_t.hpp"
@@ -26,6 +27,8 @@ inline constexpr const char* kChannelCommand = "RIG_COMMAND";
 inline constexpr const char* kChannelSignedCommand = "RIG_COMMAND_SIGNED";
 inline constexpr const char* kChannelUsb = "RIG_USB";
 inline constexpr const char* kChannelFault = "RIG_FAULT";
+// A log's last event, never published: what the log held when written (rig_log_seal_t).
+inline constexpr const char* kChannelSeal = "RIG_LOG_SEAL";
 
 struct SessionLog {
   std::filesystem::path path;
@@ -45,14 +48,39 @@ struct SessionLog {
   // number is missing (the region may have held USB reports only).
   std::vector<std::size_t> damage_before_sample;
 
+  // The seal (the first RIG_LOG_SEAL event; absent in logs written before logs were sealed, and
+  // in logs cut short) and what the reader found against it.
+  std::optional<furuta::rig_log_seal_t> seal;
+  // SHA-256 (hex) over the events before the seal, or over every event when there is none: the
+  // log's identity, the same for two copies of one log whatever their file names.
+  std::string digest_hex;
+  std::uint64_t digested_events = 0;   // the events digest_hex covers
+  std::uint64_t digested_samples = 0;  // RIG_SAMPLE events among them
+  bool seal_digest_matches = false;    // the seal's digest is digest_hex
+  std::uint64_t events_after_seal = 0;
+  std::uint64_t start_records = 0;  // more than one: sessions joined into one file
+  std::uint64_t end_records = 0;
+  // Samples whose session is not the start record's (another session's samples joined in).
+  std::uint64_t foreign_samples = 0;
+
   bool complete() const { return start.has_value() && end.has_value(); }
-  // Sample sequence numbers not present between the first and the last (each should be explained by
-  // a fault record).
+  // Sample sequence numbers not present between 0 (a session's first) and the last (each should be
+  // explained by a fault record).
   std::vector<std::int64_t> missing_sequence_numbers() const;
 };
 
 // Throws std::runtime_error only when the file cannot be opened; damage is counted, not thrown.
 SessionLog load_session_log(const std::filesystem::path& path);
+
+// Where a replayed log's data came from, for its seal.
+struct SealSource {
+  std::string source;     // "PATH sha256:HEX" of the log replayed; empty for a session on the rig
+  std::string integrity;  // that log's verdict: "intact" or its problems
+};
+// Writes the log's seal: its last event, after the end record, carrying the session, the events
+// and samples written so far and their digest (LcmLogWriter::digest). `utime` as for any event.
+LogWriteStatus write_seal(LcmLogWriter& log, const std::string& session, std::int64_t samples,
+                          std::int64_t utime, const SealSource& source = {});
 
 // A command the host wrote to the motor board (an OUTPUT report of the log), read by the board's
 // adapter: the board ramps its applied duty towards `duty` at `acceleration_pct_per_s` (never 0)
