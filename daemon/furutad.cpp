@@ -205,15 +205,15 @@ int main(int argc, char** argv) {
       replayed = session_log::load_session_log(replay_log);
       const auto problems = session_log::integrity_problems(*replayed);
       if (!replayed->start) throw std::runtime_error(replay_log + ": no session start record");
-      if (replayed->samples.empty()) {
-        std::cerr << "furutad: --replay " << replay_log << ": the log holds no samples to replay\n";
-        return 2;
-      }
       if (!problems.empty() && !replay_not_intact) {
         std::cerr << "furutad: --replay " << replay_log
                   << " is not intact: " << session_log::describe(problems)
                   << "; refused (--replay-not-intact replays it, recording that in the new "
                      "log)\n";
+        return 2;
+      }
+      if (replayed->samples.empty()) {
+        std::cerr << "furutad: --replay " << replay_log << ": the log holds no samples to replay\n";
         return 2;
       }
       // The new log says where its data came from and in what state, so that a replay of a

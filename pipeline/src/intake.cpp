@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <numbers>
 #include <sstream>
 
+#include "furuta/firmware_bridge/encoder_geometry.hpp"
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -52,6 +54,50 @@ bool same_rig_as_first(const std::vector<session_log::SessionLog>& logs,
     same = false;
   }
   return same;
+}
+
+// Every value a fit reads from a sample, checked where it enters: finite, the duties within
+// [-1, 1], and each angle its counts through the encoder geometry the log ran with (the daemon
+// computes them so). A value that is not was changed after it was logged, which a log written
+// before logs were sealed cannot show otherwise; the first such sample is named.
+std::optional<std::string> sample_value_problem(const session_log::SessionLog& log) {
+  if (!log.start) return std::nullopt;
+  config::RigConfig rig;
+  try {
+    rig = config::parse_rig_config(log.start->rig_config_toml, log.path.string());
+  } catch (const config::ConfigError&) {
+    return std::nullopt;  // refused elsewhere, with the configuration's own error
+  }
+  const auto angle_off = [](double logged, const bridge::EncoderGeometry& g, std::int64_t counts) {
+    const double expected = bridge::counts_to_rad(g, counts);
+    // The daemon's own arithmetic gives exactly this; a rounding's worth is allowed for another
+    // compiler or platform.
+    return !(std::fabs(logged - expected) <= 1e-9 * (1.0 + std::fabs(expected)));
+  };
+  for (const furuta::rig_sample_t& s : log.samples) {
+    std::string field;
+    if (angle_off(s.arm_angle_rad, rig.arm_encoder, s.arm_counts)) {
+      field = "arm_angle_rad " + std::to_string(s.arm_angle_rad) + " is not its arm_counts " +
+              std::to_string(s.arm_counts) + " through the log's [encoders.arm]";
+    } else if (angle_off(s.pendulum_angle_rad, rig.pendulum_encoder, s.pendulum_counts)) {
+      std::ostringstream text;
+      text << "pendulum_angle_rad " << s.pendulum_angle_rad << " is not its pendulum_counts "
+           << s.pendulum_counts << " through the log's [encoders.pendulum]";
+      field = text.str();
+    } else if (!(std::fabs(s.commanded_duty) <= 1.0) || !(std::fabs(s.applied_duty) <= 1.0)) {
+      std::ostringstream text;
+      text << "duty " << s.commanded_duty << " commanded, " << s.applied_duty
+           << " applied: outside [-1, 1]";
+      field = text.str();
+    } else if (!std::isfinite(s.motor_current_a) || !std::isfinite(s.supply_voltage_v)) {
+      field = "current or supply not a finite number";
+    }
+    if (!field.empty()) {
+      return log.path.string() + ": sample seq " + std::to_string(s.seq) + ": " + field +
+             "; the value was changed after it was logged (or the log is not this project's)";
+    }
+  }
+  return std::nullopt;
 }
 
 // Each log once: by its digest (SessionLog::digest_hex), whatever its file is called. A log fitted
@@ -113,6 +159,9 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
   std::optional<session_log::SessionLog> held_out_log;
   if (!request.validate.empty()) held_out_log = session_log::load_session_log(request.validate);
 
+  std::vector<const session_log::SessionLog*> all_logs;
+  for (const auto& log : logs) all_logs.push_back(&log);
+  if (held_out_log) all_logs.push_back(&*held_out_log);
   bool refused = false;
   bool gaps_only = true;  // every refusal so far is one --use-intact-part would take
   const auto check_intact = [&](const session_log::SessionLog& log) {
@@ -142,6 +191,13 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
     return std::nullopt;
   }
   if (!distinct_logs(logs, held_out_log, refusals)) return std::nullopt;
+  for (const auto* log : all_logs) {
+    if (const auto problem = sample_value_problem(*log)) {
+      refusals.push_back(*problem);
+      refused = true;
+    }
+  }
+  if (refused) return std::nullopt;
 
   if (!logs.front().start && request.config_path.empty()) {
     refusals.push_back(request.logs.front().string() +

@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "log_events.hpp"
 #include "temp_dir.hpp"
 
 namespace {
@@ -205,6 +207,52 @@ TEST(CliArguments, FurutadSaysAtStartUpThatItCannotLog) {
   EXPECT_TRUE(has(o, "furutad: WARNING: cannot log sessions in " + logs.string())) << o.output;
   EXPECT_TRUE(has(o, "Not a directory")) << o.output;
   EXPECT_TRUE(has(o, "every start is refused until it can")) << o.output;
+}
+
+// furutad --replay takes only a whole session unless told otherwise, and the log it writes from
+// one that is not says where it came from, so that it never passes for a whole session.
+TEST(CliArguments, FurutadReplaysALogThatIsNotIntactOnlyWhenAskedAndSaysSo) {
+  furuta::testing::TempDir dir;
+  const Outcome made = run(run_options(dir.path() / "logs") + " --duration 0.5 --label short");
+  ASSERT_EQ(made.exit_code, 0) << made.output;
+  fs::path log;
+  for (const auto& entry : fs::directory_iterator(dir.path() / "logs")) {
+    if (entry.path().extension() == ".lcmlog") log = entry.path();
+  }
+  ASSERT_FALSE(log.empty()) << made.output;
+  std::vector<furuta::testing::Event> events = furuta::testing::events_of(log);
+  const std::vector<furuta::testing::Event> once = events;
+  events.insert(events.end(), once.begin(), once.end());
+  const fs::path joined = furuta::testing::write_events(dir.path() / "joined.lcmlog", events);
+  // The start and end records alone (the end record is the one before the seal).
+  const fs::path no_samples = furuta::testing::write_events(dir.path() / "no_samples.lcmlog",
+                                                            {once.front(), once[once.size() - 2]});
+
+  const std::string furutad = "timeout 60 " + std::string(FURUTA_DAEMON) +
+                              " --lcm-url memq:// --config " FURUTA_SOURCE_DIR "/config/rig.toml" +
+                              " --logs-dir " + (dir.path() / "replays").string() + " --replay ";
+  for (const fs::path& bad : {joined, no_samples}) {
+    const Outcome refused = run(furutad + bad.string());
+    EXPECT_EQ(refused.exit_code, 2) << refused.output;
+    EXPECT_TRUE(has(refused, "is not intact")) << refused.output;
+    EXPECT_TRUE(has(refused, "--replay-not-intact")) << refused.output;
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "replays") &&
+               std::any_of(fs::directory_iterator(dir.path() / "replays"), fs::directory_iterator(),
+                           [](const auto& e) { return e.path().extension() == ".lcmlog"; }));
+
+  const Outcome asked = run(furutad + joined.string() + " --replay-not-intact");
+  ASSERT_EQ(asked.exit_code, 0) << asked.output;
+  fs::path replayed;
+  for (const auto& entry : fs::directory_iterator(dir.path() / "replays")) {
+    if (entry.path().extension() == ".lcmlog") replayed = entry.path();
+  }
+  ASSERT_FALSE(replayed.empty()) << asked.output;
+  const Outcome info = run(std::string(FURUTA_CLI) + " log info " + replayed.string());
+  EXPECT_EQ(info.exit_code, 1) << info.output;
+  EXPECT_TRUE(has(info, "a replay of " + joined.string())) << info.output;
+  EXPECT_TRUE(has(info, "replayed from a log that was not intact")) << info.output;
+  EXPECT_TRUE(has(info, "joined")) << info.output;
 }
 
 }  // namespace

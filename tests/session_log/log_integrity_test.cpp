@@ -13,6 +13,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+using furuta::testing::events_of;
+using furuta::testing::write_events;
 using testing::read_bytes;
 using testing::TempDir;
 using testing::write_bytes;
@@ -84,30 +86,6 @@ std::vector<std::pair<std::size_t, std::size_t>> runs_of(const SessionLog& log) 
   return out;
 }
 
-// Every event of a log, to be changed and written back as a new file.
-std::vector<testing::Event> events_of(const fs::path& path) {
-  std::vector<testing::Event> out;
-  LcmLogReader reader(path);
-  LogEvent e;
-  while (reader.next(e)) out.push_back({e.event_number, e.utime, e.channel, e.data});
-  return out;
-}
-
-fs::path write_events(const fs::path& path, const std::vector<testing::Event>& events) {
-  std::vector<std::uint8_t> bytes;
-  for (const auto& e : events) append_event(bytes, e);
-  write_bytes(path, bytes);
-  return path;
-}
-
-std::vector<std::size_t> sample_events(const std::vector<testing::Event>& events) {
-  std::vector<std::size_t> at;
-  for (std::size_t i = 0; i < events.size(); ++i) {
-    if (events[i].channel == kChannelSample) at.push_back(i);
-  }
-  return at;
-}
-
 std::vector<Kind> kinds_of(const std::vector<LogProblem>& problems) {
   std::vector<Kind> kinds;
   for (const auto& p : problems) kinds.push_back(p.kind);
@@ -151,7 +129,7 @@ TEST(LogIntegrity, AChangedSealedLogIsNeverIntact) {
   TempDir dir;
   const fs::path original = write_session(dir.path(), {}, true, true, true);
   const std::vector<testing::Event> events = events_of(original);
-  const std::vector<std::size_t> samples = sample_events(events);
+  const std::vector<std::size_t> samples = furuta::testing::events_on(events, kChannelSample);
   const auto check = [&](const char* name, std::vector<testing::Event> changed,
                          std::vector<Kind> expected) {
     const SessionLog log = load_session_log(write_events(dir.path() / name, changed));
@@ -212,7 +190,7 @@ TEST(LogIntegrity, AChangedSealedLogIsNeverIntact) {
 TEST(LogIntegrity, AnUnsealedLogIsCheckedByItsNumbersTimesAndCounts) {
   TempDir dir;
   const std::vector<testing::Event> events = events_of(write_session(dir.path()));
-  const std::vector<std::size_t> samples = sample_events(events);
+  const std::vector<std::size_t> samples = furuta::testing::events_on(events, kChannelSample);
   auto duplicated = events;
   duplicated.insert(duplicated.begin() + static_cast<std::ptrdiff_t>(samples[3]),
                     events[samples[3]]);

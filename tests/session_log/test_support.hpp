@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "furuta/session_log/lcm_log.hpp"
+#include "log_events.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::session_log::testing {
@@ -35,27 +36,10 @@ inline void write_bytes(const fs::path& path, const std::vector<std::uint8_t>& b
   if (!out) throw std::runtime_error("cannot write " + path.string());
 }
 
-struct Event {
-  std::int64_t number = 0;
-  std::int64_t utime = 0;
-  std::string channel;
-  std::vector<std::uint8_t> data;
-};
-
-inline void put_be(std::vector<std::uint8_t>& out, std::uint64_t v, int bytes) {
-  for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
-
-// One event as lcm-logger lays it out.
-inline void append_event(std::vector<std::uint8_t>& out, const Event& e) {
-  put_be(out, 0xEDA1DA01u, 4);
-  put_be(out, static_cast<std::uint64_t>(e.number), 8);
-  put_be(out, static_cast<std::uint64_t>(e.utime), 8);
-  put_be(out, e.channel.size(), 4);
-  put_be(out, e.data.size(), 4);
-  out.insert(out.end(), e.channel.begin(), e.channel.end());
-  out.insert(out.end(), e.data.begin(), e.data.end());
-}
+using furuta::testing::append_event;
+using furuta::testing::encode_log;
+using furuta::testing::Event;
+using furuta::testing::put_be;
 
 inline std::size_t encoded_size(const Event& e) {
   return 28 + e.channel.size() + e.data.size();
@@ -81,12 +65,6 @@ inline std::vector<Event> pattern_events(int n) {
   std::vector<Event> events;
   for (int i = 0; i < n; ++i) events.push_back(pattern_event(i));
   return events;
-}
-
-inline std::vector<std::uint8_t> encode_log(const std::vector<Event>& events) {
-  std::vector<std::uint8_t> out;
-  for (const Event& e : events) append_event(out, e);
-  return out;
 }
 
 inline std::vector<LogEvent> read_log(const fs::path& path, LogReadStats& stats) {
