@@ -234,4 +234,12 @@ double pendulum_resolution_rad(const RigConfig& rig) {
   return bridge::resolution_rad(rig.pendulum_encoder);
 }
 
+double arm_angle_rad(const RigConfig& rig, std::int64_t arm_counts) {
+  return bridge::counts_to_rad(rig.arm_encoder, arm_counts);
+}
+
+double pendulum_angle_rad(const RigConfig& rig, std::int64_t pendulum_counts) {
+  return bridge::counts_to_rad(rig.pendulum_encoder, pendulum_counts);
+}
+
 }  // namespace furuta::config

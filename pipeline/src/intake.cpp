@@ -6,7 +6,6 @@
 #include <numbers>
 #include <sstream>
 
-#include "furuta/firmware_bridge/encoder_geometry.hpp"
 #include "furuta/identification/csv_import.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -68,18 +67,18 @@ std::optional<std::string> sample_value_problem(const session_log::SessionLog& l
   } catch (const config::ConfigError&) {
     return std::nullopt;  // refused elsewhere, with the configuration's own error
   }
-  const auto angle_off = [](double logged, const bridge::EncoderGeometry& g, std::int64_t counts) {
-    const double expected = bridge::counts_to_rad(g, counts);
+  const auto angle_off = [](double logged, double expected) {
     // The daemon's own arithmetic gives exactly this; a rounding's worth is allowed for another
     // compiler or platform.
     return !(std::fabs(logged - expected) <= 1e-9 * (1.0 + std::fabs(expected)));
   };
   for (const furuta::rig_sample_t& s : log.samples) {
     std::string field;
-    if (angle_off(s.arm_angle_rad, rig.arm_encoder, s.arm_counts)) {
+    if (angle_off(s.arm_angle_rad, config::arm_angle_rad(rig, s.arm_counts))) {
       field = "arm_angle_rad " + std::to_string(s.arm_angle_rad) + " is not its arm_counts " +
               std::to_string(s.arm_counts) + " through the log's [encoders.arm]";
-    } else if (angle_off(s.pendulum_angle_rad, rig.pendulum_encoder, s.pendulum_counts)) {
+    } else if (angle_off(s.pendulum_angle_rad,
+                         config::pendulum_angle_rad(rig, s.pendulum_counts))) {
       std::ostringstream text;
       text << "pendulum_angle_rad " << s.pendulum_angle_rad << " is not its pendulum_counts "
            << s.pendulum_counts << " through the log's [encoders.pendulum]";

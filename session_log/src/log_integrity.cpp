@@ -1,6 +1,8 @@
 #include "furuta/session_log/log_integrity.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <optional>
 #include <sstream>
 
 namespace furuta::session_log {
@@ -25,6 +27,30 @@ std::string ranges_text(const std::vector<std::int64_t>& sorted) {
     i = j + 1;
   }
   return text.str();
+}
+
+// The version a start record names ("furuta 0.2.0 (git ...)", or a bare "0.2.0"), if any.
+std::optional<std::array<int, 3>> version_of(const std::string& software_version) {
+  for (std::size_t i = 0; i < software_version.size(); ++i) {
+    if (!std::isdigit(static_cast<unsigned char>(software_version[i]))) continue;
+    if (i > 0 && software_version[i - 1] != ' ') continue;
+    std::array<int, 3> v{};
+    char dot1 = 0, dot2 = 0;
+    std::istringstream in(software_version.substr(i));
+    if (in >> v[0] >> dot1 >> v[1] >> dot2 >> v[2] && dot1 == '.' && dot2 == '.') return v;
+    return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+// A whole log (both records, every byte readable) that has no seal though its version seals.
+bool seal_removed(const SessionLog& log) {
+  if (log.seal || !log.complete() || log.read_stats.damaged_regions > 0 ||
+      log.read_stats.truncated_tail) {
+    return false;
+  }
+  const auto version = version_of(log.start->software_version);
+  return version && *version >= kFirstSealingVersion;
 }
 
 }  // namespace
@@ -135,6 +161,13 @@ std::vector<LogProblem> integrity_problems(const SessionLog& log) {
       add(Kind::altered, t);
     }
   }
+  if (seal_removed(log)) {
+    std::ostringstream t;
+    t << "seal missing: written by " << log.start->software_version
+      << ", which seals every log, but it has no seal (removed, or the writer stopped between "
+         "the end record and the seal)";
+    add(Kind::seal_missing, t);
+  }
   if (log.seal && !log.seal->source_integrity.empty() && log.seal->source_integrity != kIntact) {
     std::ostringstream t;
     t << "replayed from a log that was not intact (" << log.seal->source
@@ -147,13 +180,14 @@ std::vector<LogProblem> integrity_problems(const SessionLog& log) {
 bool usable_in_part(const std::vector<LogProblem>& problems) {
   using Kind = LogProblem::Kind;
   return !has_problem(problems, Kind::not_a_session_log) && !has_problem(problems, Kind::joined) &&
-         !has_problem(problems, Kind::altered) && !has_problem(problems, Kind::damaged_source);
+         !has_problem(problems, Kind::altered) && !has_problem(problems, Kind::damaged_source) &&
+         !has_problem(problems, Kind::seal_missing);
 }
 
 std::vector<std::string> integrity_notes(const SessionLog& log) {
   std::vector<std::string> notes;
   if (log.complete() && !log.seal && log.read_stats.damaged_regions == 0 &&
-      !log.read_stats.truncated_tail) {
+      !log.read_stats.truncated_tail && !seal_removed(log)) {
     notes.push_back(
         "no seal: written before session logs were sealed, so its integrity rests on its sequence "
         "numbers, times and counts alone (a changed value inside a sample cannot be seen)");

@@ -130,7 +130,7 @@ TEST(CliArguments, VersionNamesTheVersionAndTheGitCommitOfBothPrograms) {
   for (const std::string program : {FURUTA_CLI, FURUTA_DAEMON}) {
     const Outcome o = run(program + " --version");
     EXPECT_EQ(o.exit_code, 0) << program << "\n" << o.output;
-    EXPECT_TRUE(has(o, "furuta 0.1.0 (git ")) << program << "\n" << o.output;
+    EXPECT_TRUE(has(o, "furuta 0.2.0 (git ")) << program << "\n" << o.output;
     EXPECT_TRUE(has(o, commit.empty() ? "unknown" : commit)) << program << "\n" << o.output;
   }
 }

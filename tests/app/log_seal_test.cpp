@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "furuta/rig_sample_t.hpp"
+#include "furuta/rig_session_t.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "log_events.hpp"
 #include "simulated_logs.hpp"
@@ -61,6 +62,19 @@ std::vector<std::uint8_t> encode_sample(const rig_sample_t& s) {
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(s.getEncodedSize()));
   s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
+}
+
+// The events as a version before seals wrote them: no seal, and that version in the start record.
+void as_written_before_seals(std::vector<Event>& events) {
+  ASSERT_EQ(events.back().channel, session_log::kChannelSeal);
+  events.pop_back();
+  ASSERT_EQ(events.front().channel, session_log::kChannelSession);
+  rig_session_t start;
+  Event& e = events.front();
+  ASSERT_GT(start.decode(e.data.data(), 0, static_cast<int>(e.data.size())), 0);
+  start.software_version = "furuta 0.1.0 (git 114f8895c6d5)";
+  e.data.assign(static_cast<std::size_t>(start.getEncodedSize()), 0);
+  start.encode(e.data.data(), 0, static_cast<int>(e.data.size()));
 }
 
 class LogSeal : public ::testing::Test {
@@ -150,13 +164,26 @@ TEST_F(LogSeal, LogInfoNeverCallsAChangedLogIntact) {
 }
 
 TEST_F(LogSeal, ALogWrittenBeforeSealsIsReadWithANote) {
-  const fs::path unsealed = changed("unsealed", [](std::vector<Event>& e, auto&) {
-    ASSERT_EQ(e.back().channel, session_log::kChannelSeal);
-    e.pop_back();
-  });
+  const fs::path unsealed =
+      changed("unsealed", [](std::vector<Event>& e, auto&) { as_written_before_seals(e); });
   const Outcome o = log_info(unsealed);
   EXPECT_EQ(o.status, 0) << o.out << o.err;
   EXPECT_TRUE(o.says("no seal: written before session logs were sealed")) << o.out;
+}
+
+// A version that seals every log: a whole log of it without a seal lost it.
+TEST_F(LogSeal, ALogWhoseSealWasRemovedIsNotIntact) {
+  const fs::path stripped = changed("stripped", [](std::vector<Event>& e, auto&) { e.pop_back(); });
+  const Outcome o = log_info(stripped);
+  EXPECT_EQ(o.status, 1) << o.out << o.err;
+  EXPECT_TRUE(o.says("seal missing")) << o.out;
+  IdentifyCommandOptions options;
+  options.logs = {stripped};
+  options.use_intact_part = true;
+  options.output_dir = dir_.path() / "out";
+  const Outcome i = identify(options);
+  EXPECT_EQ(i.status, 2) << i.out << i.err;
+  EXPECT_TRUE(i.says("--use-intact-part cannot use it either")) << i.err;
 }
 
 TEST_F(LogSeal, ReplayComparesEveryFieldAndNamesTheFirstThatDiffers) {
@@ -217,7 +244,7 @@ TEST_F(LogSeal, IdentifyChecksEveryValueOfALogWrittenBeforeSeals) {
         rig_sample_t sample = decode_sample(e[s[40]]);
         sample.pendulum_angle_rad = -8.1e307;
         e[s[40]].data = encode_sample(sample);
-        e.pop_back();  // the seal
+        as_written_before_seals(e);
       });
   EXPECT_EQ(log_info(unsealed_altered).status, 0);  // nothing in the log's structure shows it
   IdentifyCommandOptions options;
@@ -233,7 +260,7 @@ TEST_F(LogSeal, IdentifyChecksEveryValueOfALogWrittenBeforeSeals) {
         rig_sample_t sample = decode_sample(e[s[7]]);
         sample.applied_duty = std::numeric_limits<double>::quiet_NaN();
         e[s[7]].data = encode_sample(sample);
-        e.pop_back();
+        as_written_before_seals(e);
       });
   options.logs = {duty};
   const Outcome d = identify(options);

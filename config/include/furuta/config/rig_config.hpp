@@ -232,5 +232,9 @@ std::filesystem::path default_rig_config_path();
 bridge::MotorResolution motor_resolution(const RigConfig& rig);
 // One count of the pendulum's encoder, in radians of the pendulum ([encoders.pendulum]).
 double pendulum_resolution_rad(const RigConfig& rig);
+// The joint angles the daemon logs for a sample's counts: the counts through [encoders.arm] and
+// [encoders.pendulum].
+double arm_angle_rad(const RigConfig& rig, std::int64_t arm_counts);
+double pendulum_angle_rad(const RigConfig& rig, std::int64_t pendulum_counts);
 
 }  // namespace furuta::config

@@ -7,6 +7,7 @@
 // count the end record gives, sample times increasing, and, in a sealed log, every event as the
 // seal says it was written.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -18,6 +19,9 @@ namespace furuta::session_log {
 
 // A replayed log's seal says "intact" of a source that was (rig_log_seal_t::source_integrity).
 inline constexpr const char* kIntact = "intact";
+// The first version whose logs all carry a seal: a whole log of this version or later without
+// one had its seal removed (an unsealed log of an earlier version is read with a note).
+inline constexpr std::array<int, 3> kFirstSealingVersion = {0, 2, 0};
 
 struct LogProblem {
   enum class Kind : std::uint8_t {
@@ -33,6 +37,7 @@ struct LogProblem {
     count_mismatch,     // the end record counts other samples than the log holds
     altered,            // well-formed events, but not the ones the seal was made over
     damaged_source,     // a replay of a log that was not intact (its seal says so)
+    seal_missing,       // a whole session by a version that seals every log, without its seal
   };
   Kind kind;
   std::string text;  // e.g. "damaged: 1 unreadable region(s), 64 bytes skipped"
@@ -45,8 +50,8 @@ std::string describe(const std::vector<LogProblem>& problems);
 bool has_problem(const std::vector<LogProblem>& problems, LogProblem::Kind kind);
 // Whether a log with these problems still has parts that can be trusted on their own (the runs of
 // contiguous_sample_runs): not when it is not a session log, holds another session's events, or
-// was changed after it was written, or replays a log that was not intact, since no part of it is
-// then known to be what was recorded.
+// was changed after it was written, lost its seal, or replays a log that was not intact, since no
+// part of it is then known to be what was recorded.
 bool usable_in_part(const std::vector<LogProblem>& problems);
 
 // What a reader should know about a log that is not a problem with it: a whole log written before
