@@ -27,6 +27,7 @@
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/outputs.hpp"
+#include "furuta/report/run_directory.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 
@@ -158,6 +159,28 @@ void require_logs_directory(const fs::path& dir) {
   if (!fs::is_directory(status)) throw std::runtime_error(dir.string() + ": not a directory");
 }
 
+// Why the identifications cannot go to `identifications_dir`, or "" when they can (it is created
+// here when absent). Checked before done/ and failed/ are made, so that an unusable one changes
+// nothing. Never the logs directory or one of the trigger's own directories in it: logs and
+// identifications would mix, and the pass would wait forever on the lock it already holds.
+std::string identifications_dir_problem(const fs::path& logs_dir,
+                                        const fs::path& identifications_dir) {
+  if (identifications_dir.empty()) return "an empty path names no directory";
+  for (const fs::path& own :
+       {logs_dir, logs_dir / "done", logs_dir / "failed", logs_dir / ".partial"}) {
+    if (report::same_file(identifications_dir, own)) {
+      return "is " +
+             (own == logs_dir ? "the logs directory"
+                              : own.string() +
+                                    ", inside the logs "
+                                    "directory " +
+                                    logs_dir.string()) +
+             ": the identifications need a directory of their own";
+    }
+  }
+  return report::writable_directory_problem(identifications_dir).value_or("");
+}
+
 // A complete log waiting in the directory, as far as the trigger needs to know it.
 struct PendingLog {
   fs::path path;
@@ -242,6 +265,12 @@ class Processor {
 
   ProcessingPass run() {
     require_logs_directory(o_.logs_dir);
+    if (const std::string problem =
+            identifications_dir_problem(o_.logs_dir, o_.identifications_dir);
+        !problem.empty()) {
+      throw std::runtime_error("identifications directory " + o_.identifications_dir.string() +
+                               ": " + problem);
+    }
     fs::create_directories(done_);
     fs::create_directories(failed_);
     fs::create_directories(o_.identifications_dir);
@@ -554,6 +583,16 @@ int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& ou
         << (fs::exists(status) ? "not a directory" : "no such directory (nothing was created)")
         << "; give the directory the daemon writes its logs to"
         << (options.logs_dir.empty() ? " as DIR, or set logs_dir" : "") << "\n";
+    return 2;
+  }
+  if (const std::string problem =
+          identifications_dir_problem(processor.logs_dir, processor.identifications_dir);
+      !problem.empty()) {
+    err << "furuta process-logs: "
+        << (options.identifications_dir.empty()
+                ? "the [automation] identifications_dir of " + options.config_path.string() + ", "
+                : std::string("-o "))
+        << processor.identifications_dir.string() << ": " << problem << "\n";
     return 2;
   }
   out << "logs in " << processor.logs_dir.string() << logs_from << ", identifications in "
