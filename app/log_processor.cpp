@@ -387,6 +387,9 @@ class Processor {
     try {
       const pipeline::Intake intake = pipeline::load_batch(request);
       for (const std::string& refusal : intake.refusals) problems += refusal + "\n";
+      // A log the intake refuses on its own (too short, no samples) goes to failed/ alone; the
+      // rest of its batch stays pending for a batch without it.
+      if (!intake.batch && fail_unusable_alone(batch, request)) return;
       if (intake.batch) {
         run = pipeline::run(*intake.batch, intake.settings);
         report::write_identification(temp, *run, daemon::kSoftwareVersion);
@@ -419,6 +422,30 @@ class Processor {
          << "; logs moved to " << done_.string() << "\n";
     pass_.identifications.push_back(final_dir);
     pass_.logs_done += static_cast<int>(batch.paths().size());
+  }
+
+  // Each log of the batch through the intake alone, as the batch's only fitted log; those it
+  // refuses go to failed/ with their own reasons. False when every log passes alone: what is
+  // wrong is between them (different rigs), and the batch fails together.
+  bool fail_unusable_alone(const Batch& batch, const pipeline::BatchRequest& batch_request) {
+    std::vector<std::pair<fs::path, std::string>> unusable;
+    for (const fs::path& path : batch.paths()) {
+      pipeline::BatchRequest alone = batch_request;
+      alone.logs = {path};
+      alone.validate.clear();
+      const pipeline::Intake intake = pipeline::load_batch(alone);
+      if (intake.batch) continue;
+      std::string reasons;
+      for (const std::string& refusal : intake.refusals) reasons += refusal + "\n";
+      unusable.emplace_back(path, trimmed(reasons));
+    }
+    // When none is left to wait, the batch fails together with every reason.
+    if (unusable.empty() || unusable.size() == batch.paths().size()) return false;
+    for (const auto& [path, reason] : unusable) {
+      fail({path},
+           "refused on its own, so left out of its batch (the others stay pending): " + reason);
+    }
+    return true;
   }
 
   // Each log gets its reason before it moves; the journal makes a batch move all or nothing.
