@@ -242,6 +242,38 @@ TEST_F(Outputs, AnEmptyOutputOnTheCommandLineIsBadUsage) {
   EXPECT_FALSE(fs::exists(fs::path(logs) / "done"));
 }
 
+// Before: of three runs started together into one logs directory, one ended log_error with "left
+// by an earlier session: recover it" (their names have whole seconds), and the others' recovery
+// moved its running log away.
+TEST(ConcurrentRuns, SessionsStartedTogetherIntoOneLogsDirectoryEachKeepTheirLog) {
+  TempDir logs;
+  std::vector<FILE*> runs;
+  for (int seed = 1; seed <= 3; ++seed) {
+    const std::string command =
+        std::string(FURUTA_CLI) + " run --sim --virtual-time --lcm-url memq:// --config " +
+        FURUTA_SOURCE_DIR "/config/rig.toml --label bang-bang --seed " + std::to_string(seed) +
+        " --duration 3 --logs-dir " + logs.path().string() + " 2>&1";
+    runs.push_back(::popen(command.c_str(), "r"));
+    ASSERT_NE(runs.back(), nullptr);
+  }
+  for (FILE* run : runs) {
+    std::string text;
+    char buffer[4096];
+    while (std::fgets(buffer, sizeof buffer, run) != nullptr) text += buffer;
+    const int status = ::pclose(run);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == kExitDone) << text;
+    EXPECT_TRUE(has(text, "session ended: duration_reached; log ")) << text;
+    EXPECT_FALSE(has(text, "recover")) << text;
+  }
+  std::vector<std::string> finished;
+  for (const auto& entry : fs::directory_iterator(logs.path())) {
+    if (entry.is_regular_file()) finished.push_back(entry.path().filename().string());
+  }
+  EXPECT_EQ(finished.size(), 3u);
+  for (const std::string& name : finished) EXPECT_FALSE(has(name, "incomplete")) << name;
+  EXPECT_TRUE(fs::is_empty(logs.path() / ".partial"));
+}
+
 TEST(SameFile, TwoSpellingsOfOneFileAndFilesNotYetMade) {
   TempDir dir;
   std::ofstream(dir.path() / "a") << "a";
