@@ -4,6 +4,7 @@
 #include <fcntl.h>     // AT_FDCWD, open
 #include <stdio.h>     // renameat2, RENAME_EXCHANGE (glibc >= 2.28)
 #include <sys/file.h>  // flock
+#include <sys/stat.h>  // fstat, stat
 #include <unistd.h>    // getpid
 
 #include <algorithm>
@@ -123,33 +124,48 @@ std::optional<fs::path> input_in_the_way(const fs::path& dir, const std::vector<
 
 OutputLock::OutputLock(const fs::path& dir) {
   const fs::path path = normalised(dir);
-  const fs::path lock_file = path.parent_path() / ("." + path.filename().string() + ".lock");
-  fd_ = ::open(lock_file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0) {
-    throw OutputDirectoryError("cannot create the lock file " + lock_file.string() + ": " +
-                               std::strerror(errno));
-  }
-  int locked = -1;
-  while ((locked = ::flock(fd_, LOCK_EX | LOCK_NB)) != 0 && errno == EINTR) {
-  }
-  if (locked != 0) {
-    const int err = errno;
-    std::string holder;
-    if (err == EWOULDBLOCK) {
-      char text[32] = {};
-      const ssize_t n = ::pread(fd_, text, sizeof text - 1, 0);
-      holder = std::string(text, n > 0 ? static_cast<std::size_t>(n) : 0);
-      while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+  lock_file_ = path.parent_path() / ("." + path.filename().string() + ".lock");
+  // The holder removes the file when it is done: a lock taken on a file removed meanwhile guards
+  // nothing, so the lock counts only once the name still leads to the locked file.
+  for (;;) {
+    fd_ = ::open(lock_file_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) {
+      throw OutputDirectoryError("cannot create the lock file " + lock_file_.string() + ": " +
+                                 std::strerror(errno));
+    }
+    int locked = -1;
+    while ((locked = ::flock(fd_, LOCK_EX | LOCK_NB)) != 0 && errno == EINTR) {
+    }
+    if (locked != 0) {
+      const int err = errno;
+      std::string holder;
+      if (err == EWOULDBLOCK) {
+        char text[32] = {};
+        const ssize_t n = ::pread(fd_, text, sizeof text - 1, 0);
+        holder = std::string(text, n > 0 ? static_cast<std::size_t>(n) : 0);
+        while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) {
+          holder.pop_back();
+        }
+      }
+      ::close(fd_);
+      fd_ = -1;
+      if (err != EWOULDBLOCK) {
+        throw OutputDirectoryError("cannot lock " + lock_file_.string() + ": " +
+                                   std::strerror(err));
+      }
+      throw OutputDirectoryError("another run is writing " + path.string() + " now (" +
+                                 (holder.empty() ? std::string("its") : holder + " holds its") +
+                                 " lock " + lock_file_.string() +
+                                 "): wait for it to end, or give another directory");
+    }
+    struct stat held {};
+    struct stat named {};
+    if (::fstat(fd_, &held) == 0 && ::stat(lock_file_.c_str(), &named) == 0 &&
+        held.st_dev == named.st_dev && held.st_ino == named.st_ino) {
+      break;
     }
     ::close(fd_);
     fd_ = -1;
-    if (err != EWOULDBLOCK) {
-      throw OutputDirectoryError("cannot lock " + lock_file.string() + ": " + std::strerror(err));
-    }
-    throw OutputDirectoryError("another run is writing " + path.string() + " now (" +
-                               (holder.empty() ? std::string("its") : holder + " holds its") +
-                               " lock " + lock_file.string() +
-                               "): wait for it to end, or give another directory");
   }
   // Who holds it, for the message of a run refused meanwhile.
   const std::string holder = "pid " + std::to_string(::getpid()) + "\n";
@@ -159,7 +175,11 @@ OutputLock::OutputLock(const fs::path& dir) {
 }
 
 OutputLock::~OutputLock() {
-  if (fd_ >= 0) ::close(fd_);  // releases the flock
+  if (fd_ < 0) return;
+  // Removed while still held, so that no run locks the file between the two steps; one that
+  // opened it before finds it gone and takes a new one.
+  ::unlink(lock_file_.c_str());
+  ::close(fd_);  // releases the flock
 }
 
 std::optional<std::string> output_directory_problem(const fs::path& dir) {

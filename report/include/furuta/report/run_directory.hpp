@@ -50,8 +50,8 @@ std::optional<std::filesystem::path> input_in_the_way(
     const std::filesystem::path& dir, const std::vector<std::filesystem::path>& inputs);
 
 // Held while a run writes `dir`: an flock on `.<name>.lock` beside it, a file that records the
-// holder's pid and is left in place (removing it would let a third run lock a different file).
-// The kernel releases the lock when its holder exits, however it ends.
+// holder's pid and is removed when the holder is done. The kernel releases the lock when its
+// holder exits, however it ends (a killed run leaves the file, unlocked: the next run takes it).
 class OutputLock {
  public:
   // OutputDirectoryError when another run holds it (its pid named when recorded) or the lock file
@@ -62,6 +62,7 @@ class OutputLock {
   OutputLock& operator=(const OutputLock&) = delete;
 
  private:
+  std::filesystem::path lock_file_;
   int fd_ = -1;
 };
 
