@@ -91,6 +91,16 @@ std::optional<pipeline::Intake> checked_intake(const IdentifyCommandOptions& opt
   return intake;
 }
 
+// Every file the command reads: none may be where its output goes.
+std::vector<std::filesystem::path> identify_inputs(const IdentifyCommandOptions& options) {
+  std::vector<std::filesystem::path> inputs = options.logs;
+  inputs.insert(inputs.end(), options.csvs.begin(), options.csvs.end());
+  for (const auto& named : {options.validate, options.import_spec, options.config_path}) {
+    if (!named.empty()) inputs.push_back(named);
+  }
+  return inputs;
+}
+
 pipeline::Run run_batch(const pipeline::Intake& intake, std::ostream* table_one) {
   // Progress only on a terminal: logs and CI stay quiet.
   TerminalProgress terminal;
@@ -122,32 +132,40 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
            "--no-output-error\n";
     return 2;
   }
-  const std::optional<pipeline::Intake> intake = checked_intake(options, err);
-  if (!intake) return 2;
-  // Before the fit, which may take long: a directory it may not replace is refused at once.
-  if (const auto problem = report::output_directory_problem(options.output_dir)) {
-    err << "furuta identify: -o " << options.output_dir.string() << ": " << *problem << "\n";
+  if (options.output_dir.empty()) {
+    err << "furuta identify: -o is empty: give the directory for the run's files\n";
     return 2;
   }
-  const pipeline::Run run = run_batch(*intake, &out);
+  // The run replaces its directory whole: an input there would be deleted with the old files.
+  if (const auto input = report::input_in_the_way(options.output_dir, identify_inputs(options))) {
+    err << "furuta identify: -o " << options.output_dir.string() << " would overwrite the input "
+        << input->string() << " (the output directory is replaced whole): give another -o\n";
+    return 2;
+  }
+  const std::optional<pipeline::Intake> intake = checked_intake(options, err);
+  if (!intake) return 2;
+  std::optional<pipeline::Run> run;
   bool replaced = false;
   try {
+    // Before the fit, which may take long: a directory it may not replace or cannot write, or one
+    // another run is writing, is refused at once. Held until the files are in place.
     report::RunDirectory dir(options.output_dir);
-    report::write_identification(dir.staging(), run, daemon::kSoftwareVersion);
+    run = run_batch(*intake, &out);
+    report::write_identification(dir.staging(), *run, daemon::kSoftwareVersion);
     replaced = dir.commit();
   } catch (const report::OutputDirectoryError& e) {
     err << "furuta identify: -o " << options.output_dir.string() << ": " << e.what() << "\n";
     return 2;
   }
-  print_identification(out, run, options.output_dir, true);
+  print_identification(out, *run, options.output_dir, true);
   if (replaced)
     out << "(the previous run's files in " << options.output_dir.string() << " were replaced)\n";
   // Done in part: the estimate asked for (the refinement's) is not had.
-  if (run.output_error && !run.output_error->result.converged) {
+  if (run->output_error && !run->output_error->result.converged) {
     err << "furuta identify: done in part: the output-error refinement did not converge (its "
            "warning says where it stopped); "
-        << (run.identification.lsmi_ran() ? "Table I shows LSMI alone"
-                                          : "and LSMI did not run: no estimate")
+        << (run->identification.lsmi_ran() ? "Table I shows LSMI alone"
+                                           : "and LSMI did not run: no estimate")
         << "\n";
     return 1;
   }

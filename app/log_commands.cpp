@@ -18,6 +18,7 @@
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/firmware_bridge/board_roles.hpp"
+#include "furuta/report/run_directory.hpp"
 #include "furuta/rig_usb_report_t.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -180,6 +181,16 @@ int run_log_info_command(const std::filesystem::path& path, std::ostream& out, s
 int run_log_export_csv_command(const std::filesystem::path& path,
                                const std::filesystem::path& csv_path, std::ostream& out,
                                std::ostream& err) {
+  if (csv_path.empty()) {
+    err << "furuta log export-csv: -o is empty: give the CSV file to write\n";
+    return 2;
+  }
+  // Opening the output truncates it: were it the log, the log would be gone before it was read.
+  if (report::same_file(csv_path, path)) {
+    err << "furuta log export-csv: -o " << csv_path.string() << " is the log " << path.string()
+        << " itself: writing the CSV would overwrite it; give another file\n";
+    return 2;
+  }
   const session_log::SessionLog log = session_log::load_session_log(path);
   const auto problems = session_log::integrity_problems(log);
   if (session_log::has_problem(problems, session_log::LogProblem::Kind::not_a_session_log)) {

@@ -27,6 +27,7 @@
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/outputs.hpp"
+#include "furuta/report/run_directory.hpp"
 #include "furuta/session_log/log_integrity.hpp"
 #include "furuta/session_log/session_log.hpp"
 
@@ -158,6 +159,28 @@ void require_logs_directory(const fs::path& dir) {
   if (!fs::is_directory(status)) throw std::runtime_error(dir.string() + ": not a directory");
 }
 
+// Why the identifications cannot go to `identifications_dir`, or "" when they can (it is created
+// here when absent). Checked before done/ and failed/ are made, so that an unusable one changes
+// nothing. Never the logs directory or one of the trigger's own directories in it: logs and
+// identifications would mix, and the pass would wait forever on the lock it already holds.
+std::string identifications_dir_problem(const fs::path& logs_dir,
+                                        const fs::path& identifications_dir) {
+  if (identifications_dir.empty()) return "an empty path names no directory";
+  for (const fs::path& own :
+       {logs_dir, logs_dir / "done", logs_dir / "failed", logs_dir / ".partial"}) {
+    if (report::same_file(identifications_dir, own)) {
+      return "is " +
+             (own == logs_dir ? "the logs directory"
+                              : own.string() +
+                                    ", inside the logs "
+                                    "directory " +
+                                    logs_dir.string()) +
+             ": the identifications need a directory of their own";
+    }
+  }
+  return report::writable_directory_problem(identifications_dir).value_or("");
+}
+
 // A complete log waiting in the directory, as far as the trigger needs to know it.
 struct PendingLog {
   fs::path path;
@@ -242,6 +265,12 @@ class Processor {
 
   ProcessingPass run() {
     require_logs_directory(o_.logs_dir);
+    if (const std::string problem =
+            identifications_dir_problem(o_.logs_dir, o_.identifications_dir);
+        !problem.empty()) {
+      throw std::runtime_error("identifications directory " + o_.identifications_dir.string() +
+                               ": " + problem);
+    }
     fs::create_directories(done_);
     fs::create_directories(failed_);
     fs::create_directories(o_.identifications_dir);
@@ -358,6 +387,9 @@ class Processor {
     try {
       const pipeline::Intake intake = pipeline::load_batch(request);
       for (const std::string& refusal : intake.refusals) problems += refusal + "\n";
+      // A log the intake refuses on its own (too short, no samples) goes to failed/ alone; the
+      // rest of its batch stays pending for a batch without it.
+      if (!intake.batch && fail_unusable_alone(batch, request)) return;
       if (intake.batch) {
         run = pipeline::run(*intake.batch, intake.settings);
         report::write_identification(temp, *run, daemon::kSoftwareVersion);
@@ -390,6 +422,30 @@ class Processor {
          << "; logs moved to " << done_.string() << "\n";
     pass_.identifications.push_back(final_dir);
     pass_.logs_done += static_cast<int>(batch.paths().size());
+  }
+
+  // Each log of the batch through the intake alone, as the batch's only fitted log; those it
+  // refuses go to failed/ with their own reasons. False when every log passes alone: what is
+  // wrong is between them (different rigs), and the batch fails together.
+  bool fail_unusable_alone(const Batch& batch, const pipeline::BatchRequest& batch_request) {
+    std::vector<std::pair<fs::path, std::string>> unusable;
+    for (const fs::path& path : batch.paths()) {
+      pipeline::BatchRequest alone = batch_request;
+      alone.logs = {path};
+      alone.validate.clear();
+      const pipeline::Intake intake = pipeline::load_batch(alone);
+      if (intake.batch) continue;
+      std::string reasons;
+      for (const std::string& refusal : intake.refusals) reasons += refusal + "\n";
+      unusable.emplace_back(path, trimmed(reasons));
+    }
+    // When none is left to wait, the batch fails together with every reason.
+    if (unusable.empty() || unusable.size() == batch.paths().size()) return false;
+    for (const auto& [path, reason] : unusable) {
+      fail({path},
+           "refused on its own, so left out of its batch (the others stay pending): " + reason);
+    }
+    return true;
   }
 
   // Each log gets its reason before it moves; the journal makes a batch move all or nothing.
@@ -554,6 +610,16 @@ int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& ou
         << (fs::exists(status) ? "not a directory" : "no such directory (nothing was created)")
         << "; give the directory the daemon writes its logs to"
         << (options.logs_dir.empty() ? " as DIR, or set logs_dir" : "") << "\n";
+    return 2;
+  }
+  if (const std::string problem =
+          identifications_dir_problem(processor.logs_dir, processor.identifications_dir);
+      !problem.empty()) {
+    err << "furuta process-logs: "
+        << (options.identifications_dir.empty()
+                ? "the [automation] identifications_dir of " + options.config_path.string() + ", "
+                : std::string("-o "))
+        << processor.identifications_dir.string() << ": " << problem << "\n";
     return 2;
   }
   out << "logs in " << processor.logs_dir.string() << logs_from << ", identifications in "

@@ -44,7 +44,10 @@ struct ProcessingPass {
 // One pass: takes the directory's lock (a second pass waits for the first), finishes or undoes
 // what a crashed pass left, then moves unreadable, damaged and cut-short logs to failed/ and
 // identifies every complete batch ([automation]), until a listing finds nothing more to do (logs
-// that landed meanwhile are taken too: a trigger may have been lost while this pass ran).
+// that landed meanwhile are taken too: a trigger may have been lost while this pass ran). A log
+// the intake refuses on its own (too short, no samples) goes to failed/ alone and the rest of its
+// batch waits for another; a batch refused only as a whole (logs of two rigs), or whose fit
+// fails, goes to failed/ together.
 // Throws std::runtime_error when the logs directory is not an existing directory (it is never
 // created: done/ and failed/ inside it and the identifications directory are), or when the
 // directories cannot be created, locked or read.

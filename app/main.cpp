@@ -9,6 +9,20 @@
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 
+namespace {
+
+// An output path typed as '' names nothing: bad usage, rather than read as the default or as the
+// current directory.
+CLI::Validator not_empty_path() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        return text.empty() ? "an empty path names no file or directory" : std::string();
+      },
+      "");
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"furuta: identification experiments on a rotary inverted pendulum"};
   app.require_subcommand(1);
@@ -107,7 +121,9 @@ int main(int argc, char** argv) {
   export_cmd->add_option("LOG", log_path, "A session log (.lcmlog)")
       ->required()
       ->check(CLI::ExistingFile);
-  export_cmd->add_option("-o,--output", csv_path, "The CSV file to write")->required();
+  export_cmd->add_option("-o,--output", csv_path, "The CSV file to write")
+      ->required()
+      ->check(not_empty_path());
   CLI::App* replay_cmd =
       app.add_subcommand("replay", "Replay a log's USB traffic and check the samples reproduce");
   replay_cmd->add_option("LOG", log_path, "A session log (.lcmlog)")
@@ -142,9 +158,11 @@ int main(int argc, char** argv) {
                    "Rig configuration (default: the one the first log carries; with CSVs only "
                    "needed for duty input)")
       ->check(CLI::ExistingFile);
-  identify_cmd->add_option("-o,--output", identify.output_dir,
-                           "Directory for results and figures, replaced whole: new, empty or a "
-                           "previous run's (default: identification)");
+  identify_cmd
+      ->add_option("-o,--output", identify.output_dir,
+                   "Directory for results and figures, replaced whole: new, empty or a "
+                   "previous run's (default: identification)")
+      ->check(not_empty_path());
   identify_cmd
       ->add_option("--cutoff", identify.cutoff_hz,
                    "Low-pass cut-off [Hz] (default: the configuration's; 15 without one)")
@@ -213,9 +231,11 @@ int main(int argc, char** argv) {
                    "Tubes per run: 1 (default), or 2, 4, ... 64: the initial box split at 0.5 s, "
                    "tighter tubes for that many times the work")
       ->check(furuta::app::whole_in(1, 64));
-  simulate_cmd->add_option("-o,--output", simulate.output_dir,
-                           "Directory for results and figures, replaced whole: new, empty or a "
-                           "previous run's (default: simulation)");
+  simulate_cmd
+      ->add_option("-o,--output", simulate.output_dir,
+                   "Directory for results and figures, replaced whole: new, empty or a "
+                   "previous run's (default: simulation)")
+      ->check(not_empty_path());
 
   furuta::app::ProcessLogsOptions process_logs;
   process_logs.config_path = furuta::config::default_rig_config_path();
@@ -228,9 +248,11 @@ int main(int argc, char** argv) {
                                "[daemon] logs_dir)");
   process_logs_cmd->add_option("-c,--config", process_logs.config_path, "Rig configuration (TOML)")
       ->check(CLI::ExistingFile);
-  process_logs_cmd->add_option(
-      "-o,--output", process_logs.identifications_dir,
-      "Where identifications go (default: the configuration's [automation] identifications_dir)");
+  process_logs_cmd
+      ->add_option("-o,--output", process_logs.identifications_dir,
+                   "Where identifications go (default: the configuration's [automation] "
+                   "identifications_dir)")
+      ->check(not_empty_path());
   process_logs_cmd->add_flag("--watch", process_logs.watch,
                              "Keep watching: a pass whenever a log lands (machines without "
                              "systemd)");

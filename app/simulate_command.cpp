@@ -53,9 +53,15 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
         << ": expected 1, 2, 4, 8, 16, 32 or 64 (the split is a bisection)\n";
     return 2;
   }
-  // Before the tubes, which may take long: a directory it may not replace is refused at once.
-  if (const auto problem = report::output_directory_problem(options.output_dir)) {
-    err << "furuta simulate: -o " << options.output_dir.string() << ": " << *problem << "\n";
+  if (options.output_dir.empty()) {
+    err << "furuta simulate: -o is empty: give the directory for the run's files\n";
+    return 2;
+  }
+  // The run replaces its directory whole: results.json read from it would be deleted.
+  if (report::input_in_the_way(options.output_dir, {options.results})) {
+    err << "furuta simulate: -o " << options.output_dir.string() << " would overwrite the input "
+        << options.results.string()
+        << " (the output directory is replaced whole): give another -o\n";
     return 2;
   }
   std::vector<validated::Scenario> scenarios;
@@ -104,23 +110,25 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
     sets.push_back(validated::point_parameters("truth", truth));
   }
 
-  TerminalProgress progress;  // only on a terminal: logs and CI stay quiet
-  const pipeline::Simulation simulation =
-      pipeline::simulate(scenarios, sets, truth, source, options.pieces,
-                         ::isatty(STDERR_FILENO) == 1 ? &progress : nullptr);
+  std::optional<pipeline::Simulation> simulation;
   std::vector<std::string> figures;
   bool replaced = false;
   try {
+    // Before the tubes, which may take long: a directory it may not replace or cannot write, or
+    // one another run is writing, is refused at once. Held until the files are in place.
     report::RunDirectory dir(options.output_dir);
+    TerminalProgress progress;  // only on a terminal: logs and CI stay quiet
+    simulation = pipeline::simulate(scenarios, sets, truth, source, options.pieces,
+                                    ::isatty(STDERR_FILENO) == 1 ? &progress : nullptr);
     figures = report::write_simulation(
-        dir.staging(), simulation, daemon::kSoftwareVersion,
+        dir.staging(), *simulation, daemon::kSoftwareVersion,
         options.results.empty() ? std::nullopt : std::optional(options.results.string()));
     replaced = dir.commit();
   } catch (const report::OutputDirectoryError& e) {
     err << "furuta simulate: -o " << options.output_dir.string() << ": " << e.what() << "\n";
     return 2;
   }
-  out << note << report::format_table_three(simulation.results);
+  out << note << report::format_table_three(simulation->results);
   out << "wrote " << (options.output_dir / "simulate.json").string() << ", table3.txt and "
       << figures.size() << " figures in " << options.output_dir.string() << "\n";
   if (replaced)

@@ -50,7 +50,9 @@ std::string session_name(std::int64_t wall_time_ns, const std::string& label) {
 std::string unique_session_name(const std::string& name, const std::filesystem::path& logs_dir) {
   namespace fs = std::filesystem;
   const auto taken = [&](const std::string& candidate) {
-    for (const fs::path& dir : {logs_dir, logs_dir / "done", logs_dir / "failed"}) {
+    // .partial: a session being written now, in this process or another.
+    for (const fs::path& dir :
+         {logs_dir, logs_dir / "done", logs_dir / "failed", logs_dir / ".partial"}) {
       std::error_code ec;
       for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
         const std::string leaf = it->path().filename().string();

@@ -4,6 +4,7 @@
 #include <exception>
 #include <limits>
 
+#include "furuta/daemon/daemon.hpp"
 #include "furuta/rig_fault_t.hpp"
 #include "furuta/rig_session_t.hpp"
 #include "furuta/session_log/session_log.hpp"
@@ -137,7 +138,6 @@ void SessionRecorder::note_signed_start(std::int64_t request_id,
 void SessionRecorder::start_session(const SessionStartEvent& start) {
   session_ = text_of(start.session);
   session_faulted_ = false;
-  history_.last_session = session_;
   history_.last_session_request_id = start.request_id;
   history_.last_session_end.clear();
   wake_latency_.reset();
@@ -146,13 +146,27 @@ void SessionRecorder::start_session(const SessionStartEvent& start) {
   log_.reset();
   samples_logged_ = 0;
   if (!settings_.logs_dir.empty()) {
-    try {
-      log_ = std::make_unique<session_log::LcmLogWriter>(
-          session_log::LogWriterOptions{settings_.logs_dir, settings_.flush_interval}, session_);
-    } catch (const std::exception& e) {
-      fail_log(std::string("session log: ") + e.what());
+    // The name was picked when the start was accepted; another process's session into the same
+    // directory may have taken it since (names have whole seconds). The next free one is taken
+    // then, so that each session keeps its own log.
+    const std::string picked = session_;
+    for (int attempt = 0; !log_; ++attempt) {
+      try {
+        log_ = std::make_unique<session_log::LcmLogWriter>(
+            session_log::LogWriterOptions{settings_.logs_dir, settings_.flush_interval}, session_);
+      } catch (const session_log::LogNameInUse& e) {
+        if (attempt == 8) {
+          fail_log(std::string("session log: ") + e.what());
+          break;
+        }
+        session_ = unique_session_name(picked, settings_.logs_dir);
+      } catch (const std::exception& e) {
+        fail_log(std::string("session log: ") + e.what());
+        break;
+      }
     }
   }
+  history_.last_session = session_;
   furuta::rig_session_t m{};
   m.event = furuta::rig_session_t::EVENT_START;
   m.session = session_;
@@ -274,7 +288,8 @@ void SessionRecorder::end_session(const SessionEndEvent& e) {
   }
   furuta::rig_session_t m{};
   m.event = furuta::rig_session_t::EVENT_END;
-  m.session = text_of(e.session);
+  // The log's name, which may differ from the one the loop was given.
+  m.session = session_.empty() ? text_of(e.session) : session_;
   m.monotonic_ns = e.monotonic_ns;
   m.wall_time_ns = e.wall_time_ns;
   m.samples = e.samples;

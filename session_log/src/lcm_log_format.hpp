@@ -79,6 +79,10 @@ inline constexpr const char* kIncompleteSuffix = ".incomplete.lcmlog";
 // forget it even though the file's own data was synced. Returns 0 or the errno.
 int fsync_directory(const std::filesystem::path& dir);
 
+// Whether a live writer holds `part` (its flock, taken when it created the file and held while it
+// writes): a session running now, not one a crash left.
+bool held_by_a_writer(const std::filesystem::path& part);
+
 // rename(2) that never replaces an existing file (where the file system supports it; elsewhere a
 // plain rename). Returns 0 or the errno, EEXIST when `to` exists.
 int rename_no_replace(const std::filesystem::path& from, const std::filesystem::path& to);

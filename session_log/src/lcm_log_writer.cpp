@@ -8,6 +8,7 @@
 #include <fcntl.h>
 #include <lcm/eventlog.h>
 #include <stdio_ext.h>  // __fpurge
+#include <sys/file.h>   // flock
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -120,11 +121,22 @@ class LcmLogWriter::Impl {
         ::open(partial_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
     if (!created_fd.valid()) {
       const int err = errno;
+      if (err == EEXIST && detail::held_by_a_writer(partial_path_)) {
+        throw LogNameInUse("cannot create LCM log " + partial_path_.string() +
+                           ": another session is writing it now");
+      }
       throw std::runtime_error("cannot create LCM log " + partial_path_.string() + ": " +
                                std::strerror(err) +
                                (err == EEXIST ? " (left by an earlier session: recover it)" : ""));
     }
-    created_fd.reset();
+    // Held while this writer lives, so that recovery and other writers tell a running session's
+    // .part from one a crash left (the kernel drops the lock with the process).
+    if (::flock(created_fd.get(), LOCK_EX | LOCK_NB) != 0) {
+      const int err = errno;
+      throw std::runtime_error("cannot lock LCM log " + partial_path_.string() + ": " +
+                               std::strerror(err));
+    }
+    part_lock_ = std::move(created_fd);
     file_.reset(lcm_eventlog_create(partial_path_.c_str(), "w"));
     if (!file_) {
       const int err = errno;
@@ -288,6 +300,7 @@ class LcmLogWriter::Impl {
   fs::path partial_dir_;
   fs::path partial_path_;
   fs::path final_path_;
+  detail::UniqueFd part_lock_;  // the .part's flock
   EventLog file_;
   std::uint64_t events_written_ = 0;
   detail::LogDigest digest_;

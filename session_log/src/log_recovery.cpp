@@ -2,6 +2,7 @@
 // read, cut the rest, and move the log where finished logs are, marked incomplete.
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -84,7 +85,20 @@ std::vector<RecoveredLog> recover_partial_logs(const fs::path& logs_dir) {
   }
   // Oldest name first, the same order every time.
   std::sort(parts.begin(), parts.end());
-  for (const fs::path& part : parts) recovered.push_back(recover_one(logs_dir, part));
+  for (const fs::path& part : parts) {
+    // A session running now (this process's or another's) holds its .part's lock: not left by a
+    // crash, never cut or moved. Held here while recovering, so that two recoveries at once do
+    // not both take one file; one gone meanwhile was taken by the other.
+    const detail::UniqueFd lock(::open(part.c_str(), O_RDONLY | O_CLOEXEC));
+    if (!lock.valid() && errno == ENOENT) continue;
+    if (!lock.valid()) throw_io("open", part, errno);
+    if (::flock(lock.get(), LOCK_EX | LOCK_NB) != 0) {
+      if (errno == EWOULDBLOCK) continue;
+      throw_io("lock", part, errno);
+    }
+    if (!fs::exists(part)) continue;
+    recovered.push_back(recover_one(logs_dir, part));
+  }
 
   if (!recovered.empty()) {
     if (const int err = detail::fsync_directory(logs_dir); err != 0) {

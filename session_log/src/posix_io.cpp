@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <stdio.h>  // renameat2
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -15,6 +16,12 @@ int fsync_directory(const std::filesystem::path& dir) {
   if (!fd.valid()) return errno;
   if (::fsync(fd.get()) != 0) return errno;
   return 0;
+}
+
+bool held_by_a_writer(const std::filesystem::path& part) {
+  const UniqueFd fd(::open(part.c_str(), O_RDONLY | O_CLOEXEC));
+  if (!fd.valid()) return false;
+  return ::flock(fd.get(), LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK;
 }
 
 int rename_no_replace(const std::filesystem::path& from, const std::filesystem::path& to) {

@@ -282,27 +282,65 @@ TEST_F(Trigger, TheLogsDirectoryMustExistAndIsNeverCreated) {
       << out.str();
 }
 
-TEST_F(Trigger, ABatchWhoseIdentificationFailsGoesToFailedTogether) {
+// Before: the batch's two good logs went to failed/ with the short one, for its reason.
+TEST_F(Trigger, ALogTooShortOnItsOwnGoesToFailedAloneAndItsBatchWaits) {
   land(too_short_);
   land(fits_[0]);
+  land(validations_[0]);
+  ProcessingPass p = pass();
+  EXPECT_TRUE(p.identifications.empty());
+  EXPECT_EQ(p.logs_failed, 1) << out_.str() << err_.str();
+  EXPECT_EQ(logs_in(options_.logs_dir / "failed"),
+            std::vector<std::string>{too_short_.filename().string()});
+  const std::string reason =
+      read_file(options_.logs_dir / "failed" / (too_short_.stem().string() + ".reason.txt"));
+  EXPECT_NE(reason.find("refused on its own, so left out of its batch (the others stay pending)"),
+            std::string::npos)
+      << reason;
+  // Before: "LSMI: 0 equations for 7 parameters". Now the log, its length and the length needed.
+  EXPECT_NE(reason.find(too_short_.filename().string() + ": too short for LSMI: "),
+            std::string::npos)
+      << reason;
+  EXPECT_NE(reason.find("its fit needs at least 82 samples"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("but [output_error] turns it off"), std::string::npos) << reason;
+  EXPECT_EQ(err_.str().find(fits_[0].filename().string()), std::string::npos) << err_.str();
+  // The good ones wait for a batch without it, and are identified once it is complete.
+  EXPECT_EQ(p.logs_waiting, 2);
+  EXPECT_EQ(logs_in(options_.logs_dir),
+            (std::vector<std::string>{fits_[0].filename().string(),
+                                      validations_[0].filename().string()}));
+  EXPECT_TRUE(identifications_in(options_.identifications_dir).empty());
+  land(fits_[1]);
+  p = pass();
+  EXPECT_EQ(p.identifications.size(), 1u) << err_.str();
+  EXPECT_EQ(p.logs_done, 3);
+  EXPECT_TRUE(logs_in(options_.logs_dir).empty());
+}
+
+// What is wrong only between logs (here: two rigs) is no one log's: the batch fails together.
+TEST_F(Trigger, ABatchRefusedOnlyAsAWholeGoesToFailedTogether) {
+  const fs::path other_rig = dir_.path() / "other-rig.toml";
+  {
+    std::ifstream in(config_);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string toml = text.str();
+    const std::string efficiency = "\ngear_efficiency = 0.90";
+    const auto at = toml.find(efficiency);
+    ASSERT_NE(at, std::string::npos) << "config/rig.toml: no `" << efficiency << "`";
+    toml.replace(at, efficiency.size(), "\ngear_efficiency = 0.85");
+    std::ofstream(other_rig) << toml;
+  }
+  const fs::path other = session(dir_.path() / "other", "bang-bang", 11, 6.0, other_rig);
+  land(fits_[0]);
+  land(other);
   land(validations_[0]);
   const ProcessingPass p = pass();
   EXPECT_TRUE(p.identifications.empty());
   EXPECT_EQ(p.logs_failed, 3) << out_.str() << err_.str();
-  for (const fs::path& log : {too_short_, fits_[0], validations_[0]}) {
-    const std::string reason =
-        read_file(options_.logs_dir / "failed" / (log.stem().string() + ".reason.txt"));
-    EXPECT_NE(reason.find("identification " + fits_[0].stem().string()), std::string::npos)
-        << reason;
-    EXPECT_NE(reason.find("failed: "), std::string::npos) << reason;
-    // Before: "LSMI: 0 equations for 7 parameters". Now the log, its length and the length needed.
-    EXPECT_NE(reason.find(too_short_.filename().string() + ": too short for LSMI: "),
-              std::string::npos)
-        << reason;
-    EXPECT_NE(reason.find("its fit needs at least 82 samples"), std::string::npos) << reason;
-    EXPECT_NE(reason.find("but [output_error] turns it off"), std::string::npos) << reason;
-  }
-  EXPECT_TRUE(identifications_in(options_.identifications_dir).empty());
+  const std::string reason =
+      read_file(options_.logs_dir / "failed" / (fits_[0].stem().string() + ".reason.txt"));
+  EXPECT_NE(reason.find("ran with another rig configuration"), std::string::npos) << reason;
 }
 
 TEST_F(Trigger, LogsWaitForTheRestOfTheirBatchAndOtherLabelsAreLeftOut) {

@@ -154,6 +154,43 @@ TEST(LcmLogWriter, NeverOverwritesALogOrAPartLeftBehind) {
   EXPECT_EQ(testing::read_bytes(dir.path() / ".partial" / "t.lcmlog.part"), left_behind);
 }
 
+// Before: a second writer of a running session's name was told its .part was "left by an earlier
+// session: recover it", and a recovery run meanwhile moved the live session's file away.
+TEST(LcmLogWriter, ARunningSessionsPartIsInUseNotLeftByACrash) {
+  TempDir dir;
+  LcmLogWriter running({dir.path(), 1000ms}, "s");
+  ASSERT_EQ(running.write("A", 1, std::vector<std::uint8_t>{1}), LogWriteStatus::ok);
+  ASSERT_EQ(running.sync_if_due(std::chrono::steady_clock::now(), true), LogWriteStatus::ok);
+  try {
+    LcmLogWriter second({dir.path(), 1000ms}, "s");
+    ADD_FAILURE() << "accepted";
+  } catch (const LogNameInUse& e) {
+    EXPECT_NE(std::string(e.what()).find("s.lcmlog.part: another session is writing it now"),
+              std::string::npos)
+        << e.what();
+    EXPECT_EQ(std::string(e.what()).find("recover it"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(recover_partial_logs(dir.path()).empty());
+  ASSERT_TRUE(fs::exists(running.partial_path()));
+  ASSERT_EQ(running.write("A", 2, std::vector<std::uint8_t>{2}), LogWriteStatus::ok);
+  EXPECT_EQ(running.finish(), LogWriteStatus::ok);
+
+  // A writer gone without finishing (its process killed: the kernel dropped its lock) left its
+  // .part for recovery: that advice stands.
+  { LcmLogWriter crashed({dir.path(), 1000ms}, "t"); }
+  try {
+    LcmLogWriter again({dir.path(), 1000ms}, "t");
+    ADD_FAILURE() << "accepted";
+  } catch (const LogNameInUse& e) {
+    ADD_FAILURE() << "a leftover taken for a running session: " << e.what();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("left by an earlier session: recover it"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(recover_partial_logs(dir.path()).size(), 1u);
+}
+
 TEST(LcmLogWriter, ChannelsAndSizesLcmCannotCarryAreProgrammingErrors) {
   TempDir dir;
   LcmLogWriter writer({dir.path(), 1000ms}, "s");

@@ -194,8 +194,9 @@ class Daemon {
 
 // "2026-11-21T10-04-05Z_label": sortable, safe as a file name (label reduced to [A-Za-z0-9_.-]).
 std::string session_name(std::int64_t wall_time_ns, const std::string& label);
-// `name`, or name-2, name-3, ... : the first that no log in `logs_dir` (or its done/ and failed/)
-// already starts with, so two sessions started within one second both get their log.
+// `name`, or name-2, name-3, ... : the first that no log in `logs_dir` (or its done/, failed/ and
+// .partial/, where running sessions write) already starts with, so two sessions started within
+// one second both get their log.
 std::string unique_session_name(const std::string& name, const std::filesystem::path& logs_dir);
 
 }  // namespace furuta::daemon

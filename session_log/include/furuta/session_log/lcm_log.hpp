@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -74,9 +75,16 @@ struct LogWriterOptions {
 // flush_interval of their own timestamps (utime), renamed to <logs_dir>/<name>.lcmlog by finish().
 // On any write error the writer stops accepting events; what reached the disk before stays
 // readable.
+// The name's .part is held by a session writing it now: another name is needed.
+class LogNameInUse : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class LcmLogWriter {
  public:
-  // Throws std::runtime_error naming the path when the file cannot be created.
+  // Throws std::runtime_error naming the path when the file cannot be created: LogNameInUse when
+  // a live writer holds that name's .part. The writer holds an flock on its .part while it lives.
   LcmLogWriter(const LogWriterOptions& options, const std::string& name);
   ~LcmLogWriter();  // a writer never finished leaves its .part for recovery
   LcmLogWriter(const LcmLogWriter&) = delete;
@@ -120,7 +128,8 @@ struct RecoveredLog {
   bool discarded = false;
 };
 // For each .part left by a session cut short: keep the readable prefix, rename it into logs_dir
-// marked incomplete (or remove it when it holds no whole event). Safe to run at every start.
+// marked incomplete (or remove it when it holds no whole event). A .part a live writer holds (a
+// session running now, in any process) is left alone. Safe to run at every start.
 std::vector<RecoveredLog> recover_partial_logs(const std::filesystem::path& logs_dir);
 
 }  // namespace furuta::session_log
