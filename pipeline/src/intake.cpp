@@ -86,22 +86,51 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
   if (!request.validate.empty()) held_out_log = session_log::load_session_log(request.validate);
 
   bool refused = false;
+  // Why a log that is not intact is refused, from the problems it has: a gap inside its samples
+  // (damaged or undecodable bytes, missing samples), an end missing (truncated, cut short), or
+  // not a session log at all; each said only when some log has it.
+  bool gaps = false, ends = false, intact_parts_help = false, foreign_any = false;
   const auto check_intact = [&](const session_log::SessionLog& log) {
+    using Kind = session_log::LogProblem::Kind;
     const auto problems = session_log::integrity_problems(log);
     if (problems.empty() || request.use_intact_part) return;
-    const bool foreign =
-        session_log::has_problem(problems, session_log::LogProblem::Kind::not_a_session_log);
+    const bool foreign = session_log::has_problem(problems, Kind::not_a_session_log);
     refusals.push_back(log.path.string() + (foreign ? ": " : " is not intact: ") +
                        session_log::describe(problems));
     refused = true;
+    foreign_any = foreign_any || foreign;
+    if (foreign) return;
+    const bool gap = session_log::has_problem(problems, Kind::damaged) ||
+                     session_log::has_problem(problems, Kind::undecodable) ||
+                     session_log::has_problem(problems, Kind::missing_samples);
+    gaps = gaps || gap;
+    ends = ends || session_log::has_problem(problems, Kind::truncated) ||
+           session_log::has_problem(problems, Kind::cut_short);
+    intact_parts_help = intact_parts_help || !log.samples.empty();
   };
   for (const auto& log : logs) check_intact(log);
   if (held_out_log) check_intact(*held_out_log);
   if (refused) {
-    refusals.push_back(
-        "refused: filtering and differentiating across a gap gives wrong parameters without a "
-        "sign of it. Pass --use-intact-part to fit only the intact parts (each run of samples "
-        "between gaps on its own), or leave the log out");
+    if (gaps) {
+      refusals.push_back(
+          "refused: filtering and differentiating across a gap gives wrong parameters without a "
+          "sign of it");
+    }
+    if (ends) {
+      refusals.push_back(
+          "refused: a log without its end is not known to hold what its session recorded");
+    }
+    if (intact_parts_help) {
+      refusals.push_back(
+          "Pass --use-intact-part to fit only the intact parts (each run of samples between gaps "
+          "on its own), or leave the log out");
+    } else if (foreign_any) {
+      refusals.push_back(
+          "refused: only session logs (or CSV recordings, with --csv and --import-spec) are "
+          "fitted");
+    } else {
+      refusals.push_back("refused: the log has no samples to fit; leave it out");
+    }
     return std::nullopt;
   }
 
@@ -141,6 +170,8 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
       if (parts.recordings.empty()) {
         refusals.push_back(parts.account);
         refused = true;
+      } else {
+        in.used_in_part.push_back(parts.account);
       }
       return std::move(parts.recordings);
     }

@@ -98,6 +98,10 @@ struct Batch {
   // The files the recordings came from (and an import spec), in the order results.json lists
   // them with their SHA-256.
   std::vector<std::filesystem::path> files;
+  // Logs used in part (BatchRequest::use_intact_part on a log that is not intact): each one's
+  // account of what was used and what was dropped (IntactParts::account). The run is then done in
+  // part, whatever it finds.
+  std::vector<std::string> used_in_part;
   // Where the outputs name the files: empty, where they are; else this directory (the trigger
   // moves a batch's logs there once its identification is written).
   std::filesystem::path files_listed_in;
