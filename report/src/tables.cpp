@@ -132,8 +132,26 @@ std::string time_stamps_text(const identification::OutputErrorResult& r) {
   return s.str();
 }
 
+std::string tube_span_text(const std::vector<validated::ScenarioResult>& results,
+                           const std::string& set) {
+  const validated::ScenarioResult* least = nullptr;
+  double least_share = kTestedShareOfSpan;
+  for (const validated::ScenarioResult& r : results) {
+    if (r.parameters.name != set || !(r.scenario.duration_s > 0)) continue;
+    const double share = r.t_reached_s / r.scenario.duration_s;
+    if (share < least_share) {
+      least_share = share;
+      least = &r;
+    }
+  }
+  if (least == nullptr) return "";
+  return " up to " + short_number(least->t_reached_s, 3) + " s of " +
+         short_number(least->scenario.duration_s, 3) + " s (where its tubes end)";
+}
+
 std::string sivia_summary_text(const identification::GuaranteedResult& r,
-                               const std::optional<model::Parameters<double>>& truth) {
+                               const std::optional<model::Parameters<double>>& truth,
+                               const std::string& tested_span) {
   std::ostringstream s;
   s << "\nSIVIA (" << r.samples << " samples, q = " << r.q << "): " << r.paving.inner.size()
     << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
@@ -150,7 +168,8 @@ std::string sivia_summary_text(const identification::GuaranteedResult& r,
     s << "  " << model::kParameterNames[k] << " in " << interval_text(hull[k].lo(), hull[k].hi())
       << " " << model::kParameterUnits[k];
     if (truth) {
-      s << (hull[k].contains((*truth)[k]) ? "  (contains the truth)" : "  (misses the truth)");
+      s << (hull[k].contains((*truth)[k]) ? "  (contains the truth" + tested_span + ")"
+                                          : std::string("  (misses the truth)"));
     }
     s << "\n";
   }
@@ -434,7 +453,9 @@ std::string terminal_text_after_lsmi(const pipeline::Run& run) {
             "\n";
   }
   if (run.sivia) {
-    text += sivia_summary_text(run.sivia->result, run.identification.truth);
+    text += sivia_summary_text(
+        run.sivia->result, run.identification.truth,
+        run.simulation ? tube_span_text(run.simulation->results, pipeline::kSiviaSetName) : "");
   } else {
     for (const pipeline::Warning& w : run.warnings) {
       if (w.stage == pipeline::Warning::Stage::sivia) text += "warning: " + w.text + "\n";

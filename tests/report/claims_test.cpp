@@ -144,6 +144,31 @@ TEST(ReportClaims, ASetContainsTheTruthOnlyAsFarAsItsWindowsTestedIt) {
   EXPECT_TRUE(found);
 }
 
+// Before: SIVIA's hull "(contains the truth)" beside its tubes that ended at 0.025 s of 4 s.
+TEST(ReportClaims, SiviasSetContainsTheTruthOnlyAsFarAsItsTubesReach) {
+  validated::ScenarioResult early;
+  early.scenario = validated::paper_scenario(4);
+  early.parameters.name = pipeline::kSiviaSetName;
+  early.t_reached_s = 0.025;
+  validated::ScenarioResult whole = early;
+  whole.parameters.name = "LSMI";
+  whole.t_reached_s = whole.scenario.duration_s;
+  EXPECT_EQ(tube_span_text({whole, early}, pipeline::kSiviaSetName),
+            " up to 0.025 s of 4 s (where its tubes end)");
+  EXPECT_EQ(tube_span_text({whole}, "LSMI"), "");
+  identification::GuaranteedResult g;
+  g.unknown.fill(false);
+  g.unknown[5] = true;
+  interval::Box box(model::kParameterCount, interval::Interval(0.0, 1.0));
+  g.paving.prior = box;
+  g.paving.inner = {box};
+  const model::Parameters<double> truth{0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5};
+  const std::string text =
+      sivia_summary_text(g, truth, tube_span_text({whole, early}, pipeline::kSiviaSetName));
+  EXPECT_TRUE(has(text, "(contains the truth up to 0.025 s of 4 s (where its tubes end))")) << text;
+  EXPECT_TRUE(has(sivia_summary_text(g, truth), "(contains the truth)"));
+}
+
 // Before: LSMI's free run missing q2 by 1.36 rad went unflagged.
 TEST(ReportClaims, AFreeRunWorseThanTheSignalsOwnSpreadIsSuspect) {
   ReportInput in = minimal_input();

@@ -293,6 +293,8 @@ struct HeldOutFreeRuns {
 
 // Its parameter set's name in the scenarios (Table III) and Table I.
 inline constexpr const char* kOutputErrorSetName = "output error";
+// SIVIA's hull's (Table III).
+inline constexpr const char* kSiviaSetName = "SIVIA";
 // The windowed set's (Table III's guaranteed rows from the logs themselves).
 inline constexpr const char* kWindowedSetName = "guaranteed";
 

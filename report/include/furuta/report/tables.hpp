@@ -40,8 +40,17 @@ inline constexpr const char* kSiviaAssumedBoundsNote =
 
 // "\nSIVIA (n samples, q = ..): counts ..." and each unknown's hull (6 digits, rounded outward)
 // (with whether it holds the truth, when there is one), or the finding when the set is empty.
+// `tested_span` (tube_span_text of the set's tubes) follows "contains the truth".
 std::string sivia_summary_text(const identification::GuaranteedResult& result,
-                               const std::optional<model::Parameters<double>>& truth);
+                               const std::optional<model::Parameters<double>>& truth,
+                               const std::string& tested_span = "");
+
+// " up to 0.025 s of 4 s (where its tubes end)": the scenario run of the set named `set` whose
+// tube ended at the smallest share of its duration, when that is below kTestedShareOfSpan;
+// "" when every tube of the set reached that far, or the set has none. A set whose tubes end
+// there was tested against the truth's trajectory only so far.
+std::string tube_span_text(const std::vector<validated::ScenarioResult>& results,
+                           const std::string& set);
 
 // "the set excludes the output-error estimate of fv2: 6.42e-04 lies 3.2 sd above [a, b] (the set
 // rests on [sivia]'s assumed bounds)": one line, no newline.
