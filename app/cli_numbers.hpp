@@ -27,6 +27,30 @@ inline CLI::Validator finite_in(double lo, double hi) {
       "NUMBER in " + range.str());
 }
 
+// A finite number, whose range another check (the configuration's) decides.
+inline CLI::Validator finite_number() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double value = 0;
+        if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value)) {
+          return text + " is not a finite number";
+        }
+        return {};
+      },
+      "NUMBER");
+}
+
+// `check` with the option's name in its message: CLI11 names no hidden option (group "") in its
+// errors, and an old name kept as a hidden alias must still say which option was wrong.
+inline CLI::Validator named(CLI::Validator check, const std::string& name) {
+  return CLI::Validator(
+      [check, name](std::string& text) mutable -> std::string {
+        const std::string why = check(text);
+        return why.empty() ? why : name + " " + why;
+      },
+      "");
+}
+
 // A whole number in [lo, hi], checked before it is read into its (perhaps unsigned) type.
 inline CLI::Validator whole_in(long long lo, long long hi) {
   const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";

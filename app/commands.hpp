@@ -38,7 +38,8 @@ struct DevicesOptions {
   std::string config_path;
 };
 // Lists connected Phidget boards; says clearly when there are none or access is denied.
-// Returns 0 when at least one board was listed, 1 when none, 2 when USB could not be read.
+// Returns 0 when every board found was listed, 1 when some were and others could not be opened,
+// 2 when none was listed (none found, all denied, USB unreadable: no board answered).
 int run_devices_command(const DevicesOptions& options, std::ostream& out, std::ostream& err);
 
 // --- talking to a running daemon over LCM ---
@@ -159,7 +160,8 @@ std::optional<pipeline::Run> run_identification(const IdentifyCommandOptions& op
 void print_identification(std::ostream& out, const pipeline::Run& run,
                           const std::filesystem::path& dir, bool table_one_printed = false);
 // run_identification, then every file (report::write_identification) and print_identification.
-// 0; 1 when the output-error refinement did not converge; 2 for unusable inputs (a log not intact
+// 0; 1 when the output-error refinement did not converge or use_intact_part fitted a log in part
+// (each such log's account of what was dropped on err); 2 for unusable inputs (a log not intact
 // without use_intact_part, one too short for any method) or an output directory it may not use.
 int run_identify_command(const IdentifyCommandOptions& options, std::ostream& out,
                          std::ostream& err);
@@ -191,7 +193,8 @@ struct ProcessLogsOptions {
   bool watch = false;  // pass again whenever a log lands, until SIGINT or SIGTERM
 };
 // One pass over the logs directory (or, with watch, a pass per landing log). 0: every log was
-// identified or waits for its batch; 1: some went to failed/ (each with a .reason.txt).
+// identified or waits for its batch; 1: some went to failed/ (each with a .reason.txt) or to
+// done/ unidentified (a label [automation] does not name).
 int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& out,
                              std::ostream& err);
 

@@ -17,9 +17,13 @@ namespace furuta::app {
 
 namespace {
 
-constexpr int kListed = 0;
-constexpr int kNoneListed = 1;
-constexpr int kUsbUnreadable = 2;
+// The README's rule: every board found was listed (0); some were and some could not be opened,
+// said which (1, done in part); no board answered, whether none is plugged in, none may be opened
+// or the bus cannot be read (2: a rig with no board to talk to is as unusable as no daemon).
+constexpr int kListed = kExitDone;
+constexpr int kSomeDenied = kExitPartOrRefused;
+constexpr int kNoneListed = kExitNotDone;
+constexpr int kUsbUnreadable = kExitNotDone;
 
 constexpr const char* kUdevRule = "systemd/70-furuta-phidgets.rules";
 
@@ -110,7 +114,8 @@ int report_discovery(const bridge::DiscoveryResult& found, std::ostream& out, st
         << "Check that the boards are powered and their USB cables plugged in (`lsusb -d 06c2:` "
            "should list them).\n";
   }
-  return found.devices.empty() ? kNoneListed : kListed;
+  if (found.devices.empty()) return kNoneListed;
+  return found.access_denied.empty() ? kListed : kSomeDenied;
 }
 
 int run_devices_command(const DevicesOptions& options, std::ostream& out, std::ostream& err) {

@@ -8,7 +8,8 @@
 
 namespace furuta::app {
 
-// Prints `found` and returns run_devices_command's code (0 listed, 1 none, 2 USB unreadable).
+// Prints `found` and returns run_devices_command's code (0 every board listed, 1
+// some listed and some denied, 2 none listed: none found, all denied or USB unreadable).
 int report_discovery(const bridge::DiscoveryResult& found, std::ostream& out, std::ostream& err);
 
 }  // namespace furuta::app

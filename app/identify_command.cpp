@@ -160,6 +160,12 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
   print_identification(out, *run, options.output_dir, true);
   if (replaced)
     out << "(the previous run's files in " << options.output_dir.string() << " were replaced)\n";
+  // Done in part: a log fitted by its intact parts only; what was dropped is said.
+  bool in_part = false;
+  for (const std::string& account : intake->batch->used_in_part) {
+    err << "furuta identify: done in part: " << account << "\n";
+    in_part = true;
+  }
   // Done in part: the estimate asked for (the refinement's) is not had.
   if (run->output_error && !run->output_error->result.converged) {
     err << "furuta identify: done in part: the output-error refinement did not converge (its "
@@ -169,7 +175,7 @@ int run_identify_command(const IdentifyCommandOptions& options, std::ostream& ou
         << "\n";
     return 1;
   }
-  return 0;
+  return in_part ? kExitPartOrRefused : kExitDone;
 }
 
 }  // namespace furuta::app

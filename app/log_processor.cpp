@@ -642,10 +642,11 @@ int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& ou
       << " log(s) identified to done/, " << pass.logs_not_identified
       << " not identified (label not in [automation]) to done/, " << pass.logs_failed
       << " to failed/, " << pass.logs_waiting << " waiting\n";
-  // Non-zero when a log was set aside, so `systemctl --failed` shows that someone should look. A
-  // label [automation] does not name is no failure: the session was not meant for the trigger,
-  // and each such log is named above.
-  return pass.logs_failed > 0 ? 1 : 0;
+  // Done in part (1) when a log was set aside or left unidentified, so `systemctl --failed` shows
+  // that someone should look: a log of a label [automation] does not name was recorded and not
+  // fitted, which is what the README's exit rule calls "not identified" (each is named above).
+  // Logs still waiting for their batch are not set aside: a later pass takes them.
+  return pass.logs_failed > 0 || pass.logs_not_identified > 0 ? kExitPartOrRefused : kExitDone;
 }
 
 }  // namespace furuta::app

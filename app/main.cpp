@@ -59,8 +59,15 @@ int main(int argc, char** argv) {
     cmd->add_option("--profile", start.profile,
                     "bang_bang, free_decay, step, prbs, chirp, multisine (default: the "
                     "configuration's [excitation], as for every option left out)");
-    cmd->add_option("--amplitude", start.amplitude_duty, "Duty amplitude (0, 1]");
-    cmd->add_option("--duration", start.duration_s, "Seconds");
+    // The limits are the configuration's; what it can never accept is bad usage (exit 2), checked
+    // with them before anything runs.
+    cmd->add_option("--amplitude", start.amplitude_duty,
+                    "Duty amplitude, above 0 and at most the configuration's [limits] "
+                    "max_amplitude_duty (0.5 in config/rig.toml)")
+        ->check(furuta::app::finite_number());
+    cmd->add_option("--duration", start.duration_s,
+                    "Seconds, above 0 and at most the configuration's [limits] max_duration_s")
+        ->check(furuta::app::finite_number());
     cmd->add_option("--label", start.label, "A label for the session's name");
     cmd->add_option("--seed", start.seed, "Seed of randomised profiles");
   };
@@ -198,10 +205,15 @@ int main(int argc, char** argv) {
   identify_cmd->add_flag("--simulate", identify.simulate,
                          "After the fit, the paper's four scenarios by guaranteed simulation "
                          "(Table III, Fig. 6), with the LSMI and (with --sivia) SIVIA parameters");
+  // One name for one thing: each scenario's duration is --scenario-seconds for identify and
+  // simulate alike; the names each had before stay as hidden aliases.
   identify_cmd
-      ->add_option("--simulate-seconds", identify.simulate_seconds,
-                   "Each scenario's duration [s] (default: the paper's 4)")
+      ->add_option("--scenario-seconds", identify.simulate_seconds,
+                   "With --simulate: each scenario's duration [s] (default: the paper's 4)")
       ->check(furuta::app::finite_in(0.01, 60.0));
+  identify_cmd->add_option("--simulate-seconds", identify.simulate_seconds)
+      ->check(furuta::app::named(furuta::app::finite_in(0.01, 60.0), "--simulate-seconds"))
+      ->group("");
 
   furuta::app::SimulateCommandOptions simulate;
   CLI::App* simulate_cmd = app.add_subcommand(
@@ -223,9 +235,12 @@ int main(int argc, char** argv) {
                    "With the truth: also the truth +- this percent as interval parameters")
       ->check(furuta::app::finite_in(0.0, 100.0));
   simulate_cmd
-      ->add_option("--seconds", simulate.seconds,
+      ->add_option("--scenario-seconds", simulate.seconds,
                    "Each scenario's duration [s] (default: the paper's 4)")
       ->check(furuta::app::finite_in(0.01, 60.0));
+  simulate_cmd->add_option("--seconds", simulate.seconds)
+      ->check(furuta::app::named(furuta::app::finite_in(0.01, 60.0), "--seconds"))
+      ->group("");
   simulate_cmd
       ->add_option("--pieces", simulate.pieces,
                    "Tubes per run: 1 (default), or 2, 4, ... 64: the initial box split at 0.5 s, "

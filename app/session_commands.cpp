@@ -211,6 +211,21 @@ void fill_start_command(const StartOptions& start, const config::ExcitationConfi
   command.label = start.label;
 }
 
+// A session value the configuration's [limits] can never accept (an amplitude above
+// max_amplitude_duty, NaN, a label that cannot be a file name) is bad usage, like one that is not
+// a number: said with the field, the limit's key and the file, before anything else happens.
+// The values the configuration filled in are its own and pass its check.
+bool session_values_usable(const std::string& name, const furuta::rig_command_t& command,
+                           const config::RigConfig& rig, const std::filesystem::path& config_path,
+                           std::ostream& err) {
+  const std::string problem = daemon::start_session_problem(
+      command, daemon::daemon_settings_from_config(rig).command_limits);
+  if (problem.empty()) return true;
+  err << name << ": " << problem << " (the limits are [limits] max_amplitude_duty, "
+      << "max_duration_s and max_label_chars of " << config_path.string() << ")\n";
+  return false;
+}
+
 // The daemon's public key, or nothing (said on `err`: its answers are then taken unverified).
 std::optional<command_auth::DaemonPublicKey> daemon_public_key(const RemoteOptions& remote,
                                                                const std::string& name,
@@ -344,6 +359,9 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
       const config::RigConfig rig = config::load_rig_config(remote.config_path);
       command.kind = furuta::rig_command_t::KIND_START_SESSION;
       fill_start_command(start, rig.excitation, command);
+      if (!session_values_usable(name, command, rig, remote.config_path, err)) {
+        return kExitNotDone;
+      }
       const std::filesystem::path key_path =
           remote.command_key.empty() ? std::filesystem::path(rig.daemon.command_key_file)
                                      : remote.command_key;
@@ -489,6 +507,13 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
 
 int run_session_command(const RunOptions& options, std::ostream& out, std::ostream& err) {
   const config::RigConfig rig = config::load_rig_config(options.config_path);
+  {
+    furuta::rig_command_t command{};
+    fill_start_command(options.session, rig.excitation, command);
+    if (!session_values_usable("furuta run", command, rig, options.config_path, err)) {
+      return kExitNotDone;
+    }
+  }
   daemon::DaemonSettings settings = daemon::daemon_settings_from_config(rig);
   if (!options.logs_dir.empty()) settings.recorder.logs_dir = options.logs_dir;
   for (const auto& recovered : session_log::recover_partial_logs(settings.recorder.logs_dir)) {

@@ -45,7 +45,7 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
     return 2;
   }
   if (options.seconds && !(*options.seconds > 0 && *options.seconds <= 60)) {
-    err << "furuta simulate: --seconds " << *options.seconds << ": expected in (0, 60]\n";
+    err << "furuta simulate: --scenario-seconds " << *options.seconds << ": expected in (0, 60]\n";
     return 2;
   }
   if (options.pieces == 0 || options.pieces > 64 || (options.pieces & (options.pieces - 1)) != 0) {

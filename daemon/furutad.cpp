@@ -37,7 +37,10 @@ sigset_t termination_signals() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"furutad: runs the rotary pendulum rig (excitation, safety, LCM, session logs)"};
+  CLI::App app{"furutad: runs the rotary pendulum rig (excitation, safety, LCM, session logs)",
+               "furutad"};
+  // Every option whose default is a plain value shows it in --help (set before they are added).
+  app.option_defaults()->always_capture_default();
   std::string config_path = config::default_rig_config_path().string();
   bool simulated = false;
   std::string replay_log;
@@ -49,7 +52,8 @@ int main(int argc, char** argv) {
   std::string daemon_key;
   std::string command_state;
   bool create_command_key = false;
-  app.add_option("-c,--config", config_path, "Rig configuration (TOML)")->check(CLI::ExistingFile);
+  app.add_option("-c,--config", config_path, "Rig configuration (TOML) read at start")
+      ->check(CLI::ExistingFile);
   app.add_flag("--sim", simulated, "Drive the simulated rig instead of the USB boards");
   app.add_option("--replay", replay_log,
                  "Run a logged session again against its recorded USB traffic, in real time, then "
@@ -79,9 +83,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", daemon::kSoftwareVersion);
   app.footer(
       "Exit status: 0 stopped as asked (a signal, or the end of --replay); 1 the control loop "
-      "failed while running; 2 not started: bad usage or configuration, the boards, LCM or the "
-      "logs directory unusable, or --require-rt refused.");
-  app.option_defaults()->always_capture_default();
+      "failed while running; 2 not started: bad usage or configuration, the boards or LCM "
+      "unusable, or --require-rt refused. An unusable logs directory does not stop it: it "
+      "starts, says so, and refuses every session start until the directory can be written.");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -170,7 +174,10 @@ int main(int argc, char** argv) {
     // A daemon that cannot log must say so now, not at the first start. It still comes up: it is
     // what writes the zero command to a motor board left driving by a daemon killed mid-session,
     // and a directory can come back (a mount, a permission) without a restart. Until then every
-    // start is refused with this reason and the status says it (daemon/README.md, "Logs").
+    // start is refused with this reason and the status says it (daemon/README.md, "Logs"). As a
+    // systemd service, exiting here would leave no one to zero the motor and, with Restart=, loop
+    // on the same error; running and refusing starts keeps the rig safe and the reason visible
+    // in `furuta status` and the journal (the help's exit rule says so).
     if (std::string why = session_log::logs_dir_problem(settings.recorder.logs_dir, 0);
         !why.empty()) {
       std::cerr << "furutad: WARNING: cannot log sessions in "

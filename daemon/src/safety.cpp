@@ -92,6 +92,10 @@ std::string check_start_session(const rig_command_t& command, const CommandLimit
 
 }  // namespace
 
+std::string start_session_problem(const rig_command_t& command, const CommandLimits& limits) {
+  return check_start_session(command, limits);
+}
+
 StopReason check_safety(const SafetyLimits& limits, const SafetyInput& input) noexcept {
   // Comparisons are written so that NaN fails them: an unknown value is never taken as safe.
   if (input.motor_over_temperature) return StopReason::over_temperature;

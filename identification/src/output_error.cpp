@@ -1044,8 +1044,18 @@ FreeRun simulate_free_run(const OeExperiment& e, const model::Parameters<double>
     sum[o.joint] += (simulated - measured) * (simulated - measured);
     ++count[o.joint];
   }
+  std::array<double, 2> mean = {0, 0};
+  for (std::size_t i = 0; i < run.measured.size(); ++i) {
+    mean[run.joint[i]] += run.measured[i] / static_cast<double>(count[run.joint[i]]);
+  }
+  std::array<double, 2> spread = {0, 0};
+  for (std::size_t i = 0; i < run.measured.size(); ++i) {
+    const double d = run.measured[i] - mean[run.joint[i]];
+    spread[run.joint[i]] += d * d;
+  }
   for (int j = 0; j < 2; ++j) {
     run.rmse_rad[j] = count[j] ? std::sqrt(sum[j] / static_cast<double>(count[j])) : 0.0;
+    run.measured_sd_rad[j] = count[j] ? std::sqrt(spread[j] / static_cast<double>(count[j])) : 0.0;
   }
   return run;
 }

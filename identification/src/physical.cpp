@@ -12,10 +12,12 @@
 // the input: fv1 then moves by twice the back-EMF damping, in the same direction as the others.
 #include "furuta/identification/physical.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 namespace furuta::identification {
 
@@ -86,6 +88,11 @@ std::string where_to_look(LikelyCause cause, RecordingSource source) {
     case LikelyCause::input_gain:
       return csv ? "Check the import spec's input_scale, input_kind and [motor]"
                  : "Check [motor] (eq. 4's motor data) and the supply";
+    case LikelyCause::too_short:
+      return csv ? "Record longer" : "Run longer sessions (--duration, [excitation] duration_s)";
+    case LikelyCause::spike:
+      return csv ? "Check the CSV's angle columns for readings that jump and come back"
+                 : "Check the encoders' cables and the log (furuta log info)";
     case LikelyCause::none:
     case LikelyCause::unknown:
       break;
@@ -113,11 +120,18 @@ std::string cause_text(LikelyCause cause) {
       return "the time unit (inertias scale with its square, frictions with it)";
     case LikelyCause::input_gain:
       return "the input's gain (every parameter off by one factor)";
+    case LikelyCause::too_short:
+      return "a recording shorter than " + number(kShortRecordingS) +
+             " s (too few swings to tell the parameters apart)";
+    case LikelyCause::spike:
+      return "samples that jump faster than " + number(kFastestJointRadS) +
+             " rad/s, which no joint can (spikes in the angles)";
     case LikelyCause::none:
     case LikelyCause::unknown:
       break;
   }
-  return "no known pattern";
+  return "unknown (no sign pattern fits, and no check on the recordings found spikes, angles "
+         "beyond radians or too short a recording)";
 }
 
 // What a condition bounds.
@@ -194,15 +208,59 @@ const char* cause_name(LikelyCause cause) {
       return "time unit";
     case LikelyCause::input_gain:
       return "input gain";
+    case LikelyCause::too_short:
+      return "too short";
+    case LikelyCause::spike:
+      return "spike";
     case LikelyCause::unknown:
       return "unknown";
   }
   return "?";
 }
 
+bool RecordingEvidence::short_recording() const {
+  return shortest_s < kShortRecordingS;
+}
+
+bool RecordingEvidence::spikes() const {
+  return fast_steps > 0 &&
+         static_cast<double>(fast_steps) <= kSpikeShare * static_cast<double>(steps);
+}
+
+bool RecordingEvidence::angles_not_radians() const {
+  return (fast_steps > 0 && !spikes()) || largest_arm_travel_rad > kLargestArmTravelRad;
+}
+
+RecordingEvidence recording_evidence(const std::vector<RawExperiment>& experiments) {
+  RecordingEvidence out;
+  for (const RawExperiment& e : experiments) {
+    if (e.t_s.size() < 2) {
+      out.shortest_s = std::min(out.shortest_s, 0.0);
+      continue;
+    }
+    out.shortest_s = std::min(out.shortest_s, e.t_s.back() - e.t_s.front());
+    for (std::size_t i = 1; i < e.t_s.size() && i < e.q1.size() && i < e.q2.size(); ++i) {
+      const double dt = e.t_s[i] - e.t_s[i - 1];
+      if (!(dt > 0)) continue;
+      const double fastest = kFastestJointRadS * dt;
+      const bool fast = !(std::fabs(e.q1[i] - e.q1[i - 1]) <= fastest) ||
+                        !(std::fabs(e.q2[i] - e.q2[i - 1]) <= fastest);
+      ++out.steps;
+      if (fast) {
+        ++out.fast_steps;
+        continue;
+      }
+      out.largest_arm_travel_rad =
+          std::max(out.largest_arm_travel_rad, std::fabs(e.q1[i] - e.q1.front()));
+    }
+  }
+  return out;
+}
+
 PhysicalCheck check_physical(const model::Parameters<double>& p,
                              const std::optional<model::Parameters<double>>& std_dev,
-                             const std::optional<model::Parameters<double>>& nominal) {
+                             const std::optional<model::Parameters<double>>& nominal,
+                             const RecordingEvidence* evidence) {
   const model::Parameters<double> sd = std_dev.value_or(model::Parameters<double>{});
   PhysicalCheck out;
   const auto add = [&](PhysicalCondition c, double margin, double margin_sd, bool strict) {
@@ -258,8 +316,16 @@ PhysicalCheck check_physical(const model::Parameters<double>& p,
   }
 
   // Then magnitudes, when the signs name nothing: units and gains keep the signs. A gain scales
-  // every parameter alike, a time factor k the inertias by k^2 and mug not at all; an angle unit
-  // scales nothing alike (sin and cos of 57 times the angle are noise), which is what is left.
+  // every parameter alike, a time factor k the inertias by k^2 and mug not at all: each a pattern
+  // of the parameters. What scales nothing alike (an angle unit: sin and cos of 57 times the
+  // angle are noise; a spike; too few swings) is named only when the recordings show it.
+  const auto from_the_data = [&]() -> std::vector<LikelyCause> {
+    if (evidence == nullptr) return {};
+    if (evidence->spikes()) return {LikelyCause::spike};
+    if (evidence->angles_not_radians()) return {LikelyCause::angle_unit};
+    if (evidence->short_recording()) return {LikelyCause::too_short};
+    return {};
+  };
   if (out.candidates.empty()) {
     const auto off = [](double ratio) { return ratio > kCadFactor || ratio < 1 / kCadFactor; };
     const auto alike = [](double a, double b) { return a < 3 * b && b < 3 * a; };
@@ -267,12 +333,15 @@ PhysicalCheck check_physical(const model::Parameters<double>& p,
       const double r1 = std::fabs(p.mu1 / nominal->mu1), r4 = std::fabs(p.mu4 / nominal->mu4);
       const double rg = nominal->mug > 0 ? std::fabs(p.mug / nominal->mug) : 1.0;
       if (off(r1) || off(r4) || off(rg)) {
-        if (alike(r1, r4) && alike(r4, rg)) {
+        out.candidates = from_the_data();
+        if (!out.candidates.empty()) {
+          // The data's own finding comes first.
+        } else if (alike(r1, r4) && alike(r4, rg)) {
           out.candidates = {LikelyCause::input_gain};
         } else if (alike(r1, r4) && alike(rg, 1.0)) {
-          out.candidates = {LikelyCause::time_unit, LikelyCause::angle_unit};
+          out.candidates = {LikelyCause::time_unit};
         } else {
-          out.candidates = {LikelyCause::angle_unit};
+          out.candidates = {LikelyCause::unknown};
         }
       }
     }
@@ -283,9 +352,27 @@ PhysicalCheck check_physical(const model::Parameters<double>& p,
         out.pendulum_to_arm_inertia && (*out.pendulum_to_arm_inertia < 1 / kInertiaRatio ||
                                         *out.pendulum_to_arm_inertia > kInertiaRatio);
     if (out.candidates.empty() && (implausible_frequency || implausible_inertias)) {
-      out.candidates = {LikelyCause::angle_unit, LikelyCause::time_unit};
+      out.candidates = from_the_data();
+      if (out.candidates.empty()) out.candidates = {LikelyCause::unknown};
     }
-    if (out.candidates.empty() && out.clear()) out.candidates = {LikelyCause::unknown};
+    if (out.candidates.empty() && out.clear()) {
+      out.candidates = from_the_data();
+      if (out.candidates.empty()) out.candidates = {LikelyCause::unknown};
+    }
+  }
+  // Spikes and too short a recording garble any pattern of signs: when the data show either, it
+  // is named first, before the pattern the garbled estimate happens to show.
+  if (!out.candidates.empty() && evidence != nullptr) {
+    for (const auto& [shown, cause] :
+         {std::pair{evidence->short_recording(), LikelyCause::too_short},
+          std::pair{evidence->spikes(), LikelyCause::spike}}) {
+      if (shown &&
+          std::find(out.candidates.begin(), out.candidates.end(), cause) == out.candidates.end()) {
+        out.candidates.insert(out.candidates.begin(), cause);
+      }
+    }
+    std::erase(out.candidates, LikelyCause::unknown);
+    if (out.candidates.empty()) out.candidates = {LikelyCause::unknown};
   }
   out.cause = out.candidates.empty() ? LikelyCause::none : out.candidates.front();
   return out;

@@ -182,6 +182,7 @@ WindowedSet invert_recordings(const std::vector<OeExperiment>& experiments,
     chains.push_back({c.t0_s, c.t_end_s, c.rest});
   }
   WindowedSet out;
+  for (const Chain& c : chains) out.spans.push_back({c.t_s, c.t_end_s, c.t_s});
   out.search = search;
   out.set = search;
   out.lag_s = inputs.lag_s;
@@ -232,6 +233,7 @@ WindowedSet invert_recordings(const std::vector<OeExperiment>& experiments,
       const double reached = i < o.reached.size() ? o.reached[i] : batch[i].t0_s;
       const double restart = has_end ? o.end_times[i] : batch[i].t0_s;
       const bool whole = reached >= batch[i].t1_s;
+      out.spans[owner[i]].reached_s = std::max(out.spans[owner[i]].reached_s, reached);
       out.windows.push_back({owner[i], k, batch[i].t0_s, batch[i].t1_s, reached,
                              batch[i].readings.size(),
                              whole ? WindowVerdict::contracted : WindowVerdict::flow_failed,

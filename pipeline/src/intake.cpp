@@ -162,30 +162,65 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
   for (const auto& log : logs) all_logs.push_back(&log);
   if (held_out_log) all_logs.push_back(&*held_out_log);
   bool refused = false;
-  bool gaps_only = true;  // every refusal so far is one --use-intact-part would take
+  // Why a log that is not intact is refused, from the problems it has: a gap inside its samples
+  // (damaged or undecodable bytes, missing, repeated or reordered samples, a count that is not the
+  // end record's), an end missing (truncated, cut short), events that are not the ones recorded
+  // (changed, joined, a seal lost, a replay of a damaged log), or not a session log at all; each
+  // said only when some log has it.
+  bool gaps = false, ends = false, intact_parts_help = false, foreign_any = false,
+       untrusted_any = false;
   const auto check_intact = [&](const session_log::SessionLog& log) {
+    using Kind = session_log::LogProblem::Kind;
     const auto problems = session_log::integrity_problems(log);
     if (problems.empty()) return;
     const bool in_part = session_log::usable_in_part(problems);
     if (request.use_intact_part && in_part) return;
-    const bool foreign =
-        session_log::has_problem(problems, session_log::LogProblem::Kind::not_a_session_log);
+    const bool foreign = session_log::has_problem(problems, Kind::not_a_session_log);
     refusals.push_back(log.path.string() + (foreign ? ": " : " is not intact: ") +
                        session_log::describe(problems) +
-                       (in_part ? ""
-                                : "; no part of it is known to be what was recorded, so "
-                                  "--use-intact-part cannot use it either"));
-    gaps_only = gaps_only && in_part;
+                       (in_part || foreign ? ""
+                                           : "; no part of it is known to be what was recorded, "
+                                             "so --use-intact-part cannot use it either"));
     refused = true;
+    foreign_any = foreign_any || foreign;
+    if (foreign) return;
+    if (!in_part) {
+      untrusted_any = true;
+      return;
+    }
+    const bool gap = session_log::has_problem(problems, Kind::damaged) ||
+                     session_log::has_problem(problems, Kind::undecodable) ||
+                     session_log::has_problem(problems, Kind::missing_samples) ||
+                     session_log::has_problem(problems, Kind::out_of_order) ||
+                     session_log::has_problem(problems, Kind::time_goes_back) ||
+                     session_log::has_problem(problems, Kind::count_mismatch);
+    gaps = gaps || gap;
+    ends = ends || session_log::has_problem(problems, Kind::truncated) ||
+           session_log::has_problem(problems, Kind::cut_short);
+    intact_parts_help = intact_parts_help || !log.samples.empty();
   };
   for (const auto& log : logs) check_intact(log);
   if (held_out_log) check_intact(*held_out_log);
   if (refused) {
-    if (gaps_only) {
+    if (gaps) {
       refusals.push_back(
           "refused: filtering and differentiating across a gap gives wrong parameters without a "
-          "sign of it. Pass --use-intact-part to fit only the intact parts (each run of samples "
-          "between gaps on its own), or leave the log out");
+          "sign of it");
+    }
+    if (ends) {
+      refusals.push_back(
+          "refused: a log without its end is not known to hold what its session recorded");
+    }
+    if (intact_parts_help) {
+      refusals.push_back(
+          "Pass --use-intact-part to fit only the intact parts (each run of samples between gaps "
+          "on its own), or leave the log out");
+    } else if (foreign_any) {
+      refusals.push_back(
+          "refused: only session logs (or CSV recordings, with --csv and --import-spec) are "
+          "fitted");
+    } else if (!untrusted_any) {
+      refusals.push_back("refused: the log has no samples to fit; leave it out");
     }
     return std::nullopt;
   }
@@ -235,6 +270,8 @@ std::optional<Batch> batch_from_logs(const BatchRequest& request, Refusals& refu
       if (parts.recordings.empty()) {
         refusals.push_back(parts.account);
         refused = true;
+      } else {
+        in.used_in_part.push_back(parts.account);
       }
       return std::move(parts.recordings);
     }

@@ -43,13 +43,18 @@ identification::PhysicalCheck check_physical(identification::Identification& id,
     warnings.push_back({Warning::Stage::physical, Warning::Kind::suspect, text});
   };
   if (!id.lsmi_ran()) return {};
-  const PhysicalCheck combined =
-      identification::check_physical(id.combined.estimate, id.combined.std_dev, id.nominal);
+  // The recordings as read: a cause the magnitudes cannot tell apart is named from what they show.
+  const RecordingEvidence evidence = recording_evidence(id.raw);
+  const PhysicalCheck combined = identification::check_physical(
+      id.combined.estimate, id.combined.std_dev, id.nominal, &evidence);
   add(physical_warning(combined, source, "the LSMI estimate of all experiments"));
   if (combined.consistent() && combined.cause == LikelyCause::none) {
     for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
       const LsmiResult& r = id.per_experiment[i];
-      const PhysicalCheck one = identification::check_physical(r.estimate, r.std_dev, id.nominal);
+      const RecordingEvidence own =
+          i < id.raw.size() ? recording_evidence({id.raw[i]}) : RecordingEvidence{};
+      const PhysicalCheck one =
+          identification::check_physical(r.estimate, r.std_dev, id.nominal, &own);
       if (one.clear())
         add(physical_warning(one, source, "the LSMI estimate of " + id.processed[i].name));
     }

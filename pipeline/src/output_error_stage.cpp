@@ -154,7 +154,10 @@ std::optional<OutputError> refine(const OutputErrorSettings& settings,
   // The parametrisation keeps the inertias and mug positive and M positive definite, but lets mu3
   // take either sign and a parameter reach its bound: a sign-flipped pendulum fits exactly with
   // mu3 < 0. So the refined estimate is checked like LSMI's, and a violation names its cause.
-  out.physical = identification::check_physical(out.result.estimate, out.result.std_dev);
+  const identification::RecordingEvidence evidence =
+      identification::recording_evidence(run.identification.raw);
+  out.physical = identification::check_physical(out.result.estimate, out.result.std_dev,
+                                                std::nullopt, &evidence);
   if (!out.physical.consistent()) {
     warn(Kind::suspect,
          identification::physical_warning(out.physical,

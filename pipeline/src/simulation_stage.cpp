@@ -15,8 +15,8 @@ Simulation scenarios(const SimulationSettings& settings, const Run& run, const B
   std::vector<validated::ParameterSet> sets;
   if (run.sivia && !run.sivia->result.empty) {
     const interval::Box h = run.sivia->result.paving.outer_hull();
-    sets.push_back(
-        {"SIVIA", model::Parameters<interval::Interval>{h[0], h[1], h[2], h[3], h[4], h[5], h[6]}});
+    sets.push_back({kSiviaSetName, model::Parameters<interval::Interval>{h[0], h[1], h[2], h[3],
+                                                                         h[4], h[5], h[6]}});
   }
   if (run.identification.lsmi_ran()) {
     sets.push_back(validated::point_parameters("LSMI", run.identification.combined.estimate));

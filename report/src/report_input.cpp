@@ -1,5 +1,6 @@
 // The report's content from the domain results: sessions, Table I, Table II, SIVIA, warnings.
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "format.hpp"
@@ -78,7 +79,9 @@ GuaranteedSummary guaranteed_summary(const pipeline::WindowedGuaranteed& w,
   for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     const double centre = w.estimate_scaled[k];
     std::string truth = "-";
-    if (w.truth_scaled) truth = r.set[k].contains((*w.truth_scaled)[k]) ? "inside" : "OUTSIDE";
+    if (w.truth_scaled) {
+      truth = r.set[k].contains((*w.truth_scaled)[k]) ? "inside" + tested_span_text(r) : "OUTSIDE";
+    }
     g.scaled_rows.push_back({identification::kScaledParameterNames[k], interval_cell(r.search[k]),
                              interval_cell(r.set[k]), half_width_percent(r.set[k].rad(), centre),
                              truth});
@@ -136,6 +139,7 @@ ReportInput report_page(const pipeline::Run& run, const std::string& software_ve
       oe.held_out_name = h.name;
       if (h.lsmi) oe.lsmi_rmse_rad = h.lsmi->rmse_rad;
       oe.refined_rmse_rad = h.refined.rmse_rad;
+      oe.measured_sd_rad = h.refined.measured_sd_rad;
       oe.svg = svg_free_runs(h.name, h.lsmi ? &*h.lsmi : nullptr, h.refined);
     }
     page.output_error = std::move(oe);
@@ -299,6 +303,61 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
   }
   using Stage = Warning::Stage;
   using Kind = Warning::Kind;
+  // A number that is not one (NaN, infinite) is no estimate, whatever produced it: the run failed
+  // there, and the page must not show it as a result among the others.
+  const auto non_finite = [](const model::Parameters<double>& estimate,
+                             const model::Parameters<double>& sd) {
+    std::string names;
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      if (std::isfinite(estimate[k]) && std::isfinite(sd[k])) continue;
+      names += (names.empty() ? "" : ", ") + std::string(model::kParameterNames[k]);
+    }
+    return names;
+  };
+  const auto not_a_number = [&](Stage stage, const std::string& what,
+                                const model::Parameters<double>& estimate,
+                                const model::Parameters<double>& sd) {
+    const std::string names = non_finite(estimate, sd);
+    if (names.empty()) return;
+    out.push_back({stage, Kind::failed,
+                   what + ": no estimate: " + names +
+                       " not a finite number (NaN or infinite, with its sd): check the inputs "
+                       "and settings for numbers that are not"});
+  };
+  if (input.lsmi_skipped.empty()) {
+    for (std::size_t e = 0; e < input.per_experiment.size(); ++e) {
+      const std::string name =
+          e < input.experiment_names.size() ? input.experiment_names[e] : std::to_string(e + 1);
+      not_a_number(Stage::lsmi, "LSMI on " + name, input.per_experiment[e].estimate,
+                   input.per_experiment[e].std_dev);
+    }
+    not_a_number(Stage::lsmi, "LSMI on all experiments", input.combined.estimate,
+                 input.combined.std_dev);
+  }
+  if (input.output_error) {
+    not_a_number(Stage::output_error, "the output-error refinement", input.output_error->estimate,
+                 input.output_error->std_dev);
+  }
+  // A free run whose angle error is larger than the measured angle's own spread predicts the
+  // held-out session worse than its mean would: whatever its RMSE, it says nothing of the rig.
+  if (input.output_error && !input.output_error->held_out_name.empty()) {
+    const OutputErrorSummary& oe = *input.output_error;
+    const auto worse_than_mean = [&](const std::string& set, const std::array<double, 2>& rmse) {
+      for (std::size_t j = 0; j < 2; ++j) {
+        if (!(rmse[j] > oe.measured_sd_rad[j])) continue;
+        out.push_back({Stage::output_error, Kind::suspect,
+                       "the free run of the held-out " + oe.held_out_name + " with the " + set +
+                           " parameters misses q" + std::to_string(j + 1) + " by RMSE " +
+                           short_number(rmse[j], 3) +
+                           " rad, more than the measured angle's own "
+                           "spread (sd " +
+                           short_number(oe.measured_sd_rad[j], 3) +
+                           " rad): it predicts the session worse than the angle's mean would"});
+      }
+    };
+    if (oe.lsmi_rmse_rad) worse_than_mean("LSMI", *oe.lsmi_rmse_rad);
+    worse_than_mean("output-error", oe.refined_rmse_rad);
+  }
   // An empty or truncated paving is the run's own warning (pipeline::run).
   if (input.sivia) {
     const SiviaSummary& s = *input.sivia;
@@ -314,6 +373,15 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
   }
   if (input.simulation) {
     for (const auto& r : input.simulation->results) {
+      if (coverage_verdict(r.q2_step) == "low") {
+        out.push_back({Stage::simulation, Kind::suspect,
+                       "scenario " + scenario_label(r.scenario) + ", " + r.parameters.name +
+                           ": the tube holds " + percent(r.q2_step.rate()) +
+                           " of the measured q2 samples (step test), below " +
+                           percent(kCoverageOkRate) +
+                           ", the paper's lowest: check the model, the parameters or the "
+                           "measurement"});
+      }
       if (r.t_reached_s + 1e-9 >= r.scenario.duration_s &&
           r.status == validated::IntegrationResult::Status::ok) {
         continue;
@@ -323,7 +391,7 @@ std::vector<Warning> derived_warnings(const ReportInput& input) {
                          ": the tube ended early, at " + dash_fixed(r.t_reached_s, 3) + " s of " +
                          dash_fixed(r.scenario.duration_s, 1) + " s (" +
                          validated::to_string(r.status) +
-                         (r.reason.empty() ? "" : ": " + readable_numbers(r.reason)) + ")"});
+                         (r.reason.empty() ? "" : ": " + tube_end_text(r)) + ")"});
     }
   }
   return out;

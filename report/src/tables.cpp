@@ -132,8 +132,26 @@ std::string time_stamps_text(const identification::OutputErrorResult& r) {
   return s.str();
 }
 
+std::string tube_span_text(const std::vector<validated::ScenarioResult>& results,
+                           const std::string& set) {
+  const validated::ScenarioResult* least = nullptr;
+  double least_share = kTestedShareOfSpan;
+  for (const validated::ScenarioResult& r : results) {
+    if (r.parameters.name != set || !(r.scenario.duration_s > 0)) continue;
+    const double share = r.t_reached_s / r.scenario.duration_s;
+    if (share < least_share) {
+      least_share = share;
+      least = &r;
+    }
+  }
+  if (least == nullptr) return "";
+  return " up to " + short_number(least->t_reached_s, 3) + " s of " +
+         short_number(least->scenario.duration_s, 3) + " s (where its tubes end)";
+}
+
 std::string sivia_summary_text(const identification::GuaranteedResult& r,
-                               const std::optional<model::Parameters<double>>& truth) {
+                               const std::optional<model::Parameters<double>>& truth,
+                               const std::string& tested_span) {
   std::ostringstream s;
   s << "\nSIVIA (" << r.samples << " samples, q = " << r.q << "): " << r.paving.inner.size()
     << " inner, " << r.paving.boundary.size() << " boundary, " << r.paving.outer_count
@@ -150,7 +168,8 @@ std::string sivia_summary_text(const identification::GuaranteedResult& r,
     s << "  " << model::kParameterNames[k] << " in " << interval_text(hull[k].lo(), hull[k].hi())
       << " " << model::kParameterUnits[k];
     if (truth) {
-      s << (hull[k].contains((*truth)[k]) ? "  (contains the truth)" : "  (misses the truth)");
+      s << (hull[k].contains((*truth)[k]) ? "  (contains the truth" + tested_span + ")"
+                                          : std::string("  (misses the truth)"));
     }
     s << "\n";
   }
@@ -176,6 +195,26 @@ namespace {
 using identification::kScaledParameterNames;
 
 }  // namespace
+
+std::string tested_span_text(const identification::WindowedSet& set) {
+  std::optional<std::size_t> least;
+  double least_share = kTestedShareOfSpan;
+  for (std::size_t r = 0; r < set.spans.size(); ++r) {
+    const identification::WindowedSet::Span& s = set.spans[r];
+    const double span = s.planned_end_s - s.from_s;
+    if (!(span > 0)) continue;
+    const double share = (s.reached_s - s.from_s) / span;
+    if (share < least_share) {
+      least_share = share;
+      least = r;
+    }
+  }
+  if (!least) return "";
+  const identification::WindowedSet::Span& s = set.spans[*least];
+  return " up to " + short_number(s.reached_s - s.from_s, 3) + " s of " +
+         short_number(s.planned_end_s - s.from_s, 3) + " s" +
+         (set.spans.size() > 1 ? " of recording " + std::to_string(*least) : "");
+}
 
 std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
   const identification::WindowedSet& r = w.result;
@@ -204,8 +243,8 @@ std::string windowed_summary_text(const pipeline::WindowedGuaranteed& w) {
       << "  " << half_width_percent(r.set[k].rad(), centre) << " (searched "
       << half_width_percent(r.search[k].rad(), centre) << ")";
     if (w.truth_scaled) {
-      s << (r.set[k].contains((*w.truth_scaled)[k]) ? "  contains the truth"
-                                                    : "  misses the truth");
+      s << (r.set[k].contains((*w.truth_scaled)[k]) ? "  contains the truth" + tested_span_text(r)
+                                                    : std::string("  misses the truth"));
     }
     s << "\n";
   }
@@ -270,6 +309,44 @@ std::vector<std::string> per_gain_set_notes(const std::vector<validated::Scenari
   return notes;
 }
 
+std::string tube_end_text(const validated::ScenarioResult& r) {
+  if (!r.width_stop) return readable_numbers(r.reason);
+  const validated::WidthStop& w = *r.width_stop;
+  // The scenario tubes' components: [q1, dq1, q2, dq2], then parameters carried as state (each in
+  // its own unit, which max_width is compared in unconverted).
+  static constexpr const char* kNames[] = {"q1", "dq1", "q2", "dq2"};
+  static constexpr const char* kUnits[] = {"deg", "deg/s", "deg", "deg/s"};
+  std::string name = "component " + std::to_string(w.component);
+  std::string unit;
+  double factor = 1.0;
+  if (w.component < 4) {
+    name = kNames[w.component];
+    unit = std::string(" ") + kUnits[w.component];
+    factor = kDegPerRad;
+  }
+  return name + "'s enclosure " + short_number(w.width * factor, 4) + unit +
+         " wide > the limit of " + short_number(w.max_width * factor, 4) + unit +
+         " at t = " + short_number(w.t, 4) + " s";
+}
+
+std::string coverage_note() {
+  return "q2 step >= " + short_number(100 * kCoverageOkRate) + " %";
+}
+
+std::string tube_status_text(const validated::ScenarioResult& r) {
+  const bool whole = r.status == validated::IntegrationResult::Status::ok &&
+                     r.t_reached_s + 1e-9 >= r.scenario.duration_s;
+  if (whole) return "reached the end";
+  std::string text = std::string("ended (") + validated::to_string(r.status) + ")";
+  const std::string why = tube_end_text(r);
+  return why.empty() ? text : text + ": " + why;
+}
+
+std::string coverage_verdict(const validated::Coverage& q2_step) {
+  if (q2_step.measurements == 0) return "-";
+  return q2_step.rate() >= kCoverageOkRate ? "ok" : "low";
+}
+
 std::string format_table_three(const std::vector<validated::ScenarioResult>& results) {
   std::ostringstream out;
   out << "Table III: coverage of the measurements by the tubes, over all samples (and over the "
@@ -282,11 +359,12 @@ std::string format_table_three(const std::vector<validated::ScenarioResult>& res
       << std::setw(14) << "reached [s]" << std::setw(7) << "steps" << std::setw(20) << "q2 step %"
       << std::setw(20) << "q2 interp. %" << std::setw(9) << "q1 step" << std::setw(9) << "q1 int."
       << std::setw(13) << "q2 width"
-      << "  status\n";
+      << "  " << std::left << std::setw(10) << "coverage"
+      << "tube\n";
   out << std::left << std::setw(5) << "" << std::setw(12) << "" << std::right << std::setw(14) << ""
       << std::setw(7) << "" << std::setw(20) << "all (reached)" << std::setw(20) << "all (reached)"
       << std::setw(9) << "%" << std::setw(9) << "%" << std::setw(13) << "mean [deg]"
-      << "\n";
+      << "  " << std::left << std::setw(10) << coverage_note() << "\n";
   for (const validated::ScenarioResult& r : results) {
     const auto both = [](const validated::Coverage& c) {
       return fixed(100 * c.rate(), 1) + " (" + fixed(100 * c.rate_in_time(), 1) + ")";
@@ -297,9 +375,8 @@ std::string format_table_three(const std::vector<validated::ScenarioResult>& res
         << r.steps << std::setw(20) << both(r.q2_step) << std::setw(20) << both(r.q2_interpolated)
         << std::setw(9) << fixed(100 * r.q1_step.rate(), 1) << std::setw(9)
         << fixed(100 * r.q1_interpolated.rate(), 1) << std::setw(13)
-        << fixed(r.q2_mean_width_rad * kDegPerRad, 3) << "  " << validated::to_string(r.status);
-    if (!r.reason.empty()) out << ": " << readable_numbers(r.reason);
-    out << "\n";
+        << fixed(r.q2_mean_width_rad * kDegPerRad, 3) << "  " << std::left << std::setw(10)
+        << coverage_verdict(r.q2_step) << tube_status_text(r) << "\n";
   }
   return out.str();
 }
@@ -341,6 +418,19 @@ std::string held_out_free_run_text(const pipeline::HeldOutFreeRuns& runs) {
   }
   out << "output error " << sci(runs.refined.rmse_rad[0], 3) << " / "
       << sci(runs.refined.rmse_rad[1], 3) << " rad\n";
+  // An error above the measured angle's own spread: worse than predicting its mean.
+  const std::array<double, 2>& sd = runs.refined.measured_sd_rad;
+  const auto flag = [&](const char* set, const std::array<double, 2>& rmse) {
+    for (std::size_t j = 0; j < 2; ++j) {
+      if (rmse[j] > sd[j]) {
+        out << "warning: the " << set << " free run misses q" << j + 1 << " by more than the "
+            << "measured angle's own spread (sd " << sci(sd[j], 3)
+            << " rad): worse than its mean\n";
+      }
+    }
+  };
+  if (runs.lsmi) flag("LSMI", runs.lsmi->rmse_rad);
+  flag("output-error", runs.refined.rmse_rad);
   return out.str();
 }
 
@@ -363,7 +453,9 @@ std::string terminal_text_after_lsmi(const pipeline::Run& run) {
             "\n";
   }
   if (run.sivia) {
-    text += sivia_summary_text(run.sivia->result, run.identification.truth);
+    text += sivia_summary_text(
+        run.sivia->result, run.identification.truth,
+        run.simulation ? tube_span_text(run.simulation->results, pipeline::kSiviaSetName) : "");
   } else {
     for (const pipeline::Warning& w : run.warnings) {
       if (w.stage == pipeline::Warning::Stage::sivia) text += "warning: " + w.text + "\n";

@@ -42,11 +42,13 @@ std::string run_options(const fs::path& logs) {
          FURUTA_SOURCE_DIR "/config/rig.toml --logs-dir " + logs.string();
 }
 
+// A value the configuration can never accept is bad usage (2), as one that is not a number is:
+// before, `--amplitude nan` ran into the daemon's refusal (1) while `--amplitude abc` was 2.
 TEST(CliArguments, FurutaRunRefusesOutOfRangeSessionValuesWithTheField) {
   furuta::testing::TempDir logs;
   const std::pair<const char*, const char*> cases[] = {
-      {"--amplitude nan", "amplitude_duty: nan is not a finite number"},
-      {"--amplitude inf", "amplitude_duty: inf is not a finite number"},
+      {"--amplitude nan", "--amplitude: nan is not a finite number"},
+      {"--amplitude inf", "--amplitude: inf is not a finite number"},
       {"--amplitude 0.9", "amplitude_duty: 0.9 above the limit 0.5"},
       {"--amplitude -0.2", "amplitude_duty: -0.2 is not above 0"},
       {"--duration -1", "duration_s: -1 is not above 0"},
@@ -57,9 +59,17 @@ TEST(CliArguments, FurutaRunRefusesOutOfRangeSessionValuesWithTheField) {
   };
   for (const auto& [args, reason] : cases) {
     const Outcome o = run(run_options(logs.path()) + " " + args);
-    EXPECT_EQ(o.exit_code, 1) << args << "\n" << o.output;
-    EXPECT_TRUE(has(o, "furuta run: refused: ")) << args << "\n" << o.output;
+    EXPECT_EQ(o.exit_code, 2) << args << "\n" << o.output;
     EXPECT_TRUE(has(o, reason)) << args << "\n" << o.output;
+    // Not a number: the option is named; else the configuration, with the keys of its limits.
+    const std::string given = args;
+    const bool number =
+        given.find("nan") == std::string::npos && given.find("inf") == std::string::npos;
+    EXPECT_TRUE(number ? has(o, "furuta run: ") && has(o, "[limits] max_amplitude_duty") &&
+                             has(o, "config/rig.toml")
+                       : has(o, "--amplitude"))
+        << args << "\n"
+        << o.output;
   }
   // Nothing ran: no log was written.
   EXPECT_TRUE(fs::is_empty(logs.path()));
@@ -85,12 +95,12 @@ TEST(CliArguments, FurutaRejectsMalformedArgumentsBeforeDoingAnything) {
        "--input-lag-ms: nan is not a finite number"},
       {std::string(FURUTA_CLI) + " identify --cutoff inf " FURUTA_SOURCE_DIR "/README.md",
        "--cutoff: inf is not a finite number"},
-      {std::string(FURUTA_CLI) + " identify --simulate-seconds nan " FURUTA_SOURCE_DIR "/README.md",
-       "--simulate-seconds: nan is not a finite number"},
+      {std::string(FURUTA_CLI) + " identify --scenario-seconds nan " FURUTA_SOURCE_DIR "/README.md",
+       "--scenario-seconds: nan is not a finite number"},
       {std::string(FURUTA_CLI) + " status --timeout nan", "--timeout: nan is not a finite number"},
       {std::string(FURUTA_CLI) + " simulate --pieces -1", "--pieces: -1 is not in [1, 64]"},
-      {std::string(FURUTA_CLI) + " simulate --seconds nan",
-       "--seconds: nan is not a finite number"},
+      {std::string(FURUTA_CLI) + " simulate --scenario-seconds nan",
+       "--scenario-seconds: nan is not a finite number"},
   };
   for (const auto& [line, mention] : cases) {
     const Outcome o = run(line);
@@ -179,6 +189,36 @@ TEST(CliArguments, HelpDescribesPositionalsShowsDefaultsAndTheExitRule) {
     EXPECT_TRUE(has(o, "Exit status: 0 done; 1 done in part or refused")) << command;
   }
   EXPECT_TRUE(has(run(std::string(FURUTA_DAEMON) + " --help"), "Exit status: 0 stopped as asked"));
+}
+
+// Before: furutad's --help had no default for --config, identify said --simulate-seconds where
+// simulate said --seconds, and --amplitude said (0, 1] while the configuration's limit is 0.5.
+TEST(CliArguments, HelpNamesTheProgramItsDefaultsAndOneNameForOneThing) {
+  const Outcome daemon = run(std::string(FURUTA_DAEMON) + " --help");
+  EXPECT_EQ(daemon.exit_code, 0);
+  EXPECT_TRUE(has(daemon, "furutad")) << daemon.output;
+  EXPECT_FALSE(has(daemon, "furuta:")) << daemon.output;
+  EXPECT_TRUE(has(daemon, "-c,--config TEXT:FILE=")) << daemon.output;
+  EXPECT_TRUE(has(daemon, "rig.toml")) << daemon.output;
+  // It starts with an unusable logs directory (and refuses starts): the help says so.
+  EXPECT_TRUE(has(daemon, "An unusable logs directory does not stop it")) << daemon.output;
+  EXPECT_FALSE(has(daemon, "or the logs directory unusable")) << daemon.output;
+  const std::string cli = FURUTA_CLI;
+  for (const char* command : {"identify", "simulate"}) {
+    const Outcome o = run(cli + " " + command + " --help");
+    EXPECT_TRUE(has(o, "--scenario-seconds")) << command << "\n" << o.output;
+    EXPECT_FALSE(has(o, "--simulate-seconds")) << command << "\n" << o.output;
+    EXPECT_FALSE(has(o, "--seconds ")) << command << "\n" << o.output;
+  }
+  // The old names still work, hidden.
+  EXPECT_TRUE(has(run(cli + " simulate --seconds nan"), "--seconds nan is not a finite number"));
+  EXPECT_TRUE(has(run(cli + " identify --simulate-seconds nan " FURUTA_SOURCE_DIR "/README.md"),
+                  "--simulate-seconds nan is not a finite number"));
+  for (const char* command : {"run", "start"}) {
+    const Outcome o = run(cli + " " + command + " --help");
+    EXPECT_TRUE(has(o, "[limits] max_amplitude_duty")) << command << "\n" << o.output;
+    EXPECT_FALSE(has(o, "(0, 1]")) << command << "\n" << o.output;
+  }
 }
 
 }  // namespace

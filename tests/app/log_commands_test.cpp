@@ -194,6 +194,36 @@ TEST_F(LogCommands, IdentifyRefusesADamagedFitOrHeldOutLogNamingItAndTheWayOn) {
       << err_.str();
 }
 
+// Why a log is refused comes from the problems it has: before, an empty log or one with no
+// samples was refused for "filtering and differentiating across a gap", which it has none of.
+TEST_F(LogCommands, IdentifyRefusesALogForTheProblemsItHasNotAGapItLacks) {
+  IdentifyCommandOptions options;
+  options.output_dir = dir_.path() / "out";
+  const fs::path empty = dir_.path() / "empty.lcmlog";
+  write_file(empty, "");
+  options.logs = {empty};
+  EXPECT_EQ(run_identify_command(options, out_, err_), 2);
+  EXPECT_TRUE(contains(err_.str(), empty.string() + ": not a session log")) << err_.str();
+  EXPECT_TRUE(contains(err_.str(), "only session logs")) << err_.str();
+  EXPECT_FALSE(contains(err_.str(), "across a gap")) << err_.str();
+  EXPECT_FALSE(contains(err_.str(), "--use-intact-part")) << err_.str();
+
+  options.logs = {start_only_copy(first_)};
+  err_.str("");
+  EXPECT_EQ(run_identify_command(options, out_, err_), 2);
+  EXPECT_TRUE(contains(err_.str(), "cut short")) << err_.str();
+  EXPECT_TRUE(contains(err_.str(), "a log without its end")) << err_.str();
+  EXPECT_TRUE(contains(err_.str(), "no samples to fit")) << err_.str();
+  EXPECT_FALSE(contains(err_.str(), "across a gap")) << err_.str();
+
+  // A damaged one still says why a gap matters, and the way on.
+  options.logs = {damaged_copy(first_)};
+  err_.str("");
+  EXPECT_EQ(run_identify_command(options, out_, err_), 2);
+  EXPECT_TRUE(contains(err_.str(), "across a gap")) << err_.str();
+  EXPECT_TRUE(contains(err_.str(), "--use-intact-part")) << err_.str();
+}
+
 // Before: exit 0, "7 samples missing", mu2 1.45e-3 instead of 2.44e-3 and a residual ten times
 // larger, from filtering and differentiating across the damage.
 TEST_F(LogCommands, WithUseIntactPartADamagedLogFitsLikeTheIntactOne) {
@@ -233,6 +263,22 @@ TEST_F(LogCommands, WithUseIntactPartADamagedLogFitsLikeTheIntactOne) {
   EXPECT_TRUE(contains(warnings, damaged.filename().string() + ": not intact (damaged: "))
       << warnings;
   EXPECT_TRUE(contains(warnings, "separate part(s) (seq 0-")) << warnings;
+}
+
+// Done in part: before, a log fitted by its intact parts exited 0 like a whole one. Now 1, with
+// what was used and what was dropped said on stderr.
+TEST_F(LogCommands, WithUseIntactPartADamagedLogFitsInPartAndExits1SayingWhatWasDropped) {
+  IdentifyCommandOptions options;
+  const fs::path damaged = damaged_copy(first_);
+  options.logs = {damaged, second_};
+  options.use_intact_part = true;
+  options.output_dir = dir_.path() / "in-part";
+  EXPECT_EQ(run_identify_command(options, out_, err_), 1) << out_.str() << err_.str();
+  EXPECT_TRUE(contains(err_.str(), "furuta identify: done in part: " + damaged.filename().string() +
+                                       ": not intact (damaged: "))
+      << err_.str();
+  EXPECT_TRUE(contains(err_.str(), "separate part(s) (seq 0-")) << err_.str();
+  EXPECT_TRUE(fs::exists(options.output_dir / "results.json"));
 }
 
 // One held-out recording per batch: the longest intact run, the other said to be set aside.

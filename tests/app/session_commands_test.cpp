@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -331,6 +332,26 @@ TEST(RemoteCommand, StartWaitsUntilTheSessionRunsAndStopUntilItHasEnded) {
   const Said again = remote(daemon, RemoteKind::stop);
   EXPECT_EQ(again.code, 0) << again.out << again.err;
   EXPECT_TRUE(again.has("no session was running: nothing to stop")) << again.out;
+}
+
+// A start the configuration can never accept is bad usage (2), said with the field and the
+// configuration's limit, and never sent: before, NaN went to the daemon and came back refused (1).
+TEST(RemoteCommand, AStartOutsideTheConfigurationsLimitsIsBadUsageAndNotSent) {
+  SteppedDaemon daemon;
+  daemon.step_cycles(70);
+  for (const double amplitude : {0.9, std::numeric_limits<double>::quiet_NaN(), -0.2}) {
+    StartOptions start = session_of("free_decay", 30, "too-much");
+    start.amplitude_duty = amplitude;
+    const Said said = remote(daemon, RemoteKind::start, start);
+    EXPECT_EQ(said.code, 2) << said.out << said.err;
+    EXPECT_TRUE(said.has("furuta start: amplitude_duty: ")) << said.err;
+    EXPECT_TRUE(said.has("[limits] max_amplitude_duty")) << said.err;
+  }
+  EXPECT_EQ(daemon.sent(furuta::rig_command_t::KIND_START_SESSION), 0);
+  StartOptions long_one = session_of("free_decay", 1e6, "too-long");
+  const Said said = remote(daemon, RemoteKind::start, long_one);
+  EXPECT_EQ(said.code, 2) << said.out << said.err;
+  EXPECT_TRUE(said.has("duration_s: 1e+06 above the limit 600")) << said.err;
 }
 
 // The loop refuses a start the command thread accepted (the pendulum has not hung still for the

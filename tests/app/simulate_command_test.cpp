@@ -252,7 +252,7 @@ TEST(SimulateCommand, BadArgumentsAreClearErrors) {
       "--relative widens the truth");
   add(
       "negative seconds", [](SimulateCommandOptions& o) { o.seconds = -1; },
-      "--seconds -1: expected in (0, 60]");
+      "--scenario-seconds -1: expected in (0, 60]");
   add(
       "pieces not a power of two", [](SimulateCommandOptions& o) { o.pieces = 3; },
       "--pieces 3: expected 1, 2, 4, 8, 16, 32 or 64");

@@ -167,11 +167,17 @@ TEST(PhysicalCheck, MagnitudesAgainstCad) {
   // positive: a torque input has no back-EMF to drive it below 0).
   const P angle = {0.012 * t.mu1,  6.7e-6 * t.mu2, 9.8e-6 * t.mu3, 2.7e-6 * t.mu4,
                    1.1e-4 * t.mug, 0.26 * t.fv1,   5.9e-5 * t.fv2};
+  // The angle unit scales nothing alike: it is named only when the recordings show angles beyond
+  // radians (here an arm that travelled 80 "rad", 80 degrees read as radians).
+  RecordingEvidence degrees;
+  degrees.shortest_s = 10;
+  degrees.steps = 1000;
+  degrees.largest_arm_travel_rad = 80;
   EXPECT_EQ(check_physical(gain, one_percent(gain), t).cause, LikelyCause::input_gain);
   EXPECT_EQ(check_physical(time, one_percent(time), t).cause, LikelyCause::time_unit);
-  EXPECT_EQ(check_physical(angle, one_percent(angle), t).cause, LikelyCause::angle_unit);
-  EXPECT_TRUE(check_physical(angle, one_percent(angle), t).consistent());
-  const std::string w = physical_warning(check_physical(angle, one_percent(angle), t),
+  EXPECT_EQ(check_physical(angle, one_percent(angle), t, &degrees).cause, LikelyCause::angle_unit);
+  EXPECT_TRUE(check_physical(angle, one_percent(angle), t, &degrees).consistent());
+  const std::string w = physical_warning(check_physical(angle, one_percent(angle), t, &degrees),
                                          RecordingSource::csv, "the estimate");
   EXPECT_NE(w.find("lies inside the physical region, but its magnitudes are no rig's"),
             std::string::npos)
@@ -180,9 +186,67 @@ TEST(PhysicalCheck, MagnitudesAgainstCad) {
 
   // Without CAD a gain is invisible (every ratio kept); the angle unit's ratios are not.
   EXPECT_EQ(check_physical(gain, one_percent(gain)).cause, LikelyCause::none);
-  const PhysicalCheck internal = check_physical(angle, one_percent(angle));
+  const PhysicalCheck internal = check_physical(angle, one_percent(angle), std::nullopt, &degrees);
   EXPECT_EQ(internal.reference, MagnitudeReference::internal);
   EXPECT_EQ(internal.cause, LikelyCause::angle_unit);
+}
+
+// A recording of `seconds` at 16 ms: the arm swinging 0.5 rad, the pendulum 0.2 rad, at 1 Hz.
+RawExperiment swinging(double seconds) {
+  RawExperiment e;
+  e.sample_period_s = 0.016;
+  for (double t = 0; t <= seconds; t += e.sample_period_s) {
+    e.t_s.push_back(t);
+    e.q1.push_back(0.5 * std::sin(2 * M_PI * t));
+    e.q2.push_back(0.2 * std::sin(2 * M_PI * t + 1));
+    e.input.push_back(0.3);
+  }
+  return e;
+}
+
+// Before, magnitudes no pattern of the parameters explains were put down to "the angles' unit"
+// whatever the recordings were: a 1.4 s session, a CSV with one reading of 1e5. Each cause is now
+// named only when a check on the recordings found it, else "unknown".
+TEST(PhysicalCheck, ACauseTheMagnitudesCannotTellIsNamedOnlyFromTheRecordings) {
+  const P t = truth();
+  const P garbled = {0.012 * t.mu1,  6.7e-6 * t.mu2, 9.8e-6 * t.mu3, 2.7e-6 * t.mu4,
+                     1.1e-4 * t.mug, 0.26 * t.fv1,   5.9e-5 * t.fv2};
+  const auto cause = [&](const std::vector<RawExperiment>& recordings) {
+    const RecordingEvidence evidence = recording_evidence(recordings);
+    return check_physical(garbled, one_percent(garbled), t, &evidence).cause;
+  };
+  // Ten seconds in radians: nothing in the data explains it.
+  EXPECT_EQ(cause({swinging(10)}), LikelyCause::unknown);
+  EXPECT_EQ(check_physical(garbled, one_percent(garbled), t).cause, LikelyCause::unknown);
+  // 1.4 s: too short.
+  const RecordingEvidence short_one = recording_evidence({swinging(1.4)});
+  EXPECT_TRUE(short_one.short_recording());
+  EXPECT_FALSE(short_one.angles_not_radians());
+  EXPECT_EQ(cause({swinging(1.4)}), LikelyCause::too_short);
+  // One reading of 1e5: a spike, not a unit.
+  RawExperiment spiked = swinging(10);
+  spiked.q2[300] = 1e5;
+  const RecordingEvidence spike = recording_evidence({spiked});
+  EXPECT_TRUE(spike.spikes());
+  EXPECT_FALSE(spike.angles_not_radians());
+  EXPECT_EQ(cause({spiked}), LikelyCause::spike);
+  // The same swings in degrees: the arm travels 28.6 "rad", beyond a turn.
+  RawExperiment degrees = swinging(10);
+  for (double& q : degrees.q1) q *= 180 / M_PI;
+  for (double& q : degrees.q2) q *= 180 / M_PI;
+  EXPECT_TRUE(recording_evidence({degrees}).angles_not_radians());
+  EXPECT_EQ(cause({degrees}), LikelyCause::angle_unit);
+  // The warning says "unknown" when nothing was found, and names the check when one was.
+  const RecordingEvidence none = recording_evidence({swinging(10)});
+  const std::string unknown = physical_warning(
+      check_physical(garbled, one_percent(garbled), t, &none), RecordingSource::csv, "it");
+  EXPECT_NE(unknown.find("Likely cause: unknown"), std::string::npos) << unknown;
+  EXPECT_EQ(unknown.find("Likely cause: the angles' unit"), std::string::npos) << unknown;
+  const std::string spiked_text = physical_warning(
+      check_physical(garbled, one_percent(garbled), t, &spike), RecordingSource::csv, "it");
+  EXPECT_NE(spiked_text.find("jump faster than 80 rad/s"), std::string::npos) << spiked_text;
+  EXPECT_EQ(cause_name(LikelyCause::spike), std::string("spike"));
+  EXPECT_EQ(cause_name(LikelyCause::too_short), std::string("too short"));
 }
 
 }  // namespace

@@ -275,13 +275,13 @@ TEST(ReportTables, TableThreeStatusAndSiviaBoundsHaveAFewDigits) {
   r.t_reached_s = 0.058721594480886791;
   const std::string short_reason = "enclosure width 6.737 > max_width 6.283 at t = 0.05872";
   const std::string table = format_table_three({r});
-  EXPECT_NE(table.find("width_exceeded: " + short_reason), std::string::npos) << table;
+  EXPECT_NE(table.find("ended (width_exceeded): " + short_reason), std::string::npos) << table;
   EXPECT_EQ(table.find("6.7367745"), std::string::npos) << table;
   ReportInput in = minimal_input();
   in.simulation = SimulationSummary{"the truth", {r}};
   const std::string html = render_html(in);
-  EXPECT_NE(html.find("<td>width_exceeded: enclosure width 6.737 &gt; max_width 6.283 at t = "
-                      "0.05872</td>"),
+  EXPECT_NE(html.find("<td>ended (width_exceeded): enclosure width 6.737 &gt; max_width 6.283 "
+                      "at t = 0.05872</td>"),
             std::string::npos);
   EXPECT_EQ(html.find("6.7367745"), std::string::npos) << "nor in the warnings";
 

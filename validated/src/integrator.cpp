@@ -106,6 +106,15 @@ double excess_ratio(const std::vector<double>& exact, const std::vector<double>&
   return ratio;
 }
 
+WidthStop widest_component(const Box& x, double max_width, double t) {
+  WidthStop out{0, 0.0, max_width, t};
+  for (std::size_t v = 0; v < x.size(); ++v) {
+    const double width = x[v].is_bounded() ? x[v].width() : kInf;
+    if (v == 0 || width > out.width) out = WidthStop{v, width, max_width, t};
+  }
+  return out;
+}
+
 const char* to_string(IntegrationResult::Status status) {
   switch (status) {
     case IntegrationResult::Status::ok:
@@ -124,6 +133,7 @@ namespace {
 struct Stop {
   IntegrationResult::Status status;
   std::string reason;
+  std::optional<WidthStop> width = std::nullopt;
 };
 
 // The acceptance of the set at the end of a step (`next`, at next.set.t): not empty (both its
@@ -141,7 +151,8 @@ std::optional<Stop> refused(const detail::LohnerStep& next, const IntegratorOpti
   if (!(width <= options.max_width)) {
     return Stop{IntegrationResult::Status::width_exceeded,
                 "enclosure width " + describe(width) + " > max_width " +
-                    describe(options.max_width) + " at t = " + describe(t)};
+                    describe(options.max_width) + " at t = " + describe(t),
+                widest_component(x, options.max_width, t)};
   }
   // The error part against the part carried exactly (the image of r0): when it dominates, the
   // set is no longer followed, only wrapped (a split run then bisects the box).
@@ -226,6 +237,7 @@ IntegrationResult run(const std::vector<Tape>& tapes, const std::vector<double>&
     // (wider than max_width), and the tube, with the time it reaches, ends at t0.
     if (const std::optional<Stop> stop = refused(next, options)) {
       result.tube.steps.pop_back();
+      result.width_stop = stop->width;
       return finish(stop->status, state.t, stop->reason);
     }
     ++result.steps;

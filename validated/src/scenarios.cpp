@@ -161,6 +161,7 @@ ScenarioTubes scaled_torque_tubes(const Scenario& scenario,
              : integrate_split(FurutaDynamics(torque), out.initial, options, split);
   out.status = r.status;
   out.reason = r.reason;
+  out.width_stop = r.width_stop;
   out.steps = r.steps;
   out.seconds = r.seconds;
   out.pieces = std::move(r.pieces);
@@ -207,6 +208,7 @@ ScenarioTubes run_scenario_taylor_models(const Scenario& scenario, const Paramet
     const TaylorModelFlowResult r = integrate_taylor_models(system, out.initial, options);
     out.status = r.status;
     out.reason = r.reason;
+    out.width_stop = r.width_stop;
     out.steps = r.steps.size();
     out.rejected = r.rejected;
     out.seconds = r.seconds;
@@ -218,6 +220,7 @@ ScenarioTubes run_scenario_taylor_models(const Scenario& scenario, const Paramet
         integrate_taylor_models_split(system, out.initial, options, split);
     out.status = r.status;
     out.reason = r.reason;
+    out.width_stop = r.width_stop;
     out.steps = r.steps;
     out.seconds = r.seconds;
     for (const TaylorModelFlowResult& piece : r.pieces) {
@@ -251,6 +254,7 @@ ScenarioResult evaluate_tubes(const Scenario& scenario, const ParameterSet& para
   r.uncertainty = uncertainty;
   r.status = tubes.status;
   r.reason = tubes.reason;
+  r.width_stop = tubes.width_stop;
   r.t_reached_s = time_reached(pieces);
   r.steps = tubes.steps;
   r.pieces = tubes.pieces.size();

@@ -280,6 +280,7 @@ SplitResult integrate_split_tapes(const std::vector<Tape>& tapes,
     if (!d.result->ok() && out.ok()) {
       out.status = d.result->status;
       out.reason = d.result->reason;
+      out.width_stop = d.result->width_stop;
     }
   }
   out.pieces.reserve(done.size());

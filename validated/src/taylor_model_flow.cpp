@@ -261,7 +261,8 @@ std::optional<TaylorModelFlowFailure> taylor_model_flow_step(const TaylorModelFl
   if (!(width <= o.max_width)) {
     return TaylorModelFlowFailure{IntegrationResult::Status::width_exceeded,
                                   "enclosure width " + describe(width) + " > max_width " +
-                                      describe(o.max_width) + " at t = " + describe(step.t1)};
+                                      describe(o.max_width) + " at t = " + describe(step.t1),
+                                  widest_component(step.end, o.max_width, step.t1)};
   }
   if (options.keep_end_models) {
     const std::vector<Interval> error = from_point(frame.b) * frame.r;
@@ -310,6 +311,7 @@ TaylorModelFlowResult integrate_taylor_models(const std::vector<Tape>& tapes,
     if (auto failure = detail::taylor_model_flow_step(setup, runners, state, result)) {
       result.status = failure->status;
       result.reason = std::move(failure->reason);
+      result.width_stop = failure->width;
       break;
     }
   }

@@ -58,6 +58,7 @@ struct TaylorModelFlowRunners {
 struct TaylorModelFlowFailure {
   IntegrationResult::Status status;
   std::string reason;
+  std::optional<WidthStop> width = std::nullopt;
 };
 
 // One step from state.t (< t_end): appends the step to result (steps, rejected, shrink_wraps,

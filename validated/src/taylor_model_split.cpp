@@ -78,6 +78,7 @@ Run run_job(const detail::TaylorModelFlowSetup& setup, const Box& x0, const Tayl
     if (auto failure = detail::taylor_model_flow_step(setup, runners, state, run.result)) {
       run.result.status = failure->status;
       run.result.reason = std::move(failure->reason);
+      run.result.width_stop = failure->width;
       break;
     }
     if (error_part_is_small(state, weigh))
@@ -243,6 +244,7 @@ TaylorModelSplitResult integrate_taylor_models_split(const std::vector<Tape>& ta
     if (!result.ok() && out.ok()) {
       out.status = result.status;
       out.reason = result.reason;
+      out.width_stop = result.width_stop;
     }
     out.paths.push_back(path);
     out.pieces.push_back(std::move(result));

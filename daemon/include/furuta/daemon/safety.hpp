@@ -82,6 +82,11 @@ struct CommandLimits {
   int max_estop_replies_per_s = 50;
 };
 
+// Why a start's own fields are outside `limits` (profile, amplitude, duration, label, seed; the
+// first broken, naming the field: "amplitude_duty: 0.9 above the limit 0.5"), or "": the check
+// the daemon refuses a start with before anything else, for callers that check a command line.
+std::string start_session_problem(const rig_command_t& command, const CommandLimits& limits);
+
 // Why a command was refused, for the counts in the status.
 enum class CommandRefusal : std::uint8_t {
   none,

@@ -186,6 +186,9 @@ struct FreeRun {
   std::vector<double> measured;  // angle_rad (+ the q2 offset for the pendulum)
   std::vector<double> simulated;
   std::array<double, 2> rmse_rad = {0, 0};  // per joint
+  // The measured angle's standard deviation about its mean, per joint: the RMSE of a model that
+  // predicts nothing but the mean, which a free run worth reporting must beat.
+  std::array<double, 2> measured_sd_rad = {0, 0};
 };
 FreeRun simulate_free_run(const OeExperiment& experiment, const model::Parameters<double>& p,
                           const model::MotorData& motor, double input_lag_s, double q2_offset_rad,

@@ -4,10 +4,13 @@
 // magnitudes it shows (docs/csv-import.md, "When a fit is not physical"). LSMI is left
 // unconstrained (the paper's reference); this only tells a reader when its answer cannot be a rig.
 
+#include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "furuta/identification/preprocessing.hpp"
 #include "furuta/model/model.hpp"
 
 namespace furuta::identification {
@@ -50,8 +53,43 @@ enum class LikelyCause {
   angle_unit,              // degrees read as radians (or the reverse)
   time_unit,               // inertias off by the square of a factor, frictions by the factor
   input_gain,              // every parameter off by one factor: the input's scale
-  unknown,                 // a clear violation none of the patterns above explains
+  too_short,               // a recording shorter than kShortRecordingS
+  spike,                   // a few samples jump faster than any joint can move
+  unknown,                 // a clear violation no check above found a cause for
 };
+
+// What the recordings themselves show, so that a cause the parameters' magnitudes cannot tell
+// apart is named only when a check on the data found it.
+struct RecordingEvidence {
+  double shortest_s = std::numeric_limits<double>::infinity();  // the shortest recording
+  // Steps between consecutive samples of either joint faster than kFastestJointRadS, and all
+  // steps: a few are spikes, many a unit that is not radians.
+  std::size_t fast_steps = 0, steps = 0;
+  // The arm's largest |q1 - q1 at the start| over the samples no fast step leads into.
+  double largest_arm_travel_rad = 0;
+
+  bool short_recording() const;
+  bool spikes() const;
+  bool angles_not_radians() const;
+};
+RecordingEvidence recording_evidence(const std::vector<RawExperiment>& experiments);
+
+// Shorter than this, an estimate no rig has is put down to the recording's length: LSMI's
+// filters drop about 0.6 s at each end (39 samples of 16 ms with the configuration's 31-tap
+// differentiator), so under 3 s less than half of it is left for the regressor's rows. (The
+// output-error refinement needs no derivatives and fits shorter ones.)
+inline constexpr double kShortRecordingS = 3.0;
+// No joint of a rig check_physical accepts turns faster: its fastest pendulum (40 rad/s small-
+// swing frequency) falling from upright passes the bottom at twice that; the arm, geared and held
+// to under a turn, moves slower.
+inline constexpr double kFastestJointRadS = 80.0;
+// Fast steps are spikes while they are at most this share of the steps (isolated samples); more
+// is the whole signal in another unit.
+inline constexpr double kSpikeShare = 0.01;
+// The arm of a Furuta rig is cabled to its motor and never turns a whole turn from where the
+// session started (this rig's [safety] arm_limit_deg is 150): farther, its angles are degrees or
+// counts read as radians.
+inline constexpr double kLargestArmTravelRad = 6.283185307179586;
 
 // What the diagnosis compared magnitudes with.
 enum class MagnitudeReference {
@@ -81,9 +119,12 @@ struct PhysicalCheck {
 // The estimate against the physical region; `std_dev` (LSMI's) grades each violation, `nominal`
 // (CAD) lets magnitudes speak. A consistent estimate is checked for magnitudes only when a clear
 // pattern would otherwise be missed (inertias 30 times off CAD: an angle or time unit).
+// `evidence` (the recordings'): a cause the magnitudes point at is named only when the data show
+// it (too short, spikes, angles not in radians); without evidence, or when none shows, "unknown".
 PhysicalCheck check_physical(const model::Parameters<double>& estimate,
                              const std::optional<model::Parameters<double>>& std_dev = {},
-                             const std::optional<model::Parameters<double>>& nominal = {});
+                             const std::optional<model::Parameters<double>>& nominal = {},
+                             const RecordingEvidence* evidence = nullptr);
 
 // "mu3 > 0", "mu1 mu4 > mu3^2", ...
 const char* condition_text(PhysicalCondition condition);

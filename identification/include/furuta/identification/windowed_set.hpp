@@ -83,9 +83,16 @@ struct WindowedSet {
   // Per step (the k-th windows of all chains together): the set after it.
   std::vector<model::Parameters<Interval>> set_after_step;
   std::vector<WindowRecord> windows;  // in the order inverted
-  std::string finding;                // the empty set's window, or why a chain stopped
-  double seconds = 0;                 // wall time
-  double flow_seconds = 0;            // the flows' own time, summed (several run at once)
+  // Per recording, its chain's span [s]: from its first command to where its windows were
+  // planned to end (its readings' end, the input's stop, or `windows` windows), and how far its
+  // windows' flows carried: the set was tested against its readings up to reached_s only.
+  struct Span {
+    double from_s = 0, planned_end_s = 0, reached_s = 0;
+  };
+  std::vector<Span> spans;
+  std::string finding;      // the empty set's window, or why a chain stopped
+  double seconds = 0;       // wall time
+  double flow_seconds = 0;  // the flows' own time, summed (several run at once)
   std::size_t flow_steps = 0, shrink_wraps = 0;
 };
 

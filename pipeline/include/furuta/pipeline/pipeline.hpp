@@ -98,6 +98,10 @@ struct Batch {
   // The files the recordings came from (and an import spec), in the order results.json lists
   // them with their SHA-256.
   std::vector<std::filesystem::path> files;
+  // Logs used in part (BatchRequest::use_intact_part on a log that is not intact): each one's
+  // account of what was used and what was dropped (IntactParts::account). The run is then done in
+  // part, whatever it finds.
+  std::vector<std::string> used_in_part;
   // Where the outputs name the files: empty, where they are; else this directory (the trigger
   // moves a batch's logs there once its identification is written).
   std::filesystem::path files_listed_in;
@@ -289,6 +293,8 @@ struct HeldOutFreeRuns {
 
 // Its parameter set's name in the scenarios (Table III) and Table I.
 inline constexpr const char* kOutputErrorSetName = "output error";
+// SIVIA's hull's (Table III).
+inline constexpr const char* kSiviaSetName = "SIVIA";
 // The windowed set's (Table III's guaranteed rows from the logs themselves).
 inline constexpr const char* kWindowedSetName = "guaranteed";
 

@@ -81,6 +81,8 @@ struct OutputErrorSummary {
   std::string held_out_name;
   std::optional<std::array<double, 2>> lsmi_rmse_rad;  // none when LSMI did not run
   std::array<double, 2> refined_rmse_rad = {0, 0};
+  // The held-out measured angles' own spread (identification::FreeRun::measured_sd_rad).
+  std::array<double, 2> measured_sd_rad = {0, 0};
   std::string svg;  // svg_free_runs; empty without a held-out recording
 };
 

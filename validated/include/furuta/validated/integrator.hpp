@@ -13,6 +13,7 @@
 
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -116,6 +117,19 @@ class Tube {
   Box step_form(std::size_t i, const Interval& s) const;
 };
 
+// An enclosure wider than max_width, which ended a run: the widest component (its index in the
+// state), its width and the limit, in that component's own unit, and the time [s]. The numbers
+// the reason's text gives, for callers that write them in units of their own.
+struct WidthStop {
+  std::size_t component = 0;
+  double width = 0.0;
+  double max_width = 0.0;
+  double t = 0.0;
+};
+
+// The widest component of `x` (an unbounded one is infinitely wide) against `max_width` at `t`.
+WidthStop widest_component(const Box& x, double max_width, double t);
+
 struct IntegrationResult {
   enum class Status { ok, step_not_validated, width_exceeded };
 
@@ -123,7 +137,8 @@ struct IntegrationResult {
   Status status = Status::ok;
   double t_failed = std::numeric_limits<double>::quiet_NaN();  // where the run ended, on failure
   std::string reason;                                          // why, on failure
-  std::size_t steps = 0;                                       // accepted steps
+  std::optional<WidthStop> width_stop;  // with width_exceeded by max_width: its numbers
+  std::size_t steps = 0;                // accepted steps
   std::size_t rejected = 0;  // attempts rejected (Picard not validated, remainder too wide)
   std::size_t qr_steps = 0;  // steps that used the QR frame (the others: the parallelepiped)
   double seconds = 0.0;      // wall time of the integration

@@ -122,7 +122,8 @@ struct ScenarioTubes {
   Interval torque_nm;
   std::vector<Tube> pieces;
   IntegrationResult::Status status = IntegrationResult::Status::ok;
-  std::string reason;  // why the run ended early (empty when it reached the end)
+  std::string reason;                   // why the run ended early (empty when it reached the end)
+  std::optional<WidthStop> width_stop;  // when max_width ended it: its numbers
   double t_reached_s = 0.0;
   std::size_t steps = 0;
   std::size_t rejected = 0;
@@ -183,6 +184,9 @@ struct ScenarioResult {
   StateUncertainty uncertainty;
   IntegrationResult::Status status = IntegrationResult::Status::ok;
   std::string reason;
+  // When max_width ended the tube: the widest component ([q1, dq1, q2, dq2, then what is carried
+  // as state]), its width and the limit in its unit (rad, rad/s), and when.
+  std::optional<WidthStop> width_stop;
   double t_reached_s = 0.0;
   std::size_t steps = 0;
   std::size_t pieces = 0;

@@ -14,6 +14,7 @@
 // depend on the threads' schedule) and its pieces are in the order of the bisection tree.
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,12 +47,13 @@ struct SplitResult {
   // encloses every solution from its own initial box over [t_start, its t_end()].
   std::vector<Tube> pieces;
   IntegrationResult::Status status = IntegrationResult::Status::ok;  // ok when all reached t_end
-  double t_reached = 0.0;  // the smallest t_end() over the pieces
-  std::string reason;      // the first failed piece's reason (in piece order)
-  std::size_t splits = 0;  // bisections done
-  std::size_t runs = 0;    // integrations run (pieces and their ancestors)
-  std::size_t steps = 0;   // steps over all runs (the shared prefixes counted once)
-  double seconds = 0.0;    // wall time
+  double t_reached = 0.0;               // the smallest t_end() over the pieces
+  std::string reason;                   // the first failed piece's reason (in piece order)
+  std::optional<WidthStop> width_stop;  // that piece's, when max_width ended it
+  std::size_t splits = 0;               // bisections done
+  std::size_t runs = 0;                 // integrations run (pieces and their ancestors)
+  std::size_t steps = 0;                // steps over all runs (the shared prefixes counted once)
+  double seconds = 0.0;                 // wall time
 
   bool ok() const { return status == IntegrationResult::Status::ok; }
   // The pieces' tubes, for code that takes a list of tubes (coverage).

@@ -14,6 +14,7 @@
 // the doubleton integrator's runs).
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -80,7 +81,8 @@ struct TaylorModelFlowResult {
   Box initial;
   double t_start = 0.0;
   IntegrationResult::Status status = IntegrationResult::Status::ok;
-  std::string reason;  // why it ended early
+  std::string reason;                   // why it ended early
+  std::optional<WidthStop> width_stop;  // when max_width ended it: its numbers
   std::size_t rejected = 0;
   std::size_t shrink_wraps = 0;   // steps whose error part was wrapped into the polynomial
   std::size_t partial_wraps = 0;  // of them, with a start variable left out

@@ -21,6 +21,7 @@
 // set at that time. Deterministic: a generation's runs do not depend on the threads' schedule.
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,13 +46,14 @@ struct TaylorModelSplitResult {
   std::vector<TaylorModelFlowResult> pieces;
   std::vector<std::string> paths;
   IntegrationResult::Status status = IntegrationResult::Status::ok;  // ok when all reached t_end
-  double t_reached = 0.0;         // the smallest t_reached() over the pieces
-  std::string reason;             // the first failed piece's reason (in piece order)
-  std::size_t splits = 0;         // cuts made
-  std::vector<std::size_t> cuts;  // cuts per variable (x0's components)
-  std::size_t runs = 0;           // runs (pieces and their ancestors)
-  std::size_t steps = 0;          // steps over all runs (shared prefixes counted once)
-  double seconds = 0.0;           // wall time
+  double t_reached = 0.0;               // the smallest t_reached() over the pieces
+  std::string reason;                   // the first failed piece's reason (in piece order)
+  std::optional<WidthStop> width_stop;  // that piece's, when max_width ended it
+  std::size_t splits = 0;               // cuts made
+  std::vector<std::size_t> cuts;        // cuts per variable (x0's components)
+  std::size_t runs = 0;                 // runs (pieces and their ancestors)
+  std::size_t steps = 0;                // steps over all runs (shared prefixes counted once)
+  double seconds = 0.0;                 // wall time
   // The sum over the cutting tree's generations of their longest run: the wall time with a core
   // for every run of a generation.
   double critical_path_seconds = 0.0;
