@@ -116,26 +116,7 @@ class LcmLogWriter::Impl {
     if (fs::exists(final_path_, ec)) {
       throw std::runtime_error("LCM log " + final_path_.string() + " already exists");
     }
-    // O_EXCL: a .part left by a crash holds a session nobody has recovered yet; never truncate it.
-    detail::UniqueFd created_fd(
-        ::open(partial_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
-    if (!created_fd.valid()) {
-      const int err = errno;
-      if (err == EEXIST && detail::held_by_a_writer(partial_path_)) {
-        throw LogNameInUse("cannot create LCM log " + partial_path_.string() +
-                           ": another session is writing it now");
-      }
-      throw std::runtime_error("cannot create LCM log " + partial_path_.string() + ": " +
-                               std::strerror(err) +
-                               (err == EEXIST ? " (left by an earlier session: recover it)" : ""));
-    }
-    // Held while this writer lives, so that recovery and other writers tell a running session's
-    // .part from one a crash left (the kernel drops the lock with the process).
-    if (::flock(created_fd.get(), LOCK_EX | LOCK_NB) != 0) {
-      const int err = errno;
-      throw std::runtime_error("cannot lock LCM log " + partial_path_.string() + ": " +
-                               std::strerror(err));
-    }
+    detail::UniqueFd created_fd = create_locked_part();
     part_lock_ = std::move(created_fd);
     file_.reset(lcm_eventlog_create(partial_path_.c_str(), "w"));
     if (!file_) {
@@ -148,6 +129,45 @@ class LcmLogWriter::Impl {
     set_close_on_exec();
     detail::fsync_directory(partial_dir_);
     last_sync_ = std::chrono::steady_clock::now();
+  }
+
+  // The new .part, created and flock'ed, held while this writer lives: recovery and other writers
+  // tell a running session's .part from one a crash left (the kernel drops the lock with the
+  // process). Where the file system allows, it is made unnamed, locked, then linked under its
+  // name, so that nobody ever sees it unlocked; elsewhere it is created (O_EXCL) and locked at
+  // once. A .part left by a crash holds a session nobody has recovered yet: never truncated.
+  detail::UniqueFd create_locked_part() {
+    const auto refuse = [&](int err) {
+      if (err == EEXIST && detail::held_by_a_writer(partial_path_)) {
+        throw LogNameInUse("cannot create LCM log " + partial_path_.string() +
+                           ": another session is writing it now");
+      }
+      throw std::runtime_error("cannot create LCM log " + partial_path_.string() + ": " +
+                               std::strerror(err) +
+                               (err == EEXIST ? " (left by an earlier session: recover it)" : ""));
+    };
+    const auto lock = [&](detail::UniqueFd& fd) {
+      if (::flock(fd.get(), LOCK_EX | LOCK_NB) != 0) {
+        throw std::runtime_error("cannot lock LCM log " + partial_path_.string() + ": " +
+                                 std::strerror(errno));
+      }
+    };
+    detail::UniqueFd unnamed(::open(partial_dir_.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0644));
+    if (unnamed.valid()) {
+      lock(unnamed);
+      const std::string self = "/proc/self/fd/" + std::to_string(unnamed.get());
+      if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, partial_path_.c_str(), AT_SYMLINK_FOLLOW) ==
+          0) {
+        return unnamed;
+      }
+      if (errno == EEXIST) refuse(EEXIST);
+      // No /proc, or a file system that links no unnamed file: the plain way below.
+    }
+    detail::UniqueFd created(
+        ::open(partial_path_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644));
+    if (!created.valid()) refuse(errno);
+    lock(created);
+    return created;
   }
 
   LogWriteStatus write(std::string_view channel, std::int64_t utime,
