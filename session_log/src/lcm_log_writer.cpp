@@ -202,6 +202,7 @@ class LcmLogWriter::Impl {
     if (lcm_eventlog_write_event(file_.get(), &event) != 0) return fail(errno);
     digest_.add(static_cast<std::int64_t>(events_written_), utime, channel, data);
     ++events_written_;
+    last_utime_ = utime;
     if (!dirty_) first_unsynced_utime_ = utime;
     dirty_ = true;
     return LogWriteStatus::ok;
@@ -249,6 +250,7 @@ class LcmLogWriter::Impl {
 
   const fs::path& partial_path() const { return partial_path_; }
   std::uint64_t events_written() const { return events_written_; }
+  std::int64_t last_utime() const { return last_utime_; }
   std::vector<std::uint8_t> digest() const {
     const detail::Digest d = digest_.value();
     return {d.begin(), d.end()};
@@ -324,6 +326,7 @@ class LcmLogWriter::Impl {
   EventLog file_;
   std::uint64_t events_written_ = 0;
   detail::LogDigest digest_;
+  std::int64_t last_utime_ = 0;
   std::string removal_save_error_;
   std::int64_t flush_interval_us() const {
     return std::chrono::duration_cast<std::chrono::microseconds>(options_.flush_interval).count();
@@ -384,6 +387,10 @@ const std::filesystem::path& LcmLogWriter::partial_path() const {
 
 std::uint64_t LcmLogWriter::events_written() const {
   return impl_->events_written();
+}
+
+std::int64_t LcmLogWriter::last_utime() const {
+  return impl_->last_utime();
 }
 
 std::vector<std::uint8_t> LcmLogWriter::digest() const {

@@ -151,7 +151,7 @@ std::vector<LogProblem> integrity_problems(const SessionLog& log) {
     const bool same_counts = seal.events == static_cast<std::int64_t>(log.digested_events) &&
                              seal.samples == static_cast<std::int64_t>(log.digested_samples);
     const bool same_session = !log.start || seal.session == log.start->session;
-    if (!log.seal_digest_matches || !same_counts || !same_session) {
+    if (!log.seal_digest_matches || !log.seal_header_matches || !same_counts || !same_session) {
       std::ostringstream t;
       t << "altered: the events are not the ones the log's seal was made over (sealed "
         << seal.events << " events with " << seal.samples << " samples, read "

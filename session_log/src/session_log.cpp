@@ -61,6 +61,7 @@ SessionLog load_session_log(const std::filesystem::path& path) {
   LogEvent event;
   std::uint64_t damaged_so_far = 0;
   detail::LogDigest digest;
+  std::int64_t utime_before = 0;
   while (reader.next(event)) {
     const std::string_view channel = event.channel;
     if (log.seal) {
@@ -88,6 +89,8 @@ SessionLog load_session_log(const std::filesystem::path& path) {
         log.seal_digest_matches = log.seal->digest_algorithm == detail::kDigestAlgorithm &&
                                   std::equal(log.seal->digest.begin(), log.seal->digest.end(),
                                              value.begin(), value.end());
+        log.seal_header_matches =
+            event.event_number == log.seal->events && event.utime == utime_before;
       }
     } else if (channel == kChannelSession) {
       furuta::rig_session_t session;
@@ -126,6 +129,7 @@ SessionLog load_session_log(const std::filesystem::path& path) {
       ++log.unknown_channel_events;
     }
     if (!decoded) ++log.undecodable_events;
+    utime_before = event.utime;
   }
   log.read_stats = reader.stats();
   if (!log.seal) {
@@ -136,7 +140,7 @@ SessionLog load_session_log(const std::filesystem::path& path) {
 }
 
 LogWriteStatus write_seal(LcmLogWriter& log, const std::string& session, std::int64_t samples,
-                          std::int64_t utime, const SealSource& source) {
+                          const SealSource& source) {
   furuta::rig_log_seal_t seal;
   seal.session = session;
   seal.events = static_cast<std::int64_t>(log.events_written());
@@ -148,7 +152,7 @@ LogWriteStatus write_seal(LcmLogWriter& log, const std::string& session, std::in
   seal.source_integrity = source.integrity;
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(seal.getEncodedSize()));
   seal.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  return log.write(kChannelSeal, utime, bytes);
+  return log.write(kChannelSeal, log.last_utime(), bytes);
 }
 
 double BoardTimeline::motor_report(std::int16_t packet_counter) {

@@ -71,9 +71,8 @@ fs::path write_session(const fs::path& dir, const std::vector<std::int64_t>& ski
   }
   if (with_end) put(kChannelSession, encode(record(rig_session_t::EVENT_END)));
   if (sealed) {
-    EXPECT_EQ(
-        write_seal(writer, kSession, kSamples - static_cast<std::int64_t>(skipped.size()), utime++),
-        LogWriteStatus::ok);
+    EXPECT_EQ(write_seal(writer, kSession, kSamples - static_cast<std::int64_t>(skipped.size())),
+              LogWriteStatus::ok);
   }
   fs::path path;
   EXPECT_EQ(writer.finish(&path), LogWriteStatus::ok);
@@ -178,6 +177,14 @@ TEST(LogIntegrity, AChangedSealedLogIsNeverIntact) {
     s.monotonic_ns -= 4'300'000'000;
     e[samples[7]].data = encode(s);
     check("time_back", e, {Kind::time_goes_back, Kind::altered});
+  }
+  {  // the seal's own header: its time, then its number
+    auto e = events;
+    e.back().utime += 1;
+    check("seal_time", e, {Kind::altered});
+    e = events;
+    e.back().number += 1;
+    check("seal_number", e, {Kind::altered});
   }
   {  // the file twice, as `cat a a` makes it
     auto e = events;

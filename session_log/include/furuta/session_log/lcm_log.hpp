@@ -99,6 +99,7 @@ class LcmLogWriter {
 
   const std::filesystem::path& partial_path() const;
   std::uint64_t events_written() const;
+  std::int64_t last_utime() const;  // of the last event written (0 before the first)
   // SHA-256 over every event written so far, each as its event number, utime, channel and data
   // (the digest a session log's seal carries; session_log.hpp, write_seal).
   std::vector<std::uint8_t> digest() const;

@@ -57,6 +57,8 @@ struct SessionLog {
   std::uint64_t digested_events = 0;   // the events digest_hex covers
   std::uint64_t digested_samples = 0;  // RIG_SAMPLE events among them
   bool seal_digest_matches = false;    // the seal's digest is digest_hex
+  // The seal event's header as read: its number is the events before it, its time theirs.
+  bool seal_header_matches = false;
   std::uint64_t events_after_seal = 0;
   std::uint64_t start_records = 0;  // more than one: sessions joined into one file
   std::uint64_t end_records = 0;
@@ -78,9 +80,10 @@ struct SealSource {
   std::string integrity;  // that log's verdict: "intact" or its problems
 };
 // Writes the log's seal: its last event, after the end record, carrying the session, the events
-// and samples written so far and their digest (LcmLogWriter::digest). `utime` as for any event.
+// and samples written so far and their digest (LcmLogWriter::digest). The seal's own event is
+// numbered `events` and timed as the event before it, so that its header is fixed too.
 LogWriteStatus write_seal(LcmLogWriter& log, const std::string& session, std::int64_t samples,
-                          std::int64_t utime, const SealSource& source = {});
+                          const SealSource& source = {});
 
 // A command the host wrote to the motor board (an OUTPUT report of the log), read by the board's
 // adapter: the board ramps its applied duty towards `duty` at `acceleration_pct_per_s` (never 0)
