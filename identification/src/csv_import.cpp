@@ -85,6 +85,15 @@ double joint_angle_factor(const CsvImportSpec& spec, std::size_t joint) {
                       joint == 0 ? spec.arm_counts_per_rev : spec.pendulum_counts_per_rev);
 }
 
+// Past these no recording is of a rig: an angle of a million radians is 160,000 turns, an input
+// of a million volts or newton-metres none; values beyond them are a wrong column or scale.
+constexpr double kMaxAngleRad = 1e6;
+constexpr const char* kAngleRange = "no rig's angle is beyond 1e6 rad";
+constexpr double kMaxInputMagnitude = 1e6;
+constexpr const char* kInputRange = "no rig's input is beyond 1e6 (V or N m)";
+// A column's scale is a unit change or a sign: within these it is one.
+constexpr double kMinScale = 1e-6, kMaxScale = 1e6;
+
 CsvColumn read_column(Section& s, const std::string& key, bool has_header, bool has_scale,
                       const char* what) {
   CsvColumn c;
@@ -100,8 +109,10 @@ CsvColumn read_column(Section& s, const std::string& key, bool has_header, bool 
   }
   if (has_scale) {
     const std::string scale_key = key + "_scale";
-    c.scale = s.number(scale_key, 1.0);
-    if (c.scale == 0) s.fail(scale_key, s.node(scale_key), "must not be 0");
+    c.scale = s.number(
+        scale_key, 1.0,
+        [](double v) { return std::abs(v) >= kMinScale && std::abs(v) <= kMaxScale; },
+        "a unit change or a sign: 1e-6 <= |scale| <= 1e6");
   }
   return c;
 }
@@ -656,10 +667,28 @@ RecordedSeries recorded_series(const std::string& file, const CsvImportSpec& spe
   // wrapped: a pendulum that swings over keeps a continuous angle, which differentiation needs.
   const double pendulum_offset = spec.pendulum_zero == PendulumZero::up ? std::numbers::pi : 0.0;
   std::vector<double> q1, q2, u;
+  // Each value in range where it enters, the first one that is not named by its row and column:
+  // an angle no rig records (a value far past this would overflow the filters and derivatives
+  // into NaN), a duty outside [-1, 1] (a percentage, or a column that is not the input).
+  const auto check = [&](double value, std::size_t i, const Channel& channel, double limit,
+                         const char* what) {
+    if (!(std::abs(value) <= limit)) {
+      throw CsvImportError(file, row_line[i], channel.label,
+                           exact(value) + " after the spec's unit and scale: " + what);
+    }
+  };
   for (std::size_t i = 0; i < row_line.size(); ++i) {
     q1.push_back(raw[1][i] * arm_factor);
     q2.push_back(raw[2][i] * pendulum_factor + pendulum_offset);
     u.push_back(raw[3][i] * spec.input.scale);
+    check(q1.back(), i, channels[1], kMaxAngleRad, kAngleRange);
+    check(q2.back(), i, channels[2], kMaxAngleRad, kAngleRange);
+    if (spec.input_kind == InputKind::duty) {
+      check(u.back(), i, channels[3], 1.0,
+            "a duty is in [-1, 1] (a percentage needs input_scale = 0.01)");
+    } else {
+      check(u.back(), i, channels[3], kMaxInputMagnitude, kInputRange);
+    }
   }
   const auto time_of = [&](const CsvColumn& own) -> std::size_t {
     return slot(own).value_or(0);  // the row's time when the spec names none
@@ -891,14 +920,6 @@ ImportedSeries import_csv(const std::filesystem::path& csv, const CsvImportSpec&
                            " samples from " + std::to_string(n) + " rows)");
   }
 
-  if (spec.input_kind == InputKind::duty) {
-    double peak = 0;
-    for (const double u : out.input) peak = std::max(peak, std::abs(u));
-    if (peak > 1.0) {
-      out.warnings.push_back("input_kind = duty but |input| reaches " + exact(peak) +
-                             " (duty is in [-1, 1]; a percentage needs input_scale = 0.01)");
-    }
-  }
   return out;
 }
 

@@ -550,14 +550,39 @@ TEST(CsvImport, AmbiguousHeaderNamesAreRejected) {
   EXPECT_THAT(e.what(), HasSubstr("columns 2 and 5"));
 }
 
-TEST(CsvImport, DutyOutsideUnitRangeIsFlagged) {
+// Values are checked where they enter, the first bad one named by its line and column: a duty
+// outside [-1, 1] (a percentage, or a column that is not the input) and an angle no rig records
+// (which would overflow the filters into NaN) are refused, not fitted.
+TEST(CsvImport, ValuesOutOfRangeAreRefusedNamingLineAndColumn) {
   testing::TempDir dir;
-  std::string csv = "t,theta,alpha,u\n";
-  for (int k = 0; k < 16; ++k) csv += std::to_string(0.01 * k) + ",0,0,40\n";
-  const ImportedSeries s =
-      import_csv(write_file(dir, "pct.csv", csv), parse_csv_import_spec(spec_text(), "spec.toml"));
-  ASSERT_EQ(s.warnings.size(), 1u);
-  EXPECT_THAT(s.warnings[0], HasSubstr("input_scale = 0.01"));
+  const CsvImportSpec spec = parse_csv_import_spec(spec_text(), "spec.toml");
+  std::string pct = "t,theta,alpha,u\n";
+  for (int k = 0; k < 16; ++k) pct += std::to_string(0.01 * k) + ",0,0,40\n";
+  const CsvImportError duty = import_error(write_file(dir, "pct.csv", pct), spec);
+  EXPECT_EQ(duty.line(), 2);
+  EXPECT_EQ(duty.field(), "u");
+  EXPECT_THAT(duty.what(), HasSubstr("a percentage needs input_scale = 0.01"));
+
+  std::string huge = simple_csv(20);
+  const std::size_t line7 = huge.find("\n0.05,");
+  huge.replace(huge.find(',', line7) + 1, huge.find(',', huge.find(',', line7) + 1) -
+                                              huge.find(',', line7) - 1,
+               "1e300");
+  const CsvImportError angle = import_error(write_file(dir, "huge.csv", huge), spec);
+  EXPECT_EQ(angle.line(), 7);
+  EXPECT_EQ(angle.field(), "theta");
+  EXPECT_THAT(angle.what(), HasSubstr("no rig's angle is beyond 1e6 rad"));
+
+  std::string volts = simple_csv(20);
+  volts.replace(volts.rfind("0.5"), 3, "2e9");
+  std::string voltage_text = spec_text();
+  voltage_text.replace(voltage_text.find("\"duty\""), 6, "\"voltage\"");
+  voltage_text += "[motor]\ntorque_constant_nm_per_a = 0.05\nback_emf_v_s_per_rad = 0.06\n"
+                  "resistance_ohm = 2.5\n";
+  const CsvImportError input = import_error(write_file(dir, "volts.csv", volts),
+                                            parse_csv_import_spec(voltage_text, "spec.toml"));
+  EXPECT_EQ(input.line(), 21);
+  EXPECT_THAT(input.what(), HasSubstr("no rig's input is beyond 1e6"));
 }
 
 TEST(CsvImportSpec, ParsesDefaultsAndLoadsFromAFile) {
@@ -692,7 +717,12 @@ TEST(CsvImportSpec, OtherMistakesAreLocated) {
   EXPECT_THAT(spec_error(spec_text("has_header = false\n")).what(),
               HasSubstr("spec.toml:2: csv.time: 't' is not a 1-based column index"));
   EXPECT_THAT(spec_error(spec_text("input_scale = 0\n")).what(),
-              HasSubstr("spec.toml:10: csv.input_scale: must not be 0"));
+              HasSubstr("spec.toml:10: csv.input_scale: must be a unit change or a sign"));
+  EXPECT_THAT(spec_error(spec_text("arm_angle_scale = 1e300\n")).what(),
+              HasSubstr("spec.toml:10: csv.arm_angle_scale: must be a unit change or a sign: "
+                        "1e-6 <= |scale| <= 1e6"));
+  EXPECT_THAT(spec_error(spec_text("pendulum_angle_scale = nan\n")).what(),
+              HasSubstr("csv.pendulum_angle_scale: must be finite"));
   EXPECT_THAT(spec_error(spec_text("pendulum_angle_scale = \"x\"\n")).what(),
               HasSubstr("csv.pendulum_angle_scale: must be a number"));
 
