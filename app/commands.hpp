@@ -187,8 +187,11 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
 
 // --- the identification trigger (log_processor.hpp) ---
 struct ProcessLogsOptions {
-  std::filesystem::path logs_dir;             // empty: the configuration's [daemon] logs_dir
-  std::filesystem::path config_path;          // its [automation] says what to identify
+  std::filesystem::path logs_dir;     // empty: the configuration's [daemon] logs_dir
+  std::filesystem::path config_path;  // its [automation] says what to identify
+  // The configuration was named (-c): its rig and [identification] fit every batch, as
+  // `identify -c` does; otherwise each batch is fitted with the configuration its logs carry.
+  bool config_named = false;
   std::filesystem::path identifications_dir;  // empty: [automation] identifications_dir
   bool watch = false;  // pass again whenever a log lands, until SIGINT or SIGTERM
 };

@@ -378,6 +378,7 @@ class Processor {
     // The report and results.json name the logs where they will be: the batch moves to done/ as
     // a whole once its files are in place.
     request.files_listed_in = done_;
+    request.config_path = o_.fit_config;
     request.overrides.sivia = o_.automation.sivia;
     request.overrides.guaranteed = o_.automation.guaranteed;
     request.overrides.simulate = o_.automation.simulate;
@@ -599,6 +600,7 @@ int run_process_logs_command(const ProcessLogsOptions& options, std::ostream& ou
                                       ? fs::path(rig.automation.identifications_dir)
                                       : options.identifications_dir;
   processor.automation = rig.automation;
+  if (options.config_named) processor.fit_config = options.config_path;
   // Which directory, and why that one: with no DIR it is the configuration's, which may not be
   // the one the user thought of.
   const std::string logs_from =

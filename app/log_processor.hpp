@@ -30,6 +30,9 @@ struct LogProcessorOptions {
   std::filesystem::path logs_dir;
   std::filesystem::path identifications_dir;
   config::AutomationConfig automation;  // which sessions form one identification, and what it runs
+  // Empty: each batch is fitted with the configuration its first log carries (as `identify`
+  // without -c); else this file's rig and [identification] fit every batch (as `identify -c`).
+  std::filesystem::path fit_config;
 };
 
 struct ProcessingPass {

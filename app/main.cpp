@@ -261,7 +261,11 @@ int main(int argc, char** argv) {
   process_logs_cmd->add_option("DIR", process_logs.logs_dir,
                                "Logs directory, which must exist (default: the configuration's "
                                "[daemon] logs_dir)");
-  process_logs_cmd->add_option("-c,--config", process_logs.config_path, "Rig configuration (TOML)")
+  process_logs_cmd
+      ->add_option("-c,--config", process_logs.config_path,
+                   "Rig configuration (TOML): its [automation], [daemon] logs_dir and, when named, "
+                   "its rig and [identification] for every batch, as identify -c (not named: each "
+                   "batch is fitted with the configuration its logs carry)")
       ->check(CLI::ExistingFile);
   process_logs_cmd
       ->add_option("-o,--output", process_logs.identifications_dir,
@@ -308,6 +312,7 @@ int main(int argc, char** argv) {
     }
     if (*devices_cmd) return furuta::app::run_devices_command(devices, std::cout, std::cerr);
     if (*process_logs_cmd) {
+      process_logs.config_named = process_logs_cmd->get_option("--config")->count() > 0;
       return furuta::app::run_process_logs_command(process_logs, std::cout, std::cerr);
     }
     if (*identify_cmd) return furuta::app::run_identify_command(identify, std::cout, std::cerr);

@@ -219,11 +219,25 @@ RigConfig load_rig_config(const std::filesystem::path& path) {
   return parse_rig_config(read_config_text(path), path.string());
 }
 
+namespace {
+
+bool running_from_build_tree() {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::canonical("/proc/self/exe", ec);
+  if (ec) return false;
+  const std::filesystem::path tree = std::filesystem::weakly_canonical(FURUTA_BUILD_TREE, ec);
+  if (ec) return false;
+  const auto [end, _] = std::mismatch(tree.begin(), tree.end(), exe.begin(), exe.end());
+  return end == tree.end();
+}
+
+}  // namespace
+
 std::filesystem::path default_rig_config_path() {
-  const std::filesystem::path installed = FURUTA_INSTALLED_RIG_CONFIG;
-  const std::filesystem::path source = FURUTA_DEFAULT_RIG_CONFIG;
-  if (std::filesystem::exists(source)) return source;
-  return installed;
+  // An installed program reads the installed file whatever is left where it was built; a program
+  // run from its build tree (tests, a developer) reads the source tree's.
+  if (running_from_build_tree()) return FURUTA_DEFAULT_RIG_CONFIG;
+  return FURUTA_INSTALLED_RIG_CONFIG;
 }
 
 bridge::MotorResolution motor_resolution(const RigConfig& rig) {

@@ -298,7 +298,8 @@ void SessionRecorder::end_session(const SessionEndEvent& e) {
   if (!detail.empty()) m.end_reason += ": " + detail;
   publish_and_log(session_log::kChannelSession, m, e.monotonic_ns);
   if (log_ && !log_failed_) {
-    on_log_status(session_log::write_seal(*log_, m.session, samples_logged_, settings_.seal_source));
+    on_log_status(
+        session_log::write_seal(*log_, m.session, samples_logged_, settings_.seal_source));
   }
   if (log_ && !log_failed_) {
     std::filesystem::path final_path;

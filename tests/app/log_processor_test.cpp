@@ -185,6 +185,31 @@ TEST_F(Trigger, TheReportNamesTheLogsWhereTheyWentAndWhereTheConfigurationCameFr
             std::string::npos);
 }
 
+// A configuration named with -c fits every batch, as `identify -c` does; none named, each batch is
+// fitted with the configuration its logs carry, as `identify` without -c.
+TEST_F(Trigger, ANamedConfigurationFitsTheBatchAsIdentifyDashCDoes) {
+  const fs::path named = dir_.path() / "named.toml";
+  std::string text = read_file(config_);
+  text += "\n";  // the same rig, another file: the report must name this one
+  std::ofstream(named) << text;
+  land(fits_[0]);
+  land(fits_[1]);
+  land(validations_[0]);
+  ProcessLogsOptions command;
+  command.logs_dir = options_.logs_dir;
+  command.identifications_dir = options_.identifications_dir;
+  command.config_path = named;
+  command.config_named = true;
+  std::ostringstream out, err;
+  ASSERT_EQ(run_process_logs_command(command, out, err), 0) << out.str() << err.str();
+  const std::vector<fs::path> ids = identifications_in(options_.identifications_dir);
+  ASSERT_EQ(ids.size(), 1u);
+  const std::string html = read_file(ids.front() / "report.html");
+  EXPECT_NE(html.find("<td>" + named.string()), std::string::npos)
+      << "the report does not name the configuration given with -c";
+  EXPECT_EQ(html.find("<td>carried by "), std::string::npos);
+}
+
 TEST_F(Trigger, ASecondPassFindsNothingToDoAndChangesNothing) {
   land(fits_[0]);
   land(fits_[1]);

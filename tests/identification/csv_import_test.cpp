@@ -565,9 +565,8 @@ TEST(CsvImport, ValuesOutOfRangeAreRefusedNamingLineAndColumn) {
 
   std::string huge = simple_csv(20);
   const std::size_t line7 = huge.find("\n0.05,");
-  huge.replace(huge.find(',', line7) + 1, huge.find(',', huge.find(',', line7) + 1) -
-                                              huge.find(',', line7) - 1,
-               "1e300");
+  huge.replace(huge.find(',', line7) + 1,
+               huge.find(',', huge.find(',', line7) + 1) - huge.find(',', line7) - 1, "1e300");
   const CsvImportError angle = import_error(write_file(dir, "huge.csv", huge), spec);
   EXPECT_EQ(angle.line(), 7);
   EXPECT_EQ(angle.field(), "theta");
@@ -577,8 +576,9 @@ TEST(CsvImport, ValuesOutOfRangeAreRefusedNamingLineAndColumn) {
   volts.replace(volts.rfind("0.5"), 3, "2e9");
   std::string voltage_text = spec_text();
   voltage_text.replace(voltage_text.find("\"duty\""), 6, "\"voltage\"");
-  voltage_text += "[motor]\ntorque_constant_nm_per_a = 0.05\nback_emf_v_s_per_rad = 0.06\n"
-                  "resistance_ohm = 2.5\n";
+  voltage_text +=
+      "[motor]\ntorque_constant_nm_per_a = 0.05\nback_emf_v_s_per_rad = 0.06\n"
+      "resistance_ohm = 2.5\n";
   const CsvImportError input = import_error(write_file(dir, "volts.csv", volts),
                                             parse_csv_import_spec(voltage_text, "spec.toml"));
   EXPECT_EQ(input.line(), 21);

@@ -20,8 +20,18 @@ for f in etc/furuta/rig.toml "$units/furutad.service" "$units/furuta-identify@.s
   usr/lib/sysusers.d/furuta.conf usr/lib/tmpfiles.d/furuta.conf usr/share/doc/furuta/README.md; do
   [ -f "$root/$f" ] || fail "$f is missing"
 done
-# The installed configuration is the default the commands fall back to.
-"$root/usr/bin/furuta" process-logs --help >/dev/null
+# The installed configuration is the default the commands fall back to, never the source tree's
+# it was built from.
+for command in "furuta process-logs" "furuta run" "furuta status"; do
+  help=$("$root/usr/bin/${command%% *}" ${command#* } --help)
+  printf '%s' "$help" | grep -q '/etc/furuta/rig.toml' ||
+    fail "$command --help does not default to /etc/furuta/rig.toml"
+  ! printf '%s' "$help" | grep -q '=[^ ]*config/rig.toml' ||
+    fail "$command --help defaults to the source tree's config/rig.toml"
+done
+help=$("$root/usr/sbin/furutad" --help)
+printf '%s' "$help" | grep -q '/etc/furuta/rig.toml' ||
+  fail "furutad --help does not default to /etc/furuta/rig.toml"
 grep -q '^\[automation\]' "$root/etc/furuta/rig.toml" || fail "rig.toml has no [automation]"
 
 # Every ExecStart names an installed binary, and the path unit starts an installed service.

@@ -226,7 +226,8 @@ RigConfig load_rig_config(const std::filesystem::path& path);  // throws ConfigE
 // A configuration file's text; ConfigError naming the file when it cannot be opened or read.
 std::string read_config_text(const std::filesystem::path& path);
 RigConfig parse_rig_config(const std::string& text, const std::string& source_name);
-// The configuration shipped in config/rig.toml, for tools run without --config.
+// The configuration tools read without --config: the installed one (/etc/furuta/rig.toml), or,
+// for a program run from the build tree it was built in, the source tree's config/rig.toml.
 std::filesystem::path default_rig_config_path();
 // The steps the motor board's readings move in, from its adapter ([boards.motor] model).
 bridge::MotorResolution motor_resolution(const RigConfig& rig);
