@@ -71,9 +71,20 @@ class ScriptReader {
   explicit ScriptReader(std::span<const std::uint8_t> bytes) : bytes_(bytes) {}
   bool done() const { return at_ >= bytes_.size(); }
   std::uint8_t u8() { return at_ < bytes_.size() ? bytes_[at_++] : 0; }
-  std::uint16_t u16() { return static_cast<std::uint16_t>((u8() << 8) | u8()); }
-  std::uint32_t u32() { return (static_cast<std::uint32_t>(u16()) << 16) | u16(); }
-  std::uint64_t u64() { return (static_cast<std::uint64_t>(u32()) << 32) | u32(); }
+  // Big-endian, high part first: each part read in its own statement, since the operands of |
+  // are evaluated in no fixed order.
+  std::uint16_t u16() {
+    const std::uint16_t high = u8();
+    return static_cast<std::uint16_t>((high << 8) | u8());
+  }
+  std::uint32_t u32() {
+    const std::uint32_t high = u16();
+    return (high << 16) | u16();
+  }
+  std::uint64_t u64() {
+    const std::uint64_t high = u32();
+    return (high << 32) | u32();
+  }
 
  private:
   std::span<const std::uint8_t> bytes_;
