@@ -10,7 +10,8 @@ cd "$(dirname "$0")/.."
 seconds="${1:-60}"
 shift || true
 all=(fuzz_codec_1065 fuzz_codec_1047 fuzz_log_reader fuzz_csv_import fuzz_config
-     fuzz_command_decode fuzz_command_handler fuzz_signed_command fuzz_status_reply)
+     fuzz_command_decode fuzz_command_handler fuzz_signed_command fuzz_status_reply
+     fuzz_log_mutation)
 if [ $# -gt 0 ]; then targets=("$@"); else targets=("${all[@]}"); fi
 build=build/zfuzz
 jobs="${FUZZ_BUILD_JOBS:-2}"
