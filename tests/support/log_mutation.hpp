@@ -112,7 +112,7 @@ class ScriptWriter {
   std::vector<std::uint8_t> bytes_;
 };
 
-namespace mutation_detail {
+namespace detail {
 
 inline std::vector<Event> events_in(const std::vector<std::uint8_t>& bytes) {
   session_log::LogReadStats stats;
@@ -150,7 +150,7 @@ inline std::vector<std::uint8_t> encode_sample(const rig_sample_t& s) {
   return bytes;
 }
 
-}  // namespace mutation_detail
+}  // namespace detail
 
 // `log` changed by the script in `script`; what was done, in words, appended to `*done` (one
 // operation a line) when given. An operation that does not apply (an event operation on a log
@@ -158,7 +158,7 @@ inline std::vector<std::uint8_t> encode_sample(const rig_sample_t& s) {
 inline std::vector<std::uint8_t> mutate_log(std::vector<std::uint8_t> log,
                                             std::span<const std::uint8_t> script,
                                             std::string* done = nullptr) {
-  using namespace mutation_detail;
+  using namespace detail;
   const std::size_t original_size = log.size();
   ScriptReader in(script);
   std::ostringstream said;
