@@ -9,6 +9,7 @@
 set(FURUTA_MODULE_DEPENDENCIES
   "common:"
   "model:"
+  "control:model"
   "interval:common"
   "firmware_bridge:"
   "simulator:firmware_bridge,model"
@@ -22,7 +23,7 @@ set(FURUTA_MODULE_DEPENDENCIES
   "validated_research:validated,model,interval,common"
   "pipeline:identification,validated,session_log,config,model,interval"
   "report:pipeline,identification,validated,session_log,config,model,interval,common"
-  "app:firmware_bridge,simulator,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
+  "app:control,firmware_bridge,simulator,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
 )
 
 function(furuta_check_module_dependencies)

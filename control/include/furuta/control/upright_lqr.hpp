@@ -1,0 +1,70 @@
+#pragma once
+// The balance controller's design, step by step (docs/control.md):
+//
+//   1. linearize_upright: the model (docs/model.md) and the motor's drive (eq. 4) about the
+//      upright equilibrium q2 = pi, as dx/dt = A x + B duty with x = [q1, q2 - pi, dq1, dq2];
+//   2. sample: held over each loop period and reaching the board `lag_s` after its sample (the
+//      data path), as x[k+1] = Phi x[k] + Gamma u[k] on a state that carries the duties still on
+//      their way;
+//   3. design_lqr: the discrete-time LQR of that sampled plant, its gain and closed-loop poles.
+//
+// Numbers in, numbers out: the controller file and its text are made elsewhere.
+
+#include <Eigen/Dense>
+#include <array>
+#include <complex>
+#include <vector>
+
+#include "furuta/model/model.hpp"
+
+namespace furuta::control {
+
+// The plant the controller is designed for: parameters (identified, or CAD), the drive, and the
+// supply, which scales what a duty does (the PWM chops it).
+struct DesignPlant {
+  model::Parameters<double> parameters;
+  model::MotorData motor;
+  double supply_v = 12.0;
+};
+
+// dx/dt = a x + b duty about upright, x = [q1, q2 - pi, dq1, dq2].
+struct LinearPlant {
+  Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
+  Eigen::Vector4d b = Eigen::Vector4d::Zero();
+};
+LinearPlant linearize_upright(const DesignPlant& plant);
+
+// x[k+1] = phi x[k] + gamma u[k] on z = [x; the duties sent but not yet applied, oldest first]:
+// a duty computed at sample k reaches the board lag_s later and is held until the next one
+// arrives. `delayed` is how many earlier duties z carries (ceil(lag / period), 0 without lag).
+struct SampledPlant {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd gamma;
+  double period_s = 0;
+  double lag_s = 0;
+  int delayed = 0;
+};
+// Throws std::invalid_argument for a period that is not > 0 or a lag that is negative or not
+// finite.
+SampledPlant sample(const LinearPlant& plant, double period_s, double lag_s);
+
+// The cost sum of x' Q x + r u^2 over the samples, Q diagonal over x (the delayed duties carry no
+// weight of their own).
+struct LqrWeights {
+  std::array<double, 4> state = {1.0, 10.0, 0.1, 0.1};  // q1, q2 - pi, dq1, dq2
+  double duty = 10.0;
+};
+
+struct BalanceGain {
+  // u[k] = -k z[k]: the four state gains, then one per delayed duty.
+  Eigen::RowVectorXd k;
+  std::vector<std::complex<double>> closed_loop_poles;  // eigenvalues of phi - gamma k
+  double spectral_radius = 0;                           // the largest |pole|; < 1 is stable
+  int riccati_iterations = 0;
+};
+// Throws std::invalid_argument for weights that are not > 0 (state >= 0, duty > 0) and
+// std::runtime_error when the Riccati iteration does not settle (a plant the duty cannot
+// stabilise).
+BalanceGain design_lqr(const SampledPlant& plant, const LqrWeights& weights);
+
+}  // namespace furuta::control

@@ -1,0 +1,151 @@
+// The design's three steps (upright_lqr.hpp). Written here rather than taken from a control
+// library: Debian 12 packages none for C++ (no slycot, no control toolbox), and each step is a few
+// lines over Eigen: the linearisation is the model's own algebra at q2 = pi, the sampling a matrix
+// exponential (Eigen's unsupported MatrixFunctions), the LQR the Riccati recursion iterated to its
+// fixed point.
+#include "furuta/control/upright_lqr.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <unsupported/Eigen/MatrixFunctions>
+
+namespace furuta::control {
+
+namespace {
+
+// exp([[a, b], [0, 0]] t) = [[e^(a t), (integral of e^(a s) over [0, t]) b], [0, 1]]: the state's
+// own motion over t and what a duty held over t adds to it.
+struct Held {
+  Eigen::Matrix4d transition;
+  Eigen::Vector4d input;
+};
+Held held_over(const LinearPlant& plant, double t) {
+  Eigen::Matrix<double, 5, 5> m = Eigen::Matrix<double, 5, 5>::Zero();
+  m.topLeftCorner<4, 4>() = plant.a * t;
+  m.topRightCorner<4, 1>() = plant.b * t;
+  const Eigen::Matrix<double, 5, 5> e = m.exp();
+  return {e.topLeftCorner<4, 4>(), e.topRightCorner<4, 1>()};
+}
+
+}  // namespace
+
+LinearPlant linearize_upright(const DesignPlant& plant) {
+  const model::Parameters<double>& p = plant.parameters;
+  // Eq. 4 is affine in the duty and the arm's speed: tau = kd duty - kw dq1, the duty scaled by
+  // the supply over the motor's nominal voltage.
+  const double supply_scale = plant.supply_v / plant.motor.nominal_voltage_v;
+  const double kd = plant.motor.arm_torque(1.0, 0.0) * supply_scale;
+  const double kw = -plant.motor.arm_torque(0.0, 1.0);
+  // At q2 = pi: sin = 0, cos = -1; the velocity products of B(q, dq) vanish to first order, and
+  // gravity's mug sin(q2) becomes -mug (q2 - pi). M = [mu1, -mu3; -mu3, mu4].
+  Eigen::Matrix2d mass;
+  mass << p.mu1, -p.mu3, -p.mu3, p.mu4;
+  const Eigen::Matrix2d inverse = mass.inverse();
+  // M ddq = [kd u - (kw + fv1) dq1; mug (q2 - pi) - fv2 dq2]
+  Eigen::Matrix<double, 2, 4> forces = Eigen::Matrix<double, 2, 4>::Zero();
+  forces(0, 2) = -(kw + p.fv1);
+  forces(1, 1) = p.mug;
+  forces(1, 3) = -p.fv2;
+  LinearPlant out;
+  out.a(0, 2) = 1.0;
+  out.a(1, 3) = 1.0;
+  out.a.bottomRows<2>() = inverse * forces;
+  out.b.tail<2>() = inverse * Eigen::Vector2d(kd, 0.0);
+  return out;
+}
+
+SampledPlant sample(const LinearPlant& plant, double period_s, double lag_s) {
+  if (!(period_s > 0) || !std::isfinite(period_s)) {
+    throw std::invalid_argument("sample: the period must be a finite number > 0 s");
+  }
+  if (!(lag_s >= 0) || !std::isfinite(lag_s)) {
+    throw std::invalid_argument("sample: the lag must be a finite number >= 0 s");
+  }
+  // A duty sent at sample k is applied from k T + lag until the next one is: over the period
+  // [k T, (k + 1) T) the board holds, in turn, the duty of sample k - whole - 1 for `fraction`
+  // and the duty of sample k - whole for the rest.
+  const int whole = static_cast<int>(std::floor(lag_s / period_s));
+  const double fraction = lag_s - whole * period_s;
+  const int delayed = whole + (fraction > 0 ? 1 : 0);
+  const int n = 4 + delayed;
+  SampledPlant out;
+  out.period_s = period_s;
+  out.lag_s = lag_s;
+  out.delayed = delayed;
+  out.phi = Eigen::MatrixXd::Zero(n, n);
+  out.gamma = Eigen::VectorXd::Zero(n);
+  const Held whole_period = held_over(plant, period_s);
+  out.phi.topLeftCorner<4, 4>() = whole_period.transition;
+  // Which duty reaches the state first and for how long, then the next for the rest.
+  const Held late = held_over(plant, period_s - fraction);  // the newer duty, at the end
+  const Held early = held_over(plant, fraction);            // the older one, at the start
+  const Eigen::Vector4d older = late.transition * early.input;
+  const Eigen::Vector4d newer = late.input;
+  // z = [x; u[k - delayed], ..., u[k - 1]]: the oldest duty still on its way first.
+  const auto add_input = [&](int age, const Eigen::Vector4d& effect) {
+    // age 0 is this sample's duty, age a > 0 the one sent a samples ago.
+    if (age == 0) {
+      out.gamma.head<4>() += effect;
+    } else {
+      out.phi.block<4, 1>(0, 4 + delayed - age) += effect;
+    }
+  };
+  if (fraction > 0) {
+    add_input(whole + 1, older);
+    add_input(whole, newer);
+  } else {
+    add_input(whole, whole_period.input);
+  }
+  // The duties move along: each sample the newest enters the last slot.
+  for (int i = 0; i + 1 < delayed; ++i) out.phi(4 + i, 4 + i + 1) = 1.0;
+  if (delayed > 0) out.gamma(n - 1) = 1.0;
+  return out;
+}
+
+BalanceGain design_lqr(const SampledPlant& plant, const LqrWeights& weights) {
+  for (const double w : weights.state) {
+    if (!(w >= 0) || !std::isfinite(w)) {
+      throw std::invalid_argument("design_lqr: state weights must be finite and >= 0");
+    }
+  }
+  if (!(weights.duty > 0) || !std::isfinite(weights.duty)) {
+    throw std::invalid_argument("design_lqr: the duty weight must be finite and > 0");
+  }
+  const Eigen::Index n = plant.phi.rows();
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < 4; ++i) q(i, i) = weights.state[static_cast<std::size_t>(i)];
+  const Eigen::MatrixXd& a = plant.phi;
+  const Eigen::VectorXd& b = plant.gamma;
+  // P = Q + A'PA - A'Pb (r + b'Pb)^-1 b'PA, iterated from P = Q to its fixed point: it converges
+  // for every plant the duty can stabilise, and a few thousand 5x5 steps cost nothing.
+  Eigen::MatrixXd p = q;
+  BalanceGain out;
+  constexpr int kMaxIterations = 200000;
+  for (int i = 1; i <= kMaxIterations; ++i) {
+    const Eigen::RowVectorXd bp_a = b.transpose() * p * a;
+    const double denominator = weights.duty + b.dot(p * b);
+    Eigen::MatrixXd next = q + a.transpose() * p * a - bp_a.transpose() * bp_a / denominator;
+    next = 0.5 * (next + next.transpose());
+    const double change = (next - p).norm();
+    p = std::move(next);
+    if (!std::isfinite(change)) break;
+    if (change <= 1e-11 * std::max(1.0, p.norm())) {
+      out.riccati_iterations = i;
+      break;
+    }
+  }
+  if (out.riccati_iterations == 0) {
+    throw std::runtime_error(
+        "design_lqr: the Riccati recursion did not settle: the duty cannot stabilise this plant");
+  }
+  out.k = (b.transpose() * p * a) / (weights.duty + b.dot(p * b));
+  const Eigen::MatrixXd closed = a - b * out.k;
+  const Eigen::VectorXcd poles = closed.eigenvalues();
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    out.closed_loop_poles.push_back(poles(i));
+    out.spectral_radius = std::max(out.spectral_radius, std::abs(poles(i)));
+  }
+  return out;
+}
+
+}  // namespace furuta::control
