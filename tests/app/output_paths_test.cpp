@@ -17,7 +17,7 @@
 #include "simulated_logs.hpp"
 #include "temp_dir.hpp"
 
-namespace furuta::app {
+namespace furuta::app::output_paths_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -288,4 +288,4 @@ TEST(SameFile, TwoSpellingsOfOneFileAndFilesNotYetMade) {
 }
 
 }  // namespace
-}  // namespace furuta::app
+}  // namespace furuta::app::output_paths_test
