@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "furuta/control/upright_lqr.hpp"
 #include "furuta/model/model.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 #include "furuta/validated/scenarios.hpp"
@@ -186,6 +187,24 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
                          std::ostream& err);
 
 // --- the identification trigger (log_processor.hpp) ---
+// --- the balance controller (control/, docs/control.md) ---
+enum class ControllerParameters { output_error, lsmi, cad };
+const char* to_string(ControllerParameters source);
+struct ControllerDesignOptions {
+  std::filesystem::path results;  // a results.json of `furuta identify`
+  ControllerParameters parameters = ControllerParameters::output_error;
+  // The rig: its motor (eq. 4), loop period, data path's lag ([identification] input_lag_ms),
+  // duty limit ([limits] max_amplitude_duty) and, on the simulated rig, supply.
+  std::filesystem::path config_path;
+  std::optional<double> supply_v;  // default: the simulated rig's, else the motor's nominal
+  control::LqrWeights weights;
+  std::filesystem::path output;  // the controller file
+};
+// 0 written; 2 an unreadable results file, parameters it lacks, an output that is an input, or
+// a design that fails (a plant the duty cannot stabilise).
+int run_controller_design_command(const ControllerDesignOptions& options, std::ostream& out,
+                                  std::ostream& err);
+
 struct ProcessLogsOptions {
   std::filesystem::path logs_dir;     // empty: the configuration's [daemon] logs_dir
   std::filesystem::path config_path;  // its [automation] says what to identify

@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <map>
 #include <string>
 
 #include "cli_numbers.hpp"
@@ -252,6 +253,37 @@ int main(int argc, char** argv) {
                    "previous run's (default: simulation)")
       ->check(not_empty_path());
 
+  furuta::app::ControllerDesignOptions design;
+  design.config_path = furuta::config::default_rig_config_path();
+  CLI::App* controller_cmd =
+      app.add_subcommand("controller", "The balance controller (docs/control.md)");
+  controller_cmd->require_subcommand(1);
+  CLI::App* design_cmd = controller_cmd->add_subcommand(
+      "design",
+      "Design the balance controller from an identification: the model linearised about upright, "
+      "sampled at the loop period with the data path's lag, a discrete LQR");
+  design_cmd->add_option("RESULTS", design.results, "A results.json of furuta identify")
+      ->required()
+      ->check(CLI::ExistingFile);
+  std::string parameter_source = "output-error";
+  design_cmd
+      ->add_option("--parameters", parameter_source,
+                   "Which parameters of RESULTS: output-error, lsmi or cad")
+      ->check(CLI::IsMember({"output-error", "lsmi", "cad"}));
+  design_cmd
+      ->add_option("-c,--config", design.config_path,
+                   "Rig configuration: the motor (eq. 4), [daemon] period_ns, [identification] "
+                   "input_lag_ms, [limits] max_amplitude_duty")
+      ->check(CLI::ExistingFile);
+  design_cmd
+      ->add_option("--supply-v", design.supply_v,
+                   "The supply the duty chops [V] (default: the simulated rig's, else the motor's "
+                   "nominal voltage)")
+      ->check(furuta::app::finite_in(1.0, 100.0));
+  design_cmd->add_option("-o,--output", design.output, "The controller file to write (TOML)")
+      ->required()
+      ->check(not_empty_path());
+
   furuta::app::ProcessLogsOptions process_logs;
   process_logs.config_path = furuta::config::default_rig_config_path();
   CLI::App* process_logs_cmd = app.add_subcommand(
@@ -316,6 +348,13 @@ int main(int argc, char** argv) {
       return furuta::app::run_process_logs_command(process_logs, std::cout, std::cerr);
     }
     if (*identify_cmd) return furuta::app::run_identify_command(identify, std::cout, std::cerr);
+    if (*design_cmd) {
+      using furuta::app::ControllerParameters;
+      design.parameters = parameter_source == "lsmi"  ? ControllerParameters::lsmi
+                          : parameter_source == "cad" ? ControllerParameters::cad
+                                                      : ControllerParameters::output_error;
+      return furuta::app::run_controller_design_command(design, std::cout, std::cerr);
+    }
     if (*simulate_cmd) {
       if (scenario_choice != "all") {
         std::size_t used = 0;

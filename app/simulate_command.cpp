@@ -98,7 +98,8 @@ int run_simulate_command(const SimulateCommandOptions& options, std::ostream& ou
     }
     if (r.sivia) sets.push_back({"SIVIA", *r.sivia});
     if (r.lsmi) sets.push_back(validated::point_parameters("LSMI", *r.lsmi));
-    if (r.output_error) {
+    // The refinement's tube only where LSMI did not run: with both, the simulation is LSMI's.
+    if (r.output_error && !r.lsmi) {
       sets.push_back(validated::point_parameters(pipeline::kOutputErrorSetName, *r.output_error));
     }
     if (!r.note.empty()) note += options.results.string() + ": " + r.note + "\n";

@@ -84,7 +84,7 @@ ResultsFile read_results(const std::filesystem::path& path) {
     r.lsmi = parameters_from((*combined)["estimate"], "combined.estimate");
   }
   const auto refined = j.find("output_error");
-  if (!r.lsmi && refined != j.end() && refined->is_object() && refined->value("converged", false)) {
+  if (refined != j.end() && refined->is_object() && refined->value("converged", false)) {
     if (!refined->contains("estimate")) throw ResultsFileError("output_error.estimate: missing");
     r.output_error = parameters_from((*refined)["estimate"], "output_error.estimate");
   }
@@ -94,6 +94,7 @@ ResultsFile read_results(const std::filesystem::path& path) {
         "a results.json of furuta identify?)");
   }
   if (j.contains("truth")) r.truth = parameters_from(j["truth"], "truth");
+  if (j.contains("nominal")) r.nominal = parameters_from(j["nominal"], "nominal");
   const auto sivia = j.find("sivia");
   if (sivia == j.end()) {
     r.note = "no SIVIA in it (furuta identify --sivia): point parameters only";

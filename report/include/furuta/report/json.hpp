@@ -89,12 +89,13 @@ Json windowed_json(const pipeline::WindowedGuaranteed& windowed,
 // and "simulation" and "output_error" when they ran.
 Json results_json(const pipeline::Run& run, const std::string& software_version);
 
-// What a simulation takes back from a results.json: the point estimate (LSMI's, or the
-// converged refinement's where LSMI did not run), the truth of simulated sessions, SIVIA's outer
-// hull by parameter (the carried mu's as their prior), or why there is none.
+// What a simulation or a controller's design takes back from a results.json: the point estimates
+// (LSMI's, the converged refinement's), the CAD values and the truth of simulated sessions,
+// SIVIA's outer hull by parameter (the carried mu's as their prior), or why there is none.
 struct ResultsFile {
   std::optional<model::Parameters<double>> lsmi;
-  std::optional<model::Parameters<double>> output_error;
+  std::optional<model::Parameters<double>> output_error;  // only when the refinement converged
+  std::optional<model::Parameters<double>> nominal;       // CAD ([nominal]), when it was given
   std::optional<model::Parameters<double>> truth;
   std::optional<model::Parameters<interval::Interval>> sivia;
   std::string note;  // why there is no SIVIA set, when there is none

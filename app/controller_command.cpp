@@ -1,0 +1,165 @@
+// `furuta controller design`: the balance controller from an identification's results.json
+// (control/, docs/control.md), written as a controller file the daemon's balance session reads.
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+#include "commands.hpp"
+#include "furuta/config/rig_config.hpp"
+#include "furuta/control/upright_lqr.hpp"
+#include "furuta/daemon/rig_connection.hpp"
+#include "furuta/identification/identify.hpp"
+#include "furuta/report/json.hpp"
+#include "furuta/report/run_directory.hpp"
+
+namespace furuta::app {
+
+namespace {
+
+// The parameters named by --parameters, or why the results file has none.
+std::optional<model::Parameters<double>> chosen(const report::ResultsFile& r,
+                                                ControllerParameters source, std::string& why) {
+  switch (source) {
+    case ControllerParameters::output_error:
+      if (!r.output_error) why = "no converged output-error estimate (output_error.estimate)";
+      return r.output_error;
+    case ControllerParameters::lsmi:
+      if (!r.lsmi) why = "no LSMI estimate (combined.estimate)";
+      return r.lsmi;
+    case ControllerParameters::cad:
+      if (!r.nominal) why = "no CAD values (nominal: the configuration had no [nominal])";
+      return r.nominal;
+  }
+  return std::nullopt;
+}
+
+// Every double as it is (17 significant digits): the file is read back into the same numbers.
+std::string exact(double v) {
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  return s.str();
+}
+
+// A TOML basic string: quotes and backslashes escaped, control characters as \uXXXX.
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (u < 0x20 || u == 0x7F) {
+      std::ostringstream code;
+      code << "\\u" << std::hex << std::setw(4) << std::setfill('0') << static_cast<int>(u);
+      out += code.str();
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string array_text(const std::vector<double>& values) {
+  std::string text = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) text += (i ? ", " : "") + exact(values[i]);
+  return text + "]";
+}
+
+}  // namespace
+
+const char* to_string(ControllerParameters source) {
+  switch (source) {
+    case ControllerParameters::output_error:
+      return "output-error";
+    case ControllerParameters::lsmi:
+      return "lsmi";
+    case ControllerParameters::cad:
+      return "cad";
+  }
+  return "?";
+}
+
+int run_controller_design_command(const ControllerDesignOptions& options, std::ostream& out,
+                                  std::ostream& err) {
+  const auto refuse = [&](const std::string& what) {
+    err << "furuta controller design: " << what << "\n";
+    return kExitNotDone;
+  };
+  if (options.output.empty()) return refuse("-o is empty: give the controller file to write");
+  if (report::same_file(options.output, options.results) ||
+      report::same_file(options.output, options.config_path)) {
+    return refuse("-o " + options.output.string() + " is one of the inputs: give another file");
+  }
+  report::ResultsFile results;
+  try {
+    results = report::read_results(options.results);
+  } catch (const report::ResultsFileError& e) {
+    return refuse(options.results.string() + ": " + e.what());
+  }
+  std::string why;
+  const auto parameters = chosen(results, options.parameters, why);
+  if (!parameters) {
+    return refuse(options.results.string() + " has " + why + ": choose another --parameters");
+  }
+  const config::RigConfig rig = config::load_rig_config(options.config_path);
+  const double supply_v = options.supply_v.value_or(rig.backend == config::UsbBackend::simulated
+                                                        ? rig.simulation.supply_voltage_v
+                                                        : rig.motor.nominal_voltage_v);
+  const double period_s = static_cast<double>(rig.daemon.period_ns) * 1e-9;
+  const double lag_s = rig.identification.input_lag_ms.value_or(0.0) * 1e-3;
+  const control::DesignPlant plant{*parameters, rig.motor, supply_v};
+  control::BalanceGain gain;
+  try {
+    gain = control::design_lqr(control::sample(control::linearize_upright(plant), period_s, lag_s),
+                               options.weights);
+  } catch (const std::exception& e) {
+    return refuse(std::string("the design failed: ") + e.what());
+  }
+
+  std::ostringstream file;
+  file << "# A balance controller designed by `furuta controller design` (docs/control.md): the "
+          "model\n# linearised about upright, sampled at the loop period with the data path's "
+          "lag, a discrete LQR.\n\n";
+  file << "[controller]\nkind = \"upright_lqr\"\nperiod_ns = " << rig.daemon.period_ns
+       << "\nlag_s = " << exact(lag_s) << "\nsupply_v = " << exact(supply_v)
+       << "\ndesigned_by = " << quoted(daemon::kSoftwareVersion) << "\n\n";
+  file << "[parameters]\nsource = \"" << to_string(options.parameters)
+       << "\"\nresults = " << quoted(std::filesystem::weakly_canonical(options.results).string())
+       << "\nresults_sha256 = \"" << identification::sha256_file(options.results.string())
+       << "\"\n";
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    file << model::kParameterNames[k] << " = " << exact((*parameters)[k]) << "\n";
+  }
+  const control::LqrWeights& w = options.weights;
+  file << "\n[weights]\nq1 = " << exact(w.state[0]) << "\nq2 = " << exact(w.state[1])
+       << "\ndq1 = " << exact(w.state[2]) << "\ndq2 = " << exact(w.state[3])
+       << "\nduty = " << exact(w.duty) << "\n\n";
+  std::vector<double> k(gain.k.data(), gain.k.data() + gain.k.size());
+  file << "[gain]\n# duty = -k . [q1, q2 - pi, dq1, dq2, the duties still on their way, oldest "
+          "first]\nk = "
+       << array_text(k) << "\n\n";
+  std::vector<double> re, im;
+  for (const auto& pole : gain.closed_loop_poles) {
+    re.push_back(pole.real());
+    im.push_back(pole.imag());
+  }
+  file << "[prediction]\nclosed_loop_poles_re = " << array_text(re)
+       << "\nclosed_loop_poles_im = " << array_text(im)
+       << "\nspectral_radius = " << exact(gain.spectral_radius) << "\n\n";
+  file << "[limits]\nmax_duty = " << exact(rig.limits.max_amplitude_duty) << "\n";
+
+  std::ofstream written(options.output, std::ios::binary | std::ios::trunc);
+  written << file.str();
+  written.close();
+  if (!written) return refuse("cannot write " + options.output.string());
+  out << "designed from the " << to_string(options.parameters) << " parameters of "
+      << options.results.string() << ": " << gain.k.size() << " gains, largest closed-loop pole "
+      << gain.spectral_radius << " (" << (gain.spectral_radius < 1 ? "stable" : "UNSTABLE")
+      << ") at " << period_s * 1e3 << " ms with a " << lag_s * 1e3 << " ms lag\nwrote "
+      << options.output.string() << "\n";
+  return kExitDone;
+}
+
+}  // namespace furuta::app
