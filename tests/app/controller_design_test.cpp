@@ -2,11 +2,11 @@
 // control module designs for the named parameters and the rig, with where they came from; what it
 // cannot design from is refused, naming why, and nothing is written.
 #include <gtest/gtest.h>
+#include <toml++/toml.h>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
