@@ -1,0 +1,187 @@
+#include "furuta/control/balance_law.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace furuta::control {
+
+std::string_view to_string(BalanceMode mode) {
+  switch (mode) {
+    case BalanceMode::swing_up:
+      return "swing_up";
+    case BalanceMode::catching:
+      return "catch";
+    case BalanceMode::balance:
+      return "balance";
+    case BalanceMode::fallen:
+      return "fallen";
+  }
+  return "unknown";
+}
+
+namespace {
+
+void require(bool ok, const char* field, const char* rule) {
+  if (!ok) throw std::invalid_argument(std::string("balance controller: ") + field + " " + rule);
+}
+
+bool finite_positive(double x) {
+  return std::isfinite(x) && x > 0;
+}
+
+// (-pi, pi]
+double wrap_angle(double rad) {
+  const double two_pi = 2 * std::numbers::pi;
+  double r = std::fmod(rad, two_pi);
+  if (r > std::numbers::pi) r -= two_pi;
+  if (r <= -std::numbers::pi) r += two_pi;
+  return r;
+}
+
+}  // namespace
+
+BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
+  require(finite_positive(spec.period_s), "period_s", "must be a finite number > 0");
+  require(spec.delayed >= 0 && spec.delayed <= kMaxDelayedDuties, "delayed",
+          "must be 0 to 4 (the lag, in whole periods rounded up)");
+  for (const double g : spec.gain) require(std::isfinite(g), "gain", "must be finite numbers");
+  for (int i = 4 + spec.delayed; i < kMaxGains; ++i) {
+    require(spec.gain[static_cast<std::size_t>(i)] == 0, "gain",
+            "has more entries than the state (4 plus the delayed duties)");
+  }
+  require(finite_positive(spec.max_duty) && spec.max_duty <= 1, "max_duty", "must be in (0, 1]");
+  require(finite_positive(spec.duty_step) && spec.duty_step <= spec.max_duty, "duty_step",
+          "must be in (0, max_duty]");
+  for (std::size_t i = 0; i < model::kParameterCount; ++i) {
+    const double v = spec.parameters[i];
+    const bool friction = i >= 5;
+    require(std::isfinite(v) && (friction ? v >= 0 : v > 0), model::kParameterNames[i],
+            friction ? "must be a finite number >= 0" : "must be a finite number > 0");
+  }
+  require(finite_positive(spec.duty_torque_nm), "duty_torque_nm", "must be a finite number > 0");
+  require(std::isfinite(spec.back_emf_nm_s) && spec.back_emf_nm_s >= 0, "back_emf_nm_s",
+          "must be a finite number >= 0");
+  const SwingUp& s = spec.swing_up;
+  for (const auto& [value, name] :
+       {std::pair{s.energy_gain, "energy_gain"}, std::pair{s.arm_gain, "arm_gain"},
+        std::pair{s.arm_damping, "arm_damping"}}) {
+    require(std::isfinite(value) && value >= 0, name, "must be a finite number >= 0");
+  }
+  require(finite_positive(s.max_acceleration), "max_acceleration", "must be a finite number > 0");
+  require(finite_positive(s.start_acceleration) && s.start_acceleration <= s.max_acceleration,
+          "start_acceleration", "must be in (0, max_acceleration]");
+  require(std::isfinite(s.start_below_energy_ratio) && s.start_below_energy_ratio >= 0 &&
+              s.start_below_energy_ratio < 1,
+          "start_below_energy_ratio", "must be in [0, 1)");
+  require(finite_positive(s.max_duty) && s.max_duty <= spec.max_duty, "swing_up max_duty",
+          "must be in (0, the controller's max_duty]");
+  const CatchRegion& r = spec.region;
+  require(finite_positive(r.catch_rad) && r.catch_rad < std::numbers::pi / 2, "catch_rad",
+          "must be in (0, pi/2)");
+  require(std::isfinite(r.release_rad) && r.release_rad > r.catch_rad &&
+              r.release_rad < std::numbers::pi,
+          "release_rad", "must be in (catch_rad, pi)");
+  require(std::isfinite(r.settle_s) && r.settle_s >= 0, "settle_s", "must be a finite number >= 0");
+  require(std::isfinite(r.fall_rad) && r.fall_rad >= r.catch_rad && r.fall_rad < std::numbers::pi,
+          "fall_rad", "must be in [catch_rad, pi)");
+}
+
+void BalanceLaw::reset() noexcept {
+  have_previous_ = false;
+  previous_q1_ = previous_q2_ = 0;
+  mode_ = BalanceMode::swing_up;
+  inside_s_ = 0;
+  start_s_ = 0;
+  arm_velocity_ = 0;
+  sent_.fill(0.0);
+}
+
+double BalanceLaw::limit(double duty) const noexcept {
+  if (!std::isfinite(duty)) return 0.0;
+  const double steps = std::round(duty / spec_.duty_step);
+  const double max_steps = std::floor(spec_.max_duty / spec_.duty_step + 1e-9);
+  return std::clamp(steps, -max_steps, max_steps) * spec_.duty_step;
+}
+
+BalanceStep BalanceLaw::step(double q1, double q2) noexcept {
+  BalanceStep out;
+  const double t = spec_.period_s;
+  const double dq1 = have_previous_ ? (q1 - previous_q1_) / t : 0.0;
+  const double dq2 = have_previous_ ? (q2 - previous_q2_) / t : 0.0;
+  have_previous_ = true;
+  previous_q1_ = q1;
+  previous_q2_ = q2;
+  const double error = wrap_angle(q2 - std::numbers::pi);
+  const model::Parameters<double>& p = spec_.parameters;
+  const double mug = p.mug;
+  const double energy = 0.5 * p.mu4 * dq2 * dq2 + mug * (1 - std::cos(q2));
+  const double upright_energy = 2 * mug;
+  out.upright_error_rad = error;
+  out.arm_rate_rad_s = dq1;
+  out.pendulum_rate_rad_s = dq2;
+  out.energy_ratio = energy / upright_energy;
+
+  const CatchRegion& region = spec_.region;
+  const double distance = std::fabs(error);
+  switch (mode_) {
+    case BalanceMode::swing_up:
+      if (distance < region.catch_rad) {
+        mode_ = BalanceMode::catching;
+        inside_s_ = 0;
+      }
+      break;
+    case BalanceMode::catching:
+      if (distance > region.release_rad) {
+        mode_ = BalanceMode::swing_up;
+        arm_velocity_ = dq1;
+      } else {
+        inside_s_ = distance < region.catch_rad ? inside_s_ + t : 0.0;
+        if (inside_s_ >= region.settle_s) mode_ = BalanceMode::balance;
+      }
+      break;
+    case BalanceMode::balance:
+      if (distance > region.fall_rad) mode_ = BalanceMode::fallen;
+      break;
+    case BalanceMode::fallen:
+      break;
+  }
+  out.mode = mode_;
+
+  double duty = 0;
+  if (mode_ == BalanceMode::swing_up) {
+    const SwingUp& s = spec_.swing_up;
+    const double phase = dq2 * std::cos(q2);
+    double pump = s.energy_gain * (upright_energy - energy) * (phase > 0 ? -1.0 : 1.0);
+    if (out.energy_ratio < s.start_below_energy_ratio) {
+      const double natural_rad_s = std::sqrt(p.mug / p.mu4);
+      pump = std::sin(natural_rad_s * start_s_) >= 0 ? s.start_acceleration : -s.start_acceleration;
+      start_s_ += t;
+    }
+    // The arm follows a duty like a velocity (its time constant, mu1 / kw, is a fraction of the
+    // period): the acceleration is integrated into a velocity the duty holds, the back-EMF and
+    // friction at that velocity plus the inertia's share, rather than fed back through the
+    // measured velocity, which lags by half a period.
+    const double acceleration = std::clamp(pump, -s.max_acceleration, s.max_acceleration) -
+                                s.arm_gain * q1 - s.arm_damping * arm_velocity_;
+    arm_velocity_ += acceleration * t;
+    duty = ((spec_.back_emf_nm_s + p.fv1) * arm_velocity_ + p.mu1 * acceleration) /
+           spec_.duty_torque_nm;
+    duty = std::clamp(duty, -s.max_duty, s.max_duty);
+  } else if (mode_ == BalanceMode::catching || mode_ == BalanceMode::balance) {
+    const std::array<double, 4> x = {q1, error, dq1, dq2};
+    for (std::size_t i = 0; i < 4; ++i) duty -= spec_.gain[i] * x[i];
+    const auto delayed = static_cast<std::size_t>(spec_.delayed);
+    for (std::size_t i = 0; i < delayed; ++i) {
+      duty -= spec_.gain[4 + i] * sent_[kMaxDelayedDuties - delayed + i];
+    }
+  }
+  out.duty = limit(duty);
+  for (std::size_t i = 0; i + 1 < sent_.size(); ++i) sent_[i] = sent_[i + 1];
+  sent_.back() = out.duty;
+  return out;
+}
+
+}  // namespace furuta::control
