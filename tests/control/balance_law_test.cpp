@@ -1,0 +1,208 @@
+// The balance law on the nonlinear model, without the boards: from rest hanging down it swings the
+// pendulum up, catches and holds it; a push it cannot take ends in a fall with the duty at zero;
+// its modes follow the catch region's hysteresis; a spec out of range is refused by name. The
+// daemon's sessions (tests/daemon, tests/app) run the same law against the simulated rig.
+#include "furuta/control/balance_law.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <optional>
+
+#include "furuta/config/rig_config.hpp"
+#include "furuta/control/upright_lqr.hpp"
+#include "furuta/model/duty_ramp.hpp"
+#include "furuta/model/model.hpp"
+
+namespace furuta::control::balance_law_test {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kDeg = kPi / 180;
+
+struct Rig {
+  model::Parameters<double> truth;
+  model::MotorData motor;
+  double supply_v = 12;
+};
+
+Rig simulated_rig() {
+  const config::RigConfig rig = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  return {rig.simulation.parameters, rig.simulation.motor, rig.simulation.supply_voltage_v};
+}
+
+// The law for `design` parameters at 16 ms with a 2 ms lag, as `furuta controller design` makes it.
+BalanceControllerSpec spec_for(const Rig& rig, const model::Parameters<double>& design) {
+  constexpr double kPeriod = 0.016;
+  constexpr double kLag = 0.002;
+  const SampledPlant sampled =
+      sample(linearize_upright({design, rig.motor, rig.supply_v}), kPeriod, kLag);
+  const BalanceGain gain = design_lqr(sampled, LqrWeights{});
+  BalanceControllerSpec spec;
+  spec.period_s = kPeriod;
+  spec.delayed = sampled.delayed;
+  for (Eigen::Index i = 0; i < gain.k.size(); ++i)
+    spec.gain[static_cast<std::size_t>(i)] = gain.k(i);
+  spec.parameters = design;
+  spec.duty_torque_nm = rig.motor.arm_torque(1.0, 0.0) * rig.supply_v / rig.motor.nominal_voltage_v;
+  spec.back_emf_nm_s = -rig.motor.arm_torque(0.0, 1.0);
+  return spec;
+}
+
+struct Outcome {
+  std::optional<double> balanced_at_s;
+  std::optional<double> fell_at_s;
+  double upright_rms_deg = 0;  // over the balance mode's cycles after a second of it
+  double max_arm_deg = 0;
+  double final_duty = 0;
+};
+
+// The closed loop: the pendulum integrated at 0.1 ms, the encoders' counts (4096 per pendulum
+// turn, 1024 per motor-shaft turn before 26:1 gears), each duty reaching the board 2 ms after its
+// sample and ramped there at 62.5 duty/s. `tap_at_s`: an impulse on the pendulum (N m s).
+Outcome run(const Rig& rig, const BalanceControllerSpec& spec, double seconds, double tap_at_s = -1,
+            double tap_nm_s = 0) {
+  BalanceLaw law(spec);
+  model::PendulumState x{};
+  model::DutyRamp ramp;
+  constexpr double h = 1e-4;
+  const int substeps = static_cast<int>(std::lround(spec.period_s / h));
+  const double arm_count = 2 * kPi / (1024.0 * rig.motor.total_ratio());
+  const double pendulum_count = 2 * kPi / 4096.0;
+  const double scale = rig.supply_v / rig.motor.nominal_voltage_v;
+  Outcome out;
+  double sum2 = 0;
+  int n = 0;
+  double t = 0;
+  bool tapped = false;
+  for (int k = 0; t < seconds; ++k) {
+    const BalanceStep step = law.step(std::floor(x.q1 / arm_count) * arm_count,
+                                      std::floor(x.q2 / pendulum_count) * pendulum_count);
+    out.final_duty = step.duty;
+    if (step.mode == BalanceMode::fallen && !out.fell_at_s) out.fell_at_s = t;
+    if (step.mode == BalanceMode::balance) {
+      if (!out.balanced_at_s) out.balanced_at_s = t;
+      if (t > *out.balanced_at_s + 1) {
+        sum2 += step.upright_error_rad * step.upright_error_rad;
+        ++n;
+      }
+    }
+    for (int j = 0; j < substeps; ++j, t += h) {
+      if (j == 20) ramp.command(step.duty, 62.5);  // 2 ms after the sample
+      if (tap_at_s >= 0 && !tapped && t >= tap_at_s) {
+        tapped = true;
+        const auto m = model::mass_matrix(rig.truth, x.q2);
+        const double det = m.m11 * m.m22 - m.m12 * m.m12;
+        x.dq1 += -m.m12 / det * tap_nm_s;
+        x.dq2 += m.m11 / det * tap_nm_s;
+      }
+      const double u = ramp.advance(h) * scale;
+      x = model::rk4_step(rig.truth, x, h, [&](const model::PendulumState& s) {
+        return rig.motor.arm_torque(u, s.dq1);
+      });
+    }
+    out.max_arm_deg = std::max(out.max_arm_deg, std::fabs(x.q1) / kDeg);
+  }
+  out.upright_rms_deg = n > 0 ? std::sqrt(sum2 / n) / kDeg : 0;
+  return out;
+}
+
+TEST(BalanceLaw, SwingsUpFromRestCatchesAndHoldsTheTruePendulum) {
+  const Rig rig = simulated_rig();
+  const Outcome o = run(rig, spec_for(rig, rig.truth), 30);
+  ASSERT_TRUE(o.balanced_at_s.has_value());
+  EXPECT_LT(*o.balanced_at_s, 10.0);
+  EXPECT_FALSE(o.fell_at_s.has_value());
+  EXPECT_LT(o.upright_rms_deg, 1.0);
+  EXPECT_GT(o.upright_rms_deg, 0.0);  // the encoders' counts leave a residue: it is measured
+  EXPECT_LT(o.max_arm_deg, 150.0);    // the configuration's arm limit
+}
+
+TEST(BalanceLaw, ControllersFromTheCadValuesBalanceTheTruePendulumToo) {
+  const Rig rig = simulated_rig();
+  const config::RigConfig config = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
+  ASSERT_TRUE(config.nominal.has_value());
+  model::Parameters<double> cad = *config.nominal;
+  cad.fv1 = rig.truth.fv1;  // CAD has no friction: the design takes the identified values'
+  cad.fv2 = rig.truth.fv2;
+  const Outcome o = run(rig, spec_for(rig, cad), 30);
+  ASSERT_TRUE(o.balanced_at_s.has_value());
+  EXPECT_LT(o.upright_rms_deg, 1.0);
+}
+
+TEST(BalanceLaw, RecoversFromASmallTapAndFallsCleanlyFromALargeOne) {
+  const Rig rig = simulated_rig();
+  const BalanceControllerSpec spec = spec_for(rig, rig.truth);
+  const Outcome small = run(rig, spec, 20, 12.0, 2e-3);
+  ASSERT_TRUE(small.balanced_at_s.has_value());
+  ASSERT_LT(*small.balanced_at_s, 12.0);
+  EXPECT_FALSE(small.fell_at_s.has_value());
+  const Outcome large = run(rig, spec, 20, 12.0, 30e-3);
+  ASSERT_TRUE(large.fell_at_s.has_value());
+  EXPECT_GT(*large.fell_at_s, 12.0);
+  EXPECT_EQ(large.final_duty, 0.0);  // fallen is final: nothing more is driven
+}
+
+TEST(BalanceLaw, ModesFollowTheCatchRegionWithHysteresis) {
+  const Rig rig = simulated_rig();
+  BalanceControllerSpec spec = spec_for(rig, rig.truth);
+  spec.region.settle_s = 0.032;  // two periods
+  BalanceLaw law(spec);
+  const double catch_in = kPi - 0.9 * spec.region.catch_rad;
+  const double between = kPi - 0.5 * (spec.region.catch_rad + spec.region.release_rad);
+  const double beyond = kPi - 1.1 * spec.region.release_rad;
+  EXPECT_EQ(law.step(0, 0.1).mode, BalanceMode::swing_up);
+  EXPECT_EQ(law.step(0, catch_in).mode, BalanceMode::catching);
+  EXPECT_EQ(law.step(0, between).mode, BalanceMode::catching);  // inside the release angle
+  EXPECT_EQ(law.step(0, beyond).mode, BalanceMode::swing_up);
+  EXPECT_EQ(law.step(0, catch_in).mode, BalanceMode::catching);
+  EXPECT_EQ(law.step(0, catch_in).mode, BalanceMode::catching);
+  EXPECT_EQ(law.step(0, catch_in).mode, BalanceMode::balance);  // settle_s inside
+  EXPECT_EQ(law.step(0, kPi - 1.1 * spec.region.fall_rad).mode, BalanceMode::fallen);
+  const BalanceStep after = law.step(0, kPi);
+  EXPECT_EQ(after.mode, BalanceMode::fallen);
+  EXPECT_EQ(after.duty, 0.0);
+  law.reset();
+  EXPECT_EQ(law.step(0, kPi).mode, BalanceMode::catching);
+}
+
+TEST(BalanceLaw, DutiesAreWholeStepsWithinTheLimit) {
+  const Rig rig = simulated_rig();
+  BalanceControllerSpec spec = spec_for(rig, rig.truth);
+  spec.max_duty = 0.3;
+  spec.swing_up.max_duty = 0.3;
+  BalanceLaw law(spec);
+  law.step(0, kPi);
+  for (const double q2 : {kPi - 0.3, kPi + 0.3, kPi - 0.01, kPi + 0.2}) {
+    const double duty = law.step(0.5, q2).duty;
+    EXPECT_LE(std::fabs(duty), 0.3);
+    EXPECT_NEAR(duty * 255, std::round(duty * 255), 1e-9);
+  }
+}
+
+TEST(BalanceLaw, ASpecOutOfRangeIsRefusedByName) {
+  const Rig rig = simulated_rig();
+  const BalanceControllerSpec good = spec_for(rig, rig.truth);
+  const auto refused = [&](auto change, const std::string& name) {
+    BalanceControllerSpec s = good;
+    change(s);
+    try {
+      BalanceLaw law(s);
+      ADD_FAILURE() << "accepted a bad " << name;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  };
+  refused([](BalanceControllerSpec& s) { s.period_s = 0; }, "period_s");
+  refused([](BalanceControllerSpec& s) { s.max_duty = 1.5; }, "max_duty");
+  refused([](BalanceControllerSpec& s) { s.gain[1] = std::nan(""); }, "gain");
+  refused([](BalanceControllerSpec& s) { s.parameters.mu4 = -1; }, "mu4");
+  refused([](BalanceControllerSpec& s) { s.region.release_rad = s.region.catch_rad; },
+          "release_rad");
+  refused([](BalanceControllerSpec& s) { s.swing_up.max_duty = 0.9; }, "max_duty");
+  refused([](BalanceControllerSpec& s) { s.delayed = 9; }, "delayed");
+}
+
+}  // namespace
+}  // namespace furuta::control::balance_law_test
