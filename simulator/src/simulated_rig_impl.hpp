@@ -24,8 +24,6 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr std::int64_t kNsPerS = 1'000'000'000;
 constexpr std::int64_t kFarPast = std::numeric_limits<std::int64_t>::min() / 4;
 constexpr int kBoardCount = 2;
-// The latest tap time: its nanoseconds stay well inside the rig's int64 clock.
-constexpr double kMaxTapTimeS = 1e9;
 
 // Reports waiting for the host, per board. The kernel's hidraw buffer holds 64 reports and drops
 // new ones when full; this is larger so that a test can stall a board for seconds and still see

@@ -25,11 +25,14 @@ namespace furuta::sim {
 
 enum class RigBoard : std::uint8_t { motor_1065 = 0, encoder_1047 = 1 };
 
+// The latest tap time: its nanoseconds stay well inside the rig's int64 clock.
+inline constexpr double kMaxTapTimeS = 1e9;
+
 // A tap: an angular impulse on the pendulum's joint at one instant, the push a balance controller
 // is tested against. It changes the generalized momentum M(q) dq by [0, impulse] at once, so the
 // velocities jump by M(q)^-1 [0, impulse] and the angles do not move.
 struct Tap {
-  double time_s = 0.0;        // on the rig's clock, after its construction; in [0, 1e9]
+  double time_s = 0.0;        // on the rig's clock, after its construction; in [0, kMaxTapTimeS]
   double impulse_nm_s = 0.0;  // N m s, positive towards positive q2
 };
 
