@@ -138,6 +138,36 @@ void read_initial_state(Section x0, sim::SimulatedRigConfig& s) {
   x0.reject_unknown_keys();
 }
 
+// tap_times_s and tap_impulse_mnm_s: the taps on the simulated pendulum, with one impulse for
+// every tap or one per tap.
+void read_taps(Section& sim, sim::SimulatedRigConfig& s) {
+  const std::vector<double> times = sim.number_list(
+      "tap_times_s", {}, [](double v) { return v >= 0 && v <= sim::kMaxTapTimeS; }, "in [0, 1e9]");
+  for (std::size_t i = 1; i < times.size(); ++i) {
+    // Taps are applied in order: an unordered list is a typo, not a schedule to sort.
+    if (!(times[i] > times[i - 1])) {
+      sim.fail("tap_times_s", sim.node("tap_times_s")->as_array()->get(i),
+               "must be strictly increasing");
+    }
+  }
+  std::vector<double> impulses_mnm_s;
+  const toml::node* impulse = sim.node("tap_impulse_mnm_s");
+  if (impulse && impulse->is_array()) {
+    impulses_mnm_s = sim.number_list("tap_impulse_mnm_s", {});
+    if (impulses_mnm_s.size() != times.size()) {
+      sim.fail("tap_impulse_mnm_s", impulse,
+               "must be one number or an array as long as tap_times_s (" +
+                   std::to_string(times.size()) + ")");
+    }
+  } else {
+    impulses_mnm_s.assign(times.size(), sim.number("tap_impulse_mnm_s", 0.0));
+  }
+  s.taps.clear();
+  for (std::size_t i = 0; i < times.size(); ++i) {
+    s.taps.push_back({times[i], impulses_mnm_s[i] * 1e-3});
+  }
+}
+
 // [simulation]: the simulated rig's own settings (its boards are the configured ones, see
 // simulate_the_configured_rig).
 sim::SimulatedRigConfig read_simulation(Section sim) {
@@ -157,6 +187,7 @@ sim::SimulatedRigConfig read_simulation(Section sim) {
       static_cast<int>(sim.integer("firmware_1065", s.firmware_1065, firmware, "in [100, 999]"));
   s.firmware_1047 =
       static_cast<int>(sim.integer("firmware_1047", s.firmware_1047, firmware, "in [100, 999]"));
+  read_taps(sim, s);
   s.parameters = read_parameters(sim.child("parameters"), model::paper_run1());
   read_initial_state(sim.child("initial_state"), s);
   sim.reject_unknown_keys();

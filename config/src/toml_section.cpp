@@ -124,6 +124,24 @@ std::string Section::choice(const std::string& key, const std::string& fallback,
   fail(key, node(key), "'" + value + "' is not one of: " + list);
 }
 
+std::vector<double> Section::number_list(const std::string& key,
+                                         const std::vector<double>& fallback,
+                                         const NumberRule& valid, const char* rule) {
+  const toml::node* node = use(key);
+  if (!node) return fallback;
+  const toml::array* a = node->as_array();
+  if (!a) fail(key, node, "must be an array of numbers");
+  std::vector<double> out;
+  out.reserve(a->size());
+  for (const toml::node& e : *a) {
+    if (!e.is_number()) fail(key, &e, "must be an array of numbers");
+    const double value = finite_number(key, &e);
+    if (valid && !valid(value)) fail(key, &e, std::string("entries must be ") + rule);
+    out.push_back(value);
+  }
+  return out;
+}
+
 std::vector<std::string> Section::choices(const std::string& key,
                                           const std::vector<std::string>& fallback,
                                           std::initializer_list<const char*> allowed) {

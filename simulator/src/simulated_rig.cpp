@@ -324,6 +324,9 @@ const std::vector<TruthRecord>& SimulatedRig::truth() const {
 const std::vector<MotorCommandRecord>& SimulatedRig::motor_commands() const {
   return impl_->motor_commands();
 }
+const std::vector<TapRecord>& SimulatedRig::taps() const {
+  return impl_->taps();
+}
 void SimulatedRig::advance_to_now() {
   impl_->advance_to_now();
 }

@@ -191,6 +191,7 @@ class SimulatedRig::Impl {
   }
   const std::vector<TruthRecord>& truth() const { return truth_; }
   const std::vector<MotorCommandRecord>& motor_commands() const { return motor_commands_; }
+  const std::vector<TapRecord>& taps() const { return tap_records_; }
   void advance_to_now() {
     std::lock_guard lock(mutex_);
     advance_locked(clock_.now_ns());
@@ -205,6 +206,8 @@ class SimulatedRig::Impl {
   void power_up(RigBoard board);
   void advance_locked(std::int64_t t_ns);
   void integrate_to(std::int64_t t_ns);
+  // Applies every configured tap whose time physics has reached.
+  void apply_due_taps();
   void generate(RigBoard board, std::int64_t generated_ns);
   std::size_t build_1065(double torque, std::span<std::uint8_t> out);
   std::size_t build_1047(std::int64_t generated_ns, std::span<std::uint8_t> out);
@@ -250,6 +253,13 @@ class SimulatedRig::Impl {
 
   std::vector<TruthRecord> truth_;
   std::vector<MotorCommandRecord> motor_commands_;
+
+  // Taps: their times on the rig's clock, the next one to apply, what each did, and the impulse
+  // each board's next truth record reports.
+  std::vector<std::int64_t> tap_ns_;
+  std::size_t next_tap_ = 0;
+  std::vector<TapRecord> tap_records_;
+  std::array<double, detail::kBoardCount> tap_since_report_{};
   std::uint64_t next_handle_id_ = 1;
 };
 

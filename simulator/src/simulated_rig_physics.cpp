@@ -47,6 +47,15 @@ SimulatedRig::Impl::Impl(SimulatedRigConfig config, Clock& clock)
     throw std::invalid_argument("SimulatedRigConfig: report period too long for the 1047's u24");
   }
   packet_time_ticks_ = static_cast<std::uint32_t>(packet_ticks);
+  for (std::size_t i = 0; i < config_.taps.size(); ++i) {
+    const Tap& tap = config_.taps[i];
+    if (!(tap.time_s >= 0.0 && tap.time_s <= kMaxTapTimeS) || !std::isfinite(tap.impulse_nm_s) ||
+        (i > 0 && !(tap.time_s > config_.taps[i - 1].time_s))) {
+      throw std::invalid_argument(
+          "SimulatedRigConfig: tap times must be strictly increasing in [0, 1e9] s, impulses "
+          "finite");
+    }
+  }
 
   std::mt19937_64 master(config_.seed);
   noise_rng_.seed(master());
@@ -57,6 +66,13 @@ SimulatedRig::Impl::Impl(SimulatedRigConfig config, Clock& clock)
   physics_ns_ = t0_ns_;
   state_ = config_.initial_state;
   supply_v_ = config_.supply_voltage_v;
+
+  // Two taps that round to the same nanosecond are applied one after the other at that instant.
+  tap_ns_.reserve(config_.taps.size());
+  for (const Tap& tap : config_.taps) {
+    tap_ns_.push_back(t0_ns_ + std::llround(tap.time_s * static_cast<double>(kNsPerS)));
+  }
+  tap_records_.reserve(config_.taps.size());
 
   board_of(RigBoard::motor_1065).encoder.counts_per_rad =
       config_.motor_encoder_counts_per_rev * config_.motor.total_ratio() / kTwoPi;
@@ -70,6 +86,7 @@ SimulatedRig::Impl::Impl(SimulatedRigConfig config, Clock& clock)
     boards_[i].next_jitter_ns = jitter(jitter_rng_[i]);
     power_up(static_cast<RigBoard>(i));
   }
+  apply_due_taps();  // a tap at 0 s acts on the initial state
 }
 
 double SimulatedRig::Impl::drive_torque(double duty, double dq1, bool idle) const {
@@ -131,14 +148,39 @@ double duty_rate_per_s(const MotorOutput1065& output) {
   return pct / 100.0;
 }
 
+void SimulatedRig::Impl::apply_due_taps() {
+  while (next_tap_ < tap_ns_.size() && tap_ns_[next_tap_] <= physics_ns_) {
+    const double impulse = config_.taps[next_tap_].impulse_nm_s;
+    TapRecord& record = tap_records_.emplace_back();  // room reserved at construction
+    record.time_ns = physics_ns_;  // the instant it acted on, which is its own time
+    record.impulse_nm_s = impulse;
+    record.before = state_;
+    if (arm_clamped_) {
+      // The clamp takes the arm's reaction: the arm stays still and the pendulum alone turns.
+      state_.dq2 += impulse / config_.parameters.mu4;
+    } else {
+      // dq += M(q)^-1 [0, impulse], the 2x2 inverse written out.
+      const model::MassMatrix<double> m = model::mass_matrix(config_.parameters, state_.q2);
+      const double det = m.m11 * m.m22 - m.m12 * m.m12;
+      state_.dq1 += -m.m12 * impulse / det;
+      state_.dq2 += m.m11 * impulse / det;
+    }
+    record.after = state_;
+    for (double& since : tap_since_report_) since += impulse;
+    ++next_tap_;
+  }
+}
+
 void SimulatedRig::Impl::integrate_to(std::int64_t t_ns) {
   Encoder& arm = board_of(RigBoard::motor_1065).encoder;
   Encoder& pendulum = board_of(RigBoard::encoder_1047).encoder;
+  apply_due_taps();
   while (physics_ns_ < t_ns) {
-    // Steps stay on a grid anchored at t0, split only where a report or a command needs the state,
-    // so the trajectory does not depend on how often the host happens to poll.
+    // Steps stay on a grid anchored at t0, split only where a report, a command or a tap needs the
+    // state, so the trajectory does not depend on how often the host happens to poll.
     const std::int64_t grid_next = t0_ns_ + ((physics_ns_ - t0_ns_) / step_ns_ + 1) * step_ns_;
     std::int64_t end_ns = std::min(grid_next, t_ns);
+    if (next_tap_ < tap_ns_.size()) end_ns = std::min(end_ns, tap_ns_[next_tap_]);
     // A ramp that reaches its target within the step ends the step there: the step sees a duty
     // constant at the ramp's mean, and a short ramp (a small command change) spread over a whole
     // step would act half a step late: an effective delay on every small change, which an
@@ -167,6 +209,7 @@ void SimulatedRig::Impl::integrate_to(std::int64_t t_ns) {
     physics_ns_ = end_ns;
     arm.track_edges(state_.q1, physics_ns_);
     pendulum.track_edges(state_.q2, physics_ns_);
+    apply_due_taps();
   }
 }
 
@@ -291,8 +334,10 @@ void SimulatedRig::Impl::generate(RigBoard board, std::int64_t generated_ns) {
     t.applied_duty = duty_.applied();
     t.arm_torque_nm = torque;
     t.delivered = delivered;
+    t.tap_impulse_nm_s = tap_since_report_[board_index(board)];
     truth_.push_back(t);
   }
+  tap_since_report_[board_index(board)] = 0.0;
 }
 
 std::int64_t SimulatedRig::Impl::next_delivery_estimate(const Board& b) const {

@@ -227,6 +227,77 @@ TEST(RigConfig, AutomationErrorsNameLineAndField) {
   EXPECT_EQ(typo.line(), 2);
 }
 
+TEST(RigConfig, SimulationTapsAreReadWithTheirImpulsesInMilliNewtonMetreSeconds) {
+  EXPECT_TRUE(parse_rig_config("", "empty.toml").simulation.taps.empty());
+  EXPECT_TRUE(load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml").simulation.taps.empty());
+
+  const RigConfig one = parse_rig_config(
+      "[simulation]\ntap_times_s = [20.0, 40]\ntap_impulse_mnm_s = 2.0\n", "rig.toml");
+  ASSERT_EQ(one.simulation.taps.size(), 2u);
+  EXPECT_EQ(one.simulation.taps[0].time_s, 20.0);
+  EXPECT_EQ(one.simulation.taps[1].time_s, 40.0);
+  EXPECT_DOUBLE_EQ(one.simulation.taps[0].impulse_nm_s, 2e-3);
+  EXPECT_DOUBLE_EQ(one.simulation.taps[1].impulse_nm_s, 2e-3);
+
+  const RigConfig each = parse_rig_config(
+      "[simulation]\ntap_times_s = [0, 1.5]\ntap_impulse_mnm_s = [1.5, -2]\n", "rig.toml");
+  ASSERT_EQ(each.simulation.taps.size(), 2u);
+  EXPECT_DOUBLE_EQ(each.simulation.taps[0].impulse_nm_s, 1.5e-3);
+  EXPECT_DOUBLE_EQ(each.simulation.taps[1].impulse_nm_s, -2e-3);
+
+  // An impulse without times taps nothing.
+  EXPECT_TRUE(
+      parse_rig_config("[simulation]\ntap_impulse_mnm_s = 3\n", "r").simulation.taps.empty());
+}
+
+TEST(RigConfig, BadTapsAreRefusedAtTheirLine) {
+  struct Case {
+    const char* value;  // of the key, which is on line 3
+    int line;
+    const char* problem;
+  };
+  const auto check = [](const char* key, const Case& c) {
+    const std::string text =
+        std::string("[simulation]\n# the taps\n") + key + " = " + c.value + "\n";
+    SCOPED_TRACE(text);
+    const ConfigError e = error_of(text);
+    EXPECT_EQ(e.file(), "rig.toml");
+    EXPECT_EQ(e.line(), c.line) << e.what();
+    EXPECT_EQ(e.field(), std::string("simulation.") + key);
+    EXPECT_NE(std::string(e.what()).find(c.problem), std::string::npos) << e.what();
+  };
+  for (const Case& c : std::vector<Case>{
+           {"[20.0, 10.0]", 3, "must be strictly increasing"},
+           {"[\n  20.0,\n  40.0,\n  30.0,\n]", 6, "must be strictly increasing"},
+           {"[20.0, 20.0]", 3, "must be strictly increasing"},
+           {"[nan]", 3, "must be finite"},
+           {"[10, inf]", 3, "must be finite"},
+           {"[-1.0]", 3, "entries must be in [0, 1e9]"},
+           {"[2e9]", 3, "entries must be in [0, 1e9]"},
+           {"[\"20\"]", 3, "must be an array of numbers"},
+           {"20.0", 3, "must be an array of numbers"},
+           {"[[20.0]]", 3, "must be an array of numbers"},
+       }) {
+    check("tap_times_s", c);
+  }
+  for (const Case& c : std::vector<Case>{
+           {"nan", 3, "must be finite"},
+           {"-inf", 3, "must be finite"},
+           {"\"2.0\"", 3, "must be a number"},
+           {"[1.0, nan]", 3, "must be finite"},
+           {"[1.0, true]", 3, "must be an array of numbers"},
+           {"[1.0]", 3, "must be one number or an array as long as tap_times_s (0)"},
+       }) {
+    check("tap_impulse_mnm_s", c);
+  }
+  // Against the times given.
+  const ConfigError e =
+      error_of("[simulation]\ntap_times_s = [20.0, 40.0]\n\ntap_impulse_mnm_s = [1.0, 2.0, 3.0]\n");
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_NE(std::string(e.what()).find("an array as long as tap_times_s (2)"), std::string::npos)
+      << e.what();
+}
+
 }  // namespace
 }  // namespace furuta::config
 

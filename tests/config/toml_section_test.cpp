@@ -101,6 +101,28 @@ TEST(TomlSection, ChoicesReadAsTheirValuesAndListTheAllowedSpellings) {
                "t.toml: u: missing: one of s, ms");
 }
 
+TEST(TomlSection, NumberListsHaveAnyLengthAndABadEntryIsNamedAtItsLine) {
+  const toml::table root = parse_toml("a = [1, 2.5, -3]\nb = []\n", "t.toml");
+  Section top(root, "t.toml");
+  EXPECT_EQ(top.number_list("a", {}), (std::vector<double>{1.0, 2.5, -3.0}));
+  EXPECT_TRUE(top.number_list("b", {7.0}).empty());
+  EXPECT_EQ(top.number_list("c", {7.0}), std::vector<double>{7.0});
+  top.reject_unknown_keys();
+
+  const auto positive = [](Section& top) {
+    top.number_list(
+        "x", {}, [](double v) { return v > 0; }, "> 0");
+  };
+  EXPECT_STREQ(error_of("x = [\n  1,\n  -2,\n]\n", positive).what(),
+               "t.toml:3: x: entries must be > 0");
+  EXPECT_STREQ(error_of("x = [1, nan]\n", positive).what(), "t.toml:1: x: must be finite");
+  EXPECT_STREQ(error_of("\nx = [1, \"2\"]\n", positive).what(),
+               "t.toml:2: x: must be an array of numbers");
+  EXPECT_STREQ(error_of("x = 1\n", positive).what(), "t.toml:1: x: must be an array of numbers");
+  EXPECT_STREQ(error_of("x = [[1]]\n", positive).what(),
+               "t.toml:1: x: must be an array of numbers");
+}
+
 TEST(TomlSection, KeysNeverReadAreUnknown) {
   const ConfigError e = error_of("[a]\nx = 1\ny = 2\n", [](Section& top) {
     Section a = top.child("a");

@@ -84,6 +84,10 @@ class Section {
   template <std::size_t N>
   std::array<double, N> numbers(const std::string& key, const std::array<double, N>& fallback,
                                 const NumberRule& valid = {}, const char* rule = "");
+  // An array of numbers of any length (empty included), each finite and checked ("entries must be
+  // <rule>"); a bad entry is reported at its own line, as a long list spans several.
+  std::vector<double> number_list(const std::string& key, const std::vector<double>& fallback,
+                                  const NumberRule& valid = {}, const char* rule = "");
   // An array of strings, each one of `allowed`, no repeats.
   std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
                                    std::initializer_list<const char*> allowed);

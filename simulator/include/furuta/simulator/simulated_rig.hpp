@@ -25,6 +25,17 @@ namespace furuta::sim {
 
 enum class RigBoard : std::uint8_t { motor_1065 = 0, encoder_1047 = 1 };
 
+// The latest tap time: its nanoseconds stay well inside the rig's int64 clock.
+inline constexpr double kMaxTapTimeS = 1e9;
+
+// A tap: an angular impulse on the pendulum's joint at one instant, the push a balance controller
+// is tested against. It changes the generalized momentum M(q) dq by [0, impulse] at once, so the
+// velocities jump by M(q)^-1 [0, impulse] and the angles do not move.
+struct Tap {
+  double time_s = 0.0;        // on the rig's clock, after its construction; in [0, kMaxTapTimeS]
+  double impulse_nm_s = 0.0;  // N m s, positive towards positive q2
+};
+
 struct SimulatedRigConfig {
   model::Parameters<double> parameters = model::paper_run1();
   model::MotorData motor{};
@@ -46,6 +57,10 @@ struct SimulatedRigConfig {
 
   double supply_voltage_v = 12.0;
   std::uint64_t seed = 1;
+
+  // Strictly increasing times, finite impulses. Each lands exactly at its time: a physics step
+  // ends there, so the result does not depend on the step or on when the host polls.
+  std::vector<Tap> taps;
 
   std::string serial_1065 = "300001";
   int firmware_1065 = 105;
@@ -75,6 +90,17 @@ struct TruthRecord {
   double applied_duty = 0.0;
   double arm_torque_nm = 0.0;
   bool delivered = true;  // false when a fault dropped it
+  // The taps on the pendulum since this board's previous report, summed (N m s); a tap at the
+  // report's own time is in it, and in its state.
+  double tap_impulse_nm_s = 0.0;
+};
+
+// A tap as it was applied: the state the instant before and after it.
+struct TapRecord {
+  std::int64_t time_ns = 0;  // the rig's clock
+  double impulse_nm_s = 0.0;
+  model::PendulumState before{};
+  model::PendulumState after{};
 };
 
 // What the 1065 was told to do, and when it took it.
@@ -129,6 +155,9 @@ class SimulatedRig {
   const std::vector<TruthRecord>& truth() const;
   // Empty unless config.record_motor_commands. Read while no transport is in use.
   const std::vector<MotorCommandRecord>& motor_commands() const;
+  // The configured taps applied so far, in order (kept without allocating: the room for all of
+  // them is taken at construction). Read while no transport is in use.
+  const std::vector<TapRecord>& taps() const;
   // Brings physics up to the clock's time (reads and writes do this themselves).
   void advance_to_now();
   std::int64_t now_ns() const;  // the rig's clock
