@@ -65,6 +65,10 @@ int delayed_duties(double period_s, double lag_s) {
   if (!(lag_s >= 0) || !std::isfinite(lag_s)) {
     throw std::invalid_argument("sample: the lag must be a finite number >= 0 s");
   }
+  // The count must fit an int; a lag of that many periods is a mistake anyway.
+  if (!(lag_s / period_s < 1e6)) {
+    throw std::invalid_argument("sample: the lag must be less than a million periods");
+  }
   const int whole = static_cast<int>(std::floor(lag_s / period_s));
   const double fraction = lag_s - whole * period_s;
   return whole + (fraction > 0 ? 1 : 0);

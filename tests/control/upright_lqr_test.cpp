@@ -187,6 +187,7 @@ TEST(UprightLqr, DelayedDutiesIsWhatSamplingCarries) {
   EXPECT_EQ(delayed_duties(0.016, 0.035), 3);
   EXPECT_THROW(delayed_duties(0.0, 0.0), std::invalid_argument);
   EXPECT_THROW(delayed_duties(0.016, -1e-3), std::invalid_argument);
+  EXPECT_THROW(delayed_duties(1e-9, 1e9), std::invalid_argument);  // no count fits an int
 }
 
 TEST(UprightLqr, BadPeriodsLagsAndWeightsAreRefused) {
