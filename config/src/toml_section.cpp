@@ -124,6 +124,24 @@ std::string Section::choice(const std::string& key, const std::string& fallback,
   fail(key, node(key), "'" + value + "' is not one of: " + list);
 }
 
+std::vector<double> Section::required_numbers(const std::string& key, const std::string& what,
+                                              std::size_t min_count, std::size_t max_count) {
+  const toml::node* node = use(key);
+  if (!node) fail(key, nullptr, "missing: " + what);
+  const std::string shape = min_count == max_count
+                                ? "must be an array of " + std::to_string(min_count) + " numbers"
+                                : "must be an array of " + std::to_string(min_count) + " to " +
+                                      std::to_string(max_count) + " numbers";
+  const toml::array* a = node->as_array();
+  if (!a || a->size() < min_count || a->size() > max_count) fail(key, node, shape);
+  std::vector<double> out;
+  for (const toml::node& e : *a) {
+    if (!e.is_integer() && !e.is_floating_point()) fail(key, node, shape);
+    out.push_back(finite_number(key, &e));
+  }
+  return out;
+}
+
 std::vector<std::string> Section::choices(const std::string& key,
                                           const std::vector<std::string>& fallback,
                                           std::initializer_list<const char*> allowed) {

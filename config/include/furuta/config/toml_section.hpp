@@ -84,6 +84,9 @@ class Section {
   template <std::size_t N>
   std::array<double, N> numbers(const std::string& key, const std::array<double, N>& fallback,
                                 const NumberRule& valid = {}, const char* rule = "");
+  // An array of min_count to max_count numbers, each finite; absent, the error "missing: <what>".
+  std::vector<double> required_numbers(const std::string& key, const std::string& what,
+                                       std::size_t min_count, std::size_t max_count);
   // An array of strings, each one of `allowed`, no repeats.
   std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
                                    std::initializer_list<const char*> allowed);
