@@ -107,7 +107,7 @@ void read_controller_table(Section& s, ControllerFile& f) {
   f.lag_s = s.required_number("lag_s", "the data path's lag", detail::non_negative, ">= 0");
   f.ramp_lag_s =
       s.required_number("ramp_lag_s", "the duty ramp's delay", detail::non_negative, ">= 0");
-  // A gain carries at most kMaxDelayedDuties duties on their way: a longer delay has none.
+  // A gain carries at most kMaxDelayedDuties duties on their way: no gain fits a longer delay.
   const double period_s = static_cast<double>(f.period_ns) * 1e-9;
   if (!(f.lag_s + f.ramp_lag_s <= control::kMaxDelayedDuties * period_s)) {
     s.fail("ramp_lag_s", s.node("ramp_lag_s"),

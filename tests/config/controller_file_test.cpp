@@ -23,8 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 using furuta::testing::TempDir;
 
-// A file as `furuta controller design` writes it: 16 ms, a 2 ms lag and a 0.4 ms ramp, so one
-// duty on its way and five gains.
+// A file as `furuta controller design` writes it: its lags together under one period, so one duty
+// on its way and a gain of five entries.
 const char* const kValid = R"(# a balance controller
 [controller]
 kind = "upright_lqr"
