@@ -1,13 +1,20 @@
 // `furuta controller design`: the balance controller from an identification's results.json
 // (control/, docs/control.md), written as a controller file the daemon's balance session reads.
+#include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <numbers>
 #include <ostream>
 #include <sstream>
 
 #include "commands.hpp"
+#include "furuta/config/config_error.hpp"
+#include "furuta/config/controller_file.hpp"
 #include "furuta/config/rig_config.hpp"
+#include "furuta/control/balance_law.hpp"
 #include "furuta/control/upright_lqr.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 #include "furuta/identification/identify.hpp"
@@ -35,12 +42,21 @@ std::optional<model::Parameters<double>> chosen(const report::ResultsFile& r,
   return std::nullopt;
 }
 
-// Every double as it is (17 significant digits): the file is read back into the same numbers.
+// Every double in the shortest text that reads back as the same double (std::to_chars, in %g's
+// style: an exponent only for the very small and the very large), so the file is read back into
+// the design's numbers; with a decimal point or exponent, so that TOML reads a float where one is
+// meant.
 std::string exact(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  return s.str();
+  std::array<char, 64> buffer{};
+  const auto [end, ec] =
+      std::to_chars(buffer.data(), buffer.data() + buffer.size(), v, std::chars_format::general);
+  std::string text(buffer.data(), ec == std::errc() ? end : buffer.data());
+  if (text.find_first_of(".en") == std::string::npos) text += ".0";  // "n": inf and nan
+  return text;
 }
+
+// Degrees in the file, for a person to read: the reader multiplies by the same factor.
+constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 // A TOML basic string: quotes and backslashes escaped, control characters as \uXXXX.
 std::string quoted(const std::string& text) {
@@ -109,21 +125,37 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
                                                         : rig.motor.nominal_voltage_v);
   const double period_s = static_cast<double>(rig.daemon.period_ns) * 1e-9;
   const double lag_s = rig.identification.input_lag_ms.value_or(0.0) * 1e-3;
+  // The board ramps every new duty at its acceleration: on a typical balance step that is a short
+  // delay, which the design adds to the data path's lag.
+  const double ramp_lag_s =
+      control::ramp_lag_s(rig.excitation.board_acceleration_pct_per_s, control::kRampStepDuty);
   const control::DesignPlant plant{*parameters, rig.motor, supply_v};
   control::BalanceGain gain;
   try {
-    gain = control::design_lqr(control::sample(control::linearize_upright(plant), period_s, lag_s),
-                               options.weights);
+    gain = control::design_lqr(
+        control::sample(control::linearize_upright(plant), period_s, lag_s + ramp_lag_s),
+        options.weights);
   } catch (const std::exception& e) {
     return refuse(std::string("the design failed: ") + e.what());
   }
+  const control::DriveConstants drive = control::drive_constants(plant);
+  const double max_duty = rig.limits.max_amplitude_duty;
+  control::SwingUp swing_up;
+  // The swing-up never asks for more than the controller may.
+  swing_up.max_duty = std::min(swing_up.max_duty, max_duty);
+  const control::CatchRegion region;
 
   std::ostringstream file;
   file << "# A balance controller designed by `furuta controller design` (docs/control.md): the "
           "model\n# linearised about upright, sampled at the loop period with the data path's "
-          "lag, a discrete LQR.\n\n";
-  file << "[controller]\nkind = \"upright_lqr\"\nperiod_ns = " << rig.daemon.period_ns
-       << "\nlag_s = " << exact(lag_s) << "\nsupply_v = " << exact(supply_v)
+          "lag and the\n# board's duty ramp, a discrete LQR; the swing-up, catch region and limits "
+          "the loop runs.\n\n";
+  file << "[controller]\nkind = " << quoted(std::string(config::kUprightLqrKind))
+       << "\nrig = " << quoted(rig.name) << "\nperiod_ns = " << rig.daemon.period_ns
+       << "\nlag_s = " << exact(lag_s) << "\n# the duty ramp as a delay on a step of "
+       << "ramp_step_duty; the design's lag is lag_s + ramp_lag_s\nramp_lag_s = "
+       << exact(ramp_lag_s) << "\nramp_step_duty = " << exact(control::kRampStepDuty)
+       << "\nsupply_v = " << exact(supply_v)
        << "\ndesigned_by = " << quoted(daemon::kSoftwareVersion) << "\n\n";
   file << "[parameters]\nsource = \"" << to_string(options.parameters)
        << "\"\nresults = " << quoted(std::filesystem::weakly_canonical(options.results).string())
@@ -148,7 +180,30 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   file << "[prediction]\nclosed_loop_poles_re = " << array_text(re)
        << "\nclosed_loop_poles_im = " << array_text(im)
        << "\nspectral_radius = " << exact(gain.spectral_radius) << "\n\n";
-  file << "[limits]\nmax_duty = " << exact(rig.limits.max_amplitude_duty) << "\n";
+  file << "[drive]\n# eq. 4 at supply_v: torque = duty_torque_nm duty - back_emf_nm_s dq1\n"
+       << "duty_torque_nm = " << exact(drive.duty_torque_nm)
+       << "\nback_emf_nm_s = " << exact(drive.back_emf_nm_s) << "\n\n";
+  file << "[swing_up]\nenergy_gain = " << exact(swing_up.energy_gain)
+       << "\nmax_acceleration = " << exact(swing_up.max_acceleration)
+       << "\narm_gain = " << exact(swing_up.arm_gain)
+       << "\narm_damping = " << exact(swing_up.arm_damping)
+       << "\nmax_duty = " << exact(swing_up.max_duty)
+       << "\nstart_below_energy_ratio = " << exact(swing_up.start_below_energy_ratio)
+       << "\nstart_acceleration = " << exact(swing_up.start_acceleration) << "\n\n";
+  file << "[catch]\n# angles from upright\ncatch_deg = " << exact(region.catch_rad / kDegToRad)
+       << "\nrelease_deg = " << exact(region.release_rad / kDegToRad)
+       << "\nsettle_s = " << exact(region.settle_s)
+       << "\nfall_deg = " << exact(region.fall_rad / kDegToRad) << "\n\n";
+  file << "[limits]\nmax_duty = " << exact(max_duty)
+       << "\nduty_step = " << exact(config::motor_resolution(rig).duty_step) << "\n";
+
+  // What is written is what the loop's reader accepts: a rig whose limits the balance law refuses
+  // (a duty limit below one duty step) gets no file.
+  try {
+    config::parse_controller_file(file.str(), options.output.string());
+  } catch (const config::ConfigError& e) {
+    return refuse(std::string("the controller would be refused: ") + e.what());
+  }
 
   std::ofstream written(options.output, std::ios::binary | std::ios::trunc);
   written << file.str();
@@ -156,9 +211,9 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   if (!written) return refuse("cannot write " + options.output.string());
   out << "designed from the " << to_string(options.parameters) << " parameters of "
       << options.results.string() << ": " << gain.k.size() << " gains, largest closed-loop pole "
-      << gain.spectral_radius << " (" << (gain.spectral_radius < 1 ? "stable" : "UNSTABLE")
-      << ") at " << period_s * 1e3 << " ms with a " << lag_s * 1e3 << " ms lag\nwrote "
-      << options.output.string() << "\n";
+      << gain.spectral_radius << " (stable) at " << period_s * 1e3 << " ms with a " << lag_s * 1e3
+      << " ms lag and a " << ramp_lag_s * 1e3 << " ms duty ramp\nwrote " << options.output.string()
+      << "\n";
   return kExitDone;
 }
 

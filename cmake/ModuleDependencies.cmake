@@ -13,7 +13,7 @@ set(FURUTA_MODULE_DEPENDENCIES
   "interval:common"
   "firmware_bridge:"
   "simulator:firmware_bridge,model"
-  "config:firmware_bridge,simulator,model"
+  "config:firmware_bridge,simulator,model,control"
   "lcmtypes:"
   "command_auth:lcmtypes,common"
   "session_log:lcmtypes,firmware_bridge"

@@ -238,6 +238,11 @@ RigConfig parse_rig_config(const std::string& text, const std::string& source_na
 }
 
 std::string read_config_text(const std::filesystem::path& path) {
+  // A directory opens as a stream that reads nothing: it would pass for an empty file.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw ConfigError(path.string(), 0, "", "is a directory, not a file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path.string(), 0, "", "cannot open the file");
   std::ostringstream text;

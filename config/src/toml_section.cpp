@@ -142,6 +142,20 @@ std::vector<double> Section::number_list(const std::string& key,
   return out;
 }
 
+std::vector<double> Section::required_numbers(const std::string& key, const std::string& what,
+                                              std::size_t min_count, std::size_t max_count) {
+  if (!use(key)) fail(key, nullptr, "missing: " + what);
+  const std::vector<double> out = number_list(key, {});
+  if (out.size() < min_count || out.size() > max_count) {
+    fail(key, node(key),
+         min_count == max_count
+             ? "must be an array of " + std::to_string(min_count) + " numbers"
+             : "must be an array of " + std::to_string(min_count) + " to " +
+                   std::to_string(max_count) + " numbers");
+  }
+  return out;
+}
+
 std::vector<std::string> Section::choices(const std::string& key,
                                           const std::vector<std::string>& fallback,
                                           std::initializer_list<const char*> allowed) {

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace furuta::control {
 
@@ -22,10 +23,15 @@ std::string_view to_string(BalanceMode mode) {
   return "unknown";
 }
 
+BalanceSpecError::BalanceSpecError(std::string field, std::string rule)
+    : std::invalid_argument("balance controller: " + field + " " + rule),
+      field_(std::move(field)),
+      rule_(std::move(rule)) {}
+
 namespace {
 
-void require(bool ok, const char* field, const char* rule) {
-  if (!ok) throw std::invalid_argument(std::string("balance controller: ") + field + " " + rule);
+void require(bool ok, const std::string& field, const char* rule) {
+  if (!ok) throw BalanceSpecError(field, rule);
 }
 
 bool finite_positive(double x) {
@@ -58,35 +64,38 @@ BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
   for (std::size_t i = 0; i < model::kParameterCount; ++i) {
     const double v = spec.parameters[i];
     const bool friction = i >= 5;
-    require(std::isfinite(v) && (friction ? v >= 0 : v > 0), model::kParameterNames[i],
+    require(std::isfinite(v) && (friction ? v >= 0 : v > 0),
+            std::string("parameters.") + model::kParameterNames[i],
             friction ? "must be a finite number >= 0" : "must be a finite number > 0");
   }
   require(finite_positive(spec.duty_torque_nm), "duty_torque_nm", "must be a finite number > 0");
   require(std::isfinite(spec.back_emf_nm_s) && spec.back_emf_nm_s >= 0, "back_emf_nm_s",
           "must be a finite number >= 0");
   const SwingUp& s = spec.swing_up;
-  for (const auto& [value, name] :
-       {std::pair{s.energy_gain, "energy_gain"}, std::pair{s.arm_gain, "arm_gain"},
-        std::pair{s.arm_damping, "arm_damping"}}) {
+  for (const auto& [value, name] : {std::pair{s.energy_gain, "swing_up.energy_gain"},
+                                    std::pair{s.arm_gain, "swing_up.arm_gain"},
+                                    std::pair{s.arm_damping, "swing_up.arm_damping"}}) {
     require(std::isfinite(value) && value >= 0, name, "must be a finite number >= 0");
   }
-  require(finite_positive(s.max_acceleration), "max_acceleration", "must be a finite number > 0");
+  require(finite_positive(s.max_acceleration), "swing_up.max_acceleration",
+          "must be a finite number > 0");
   require(finite_positive(s.start_acceleration) && s.start_acceleration <= s.max_acceleration,
-          "start_acceleration", "must be in (0, max_acceleration]");
+          "swing_up.start_acceleration", "must be in (0, max_acceleration]");
   require(std::isfinite(s.start_below_energy_ratio) && s.start_below_energy_ratio >= 0 &&
               s.start_below_energy_ratio < 1,
-          "start_below_energy_ratio", "must be in [0, 1)");
-  require(finite_positive(s.max_duty) && s.max_duty <= spec.max_duty, "swing_up max_duty",
+          "swing_up.start_below_energy_ratio", "must be in [0, 1)");
+  require(finite_positive(s.max_duty) && s.max_duty <= spec.max_duty, "swing_up.max_duty",
           "must be in (0, the controller's max_duty]");
   const CatchRegion& r = spec.region;
-  require(finite_positive(r.catch_rad) && r.catch_rad < std::numbers::pi / 2, "catch_rad",
+  require(finite_positive(r.catch_rad) && r.catch_rad < std::numbers::pi / 2, "region.catch_rad",
           "must be in (0, pi/2)");
   require(std::isfinite(r.release_rad) && r.release_rad > r.catch_rad &&
               r.release_rad < std::numbers::pi,
-          "release_rad", "must be in (catch_rad, pi)");
-  require(std::isfinite(r.settle_s) && r.settle_s >= 0, "settle_s", "must be a finite number >= 0");
+          "region.release_rad", "must be in (catch_rad, pi)");
+  require(std::isfinite(r.settle_s) && r.settle_s >= 0, "region.settle_s",
+          "must be a finite number >= 0");
   require(std::isfinite(r.fall_rad) && r.fall_rad >= r.catch_rad && r.fall_rad < std::numbers::pi,
-          "fall_rad", "must be in [catch_rad, pi)");
+          "region.fall_rad", "must be in [catch_rad, pi)");
 }
 
 void BalanceLaw::reset() noexcept {

@@ -29,13 +29,17 @@ Held held_over(const LinearPlant& plant, double t) {
 
 }  // namespace
 
+DriveConstants drive_constants(const DesignPlant& plant) {
+  // Eq. 4 is affine in the duty and the arm's speed, so its value at (1, 0) is kd at the nominal
+  // voltage and minus its value at (0, 1) is kw.
+  const double supply_scale = plant.supply_v / plant.motor.nominal_voltage_v;
+  return {plant.motor.arm_torque(1.0, 0.0) * supply_scale, -plant.motor.arm_torque(0.0, 1.0)};
+}
+
 LinearPlant linearize_upright(const DesignPlant& plant) {
   const model::Parameters<double>& p = plant.parameters;
-  // Eq. 4 is affine in the duty and the arm's speed: tau = kd duty - kw dq1, the duty scaled by
-  // the supply over the motor's nominal voltage.
-  const double supply_scale = plant.supply_v / plant.motor.nominal_voltage_v;
-  const double kd = plant.motor.arm_torque(1.0, 0.0) * supply_scale;
-  const double kw = -plant.motor.arm_torque(0.0, 1.0);
+  // tau = kd duty - kw dq1 (drive_constants).
+  const auto [kd, kw] = drive_constants(plant);
   // At q2 = pi: sin = 0, cos = -1; the velocity products of B(q, dq) vanish to first order, and
   // gravity's mug sin(q2) becomes -mug (q2 - pi). M = [mu1, -mu3; -mu3, mu4].
   Eigen::Matrix2d mass;
@@ -54,19 +58,41 @@ LinearPlant linearize_upright(const DesignPlant& plant) {
   return out;
 }
 
-SampledPlant sample(const LinearPlant& plant, double period_s, double lag_s) {
+int delayed_duties(double period_s, double lag_s) {
   if (!(period_s > 0) || !std::isfinite(period_s)) {
     throw std::invalid_argument("sample: the period must be a finite number > 0 s");
   }
   if (!(lag_s >= 0) || !std::isfinite(lag_s)) {
     throw std::invalid_argument("sample: the lag must be a finite number >= 0 s");
   }
+  // The count must fit an int; a lag of that many periods is a mistake anyway.
+  if (!(lag_s / period_s < 1e6)) {
+    throw std::invalid_argument("sample: the lag must be less than a million periods");
+  }
+  const int whole = static_cast<int>(std::floor(lag_s / period_s));
+  const double fraction = lag_s - whole * period_s;
+  return whole + (fraction > 0 ? 1 : 0);
+}
+
+double ramp_lag_s(double acceleration_pct_per_s, double step_duty) {
+  if (!(acceleration_pct_per_s >= 0) || !std::isfinite(acceleration_pct_per_s)) {
+    throw std::invalid_argument("ramp_lag_s: the acceleration must be a finite number >= 0 %/s");
+  }
+  if (!(step_duty >= 0) || !std::isfinite(step_duty)) {
+    throw std::invalid_argument("ramp_lag_s: the duty step must be a finite number >= 0");
+  }
+  if (acceleration_pct_per_s == 0) return 0.0;
+  const double rate_duty_per_s = acceleration_pct_per_s / 100.0;
+  return step_duty / (2.0 * rate_duty_per_s);
+}
+
+SampledPlant sample(const LinearPlant& plant, double period_s, double lag_s) {
+  const int delayed = delayed_duties(period_s, lag_s);
   // A duty sent at sample k is applied from k T + lag until the next one is: over the period
   // [k T, (k + 1) T) the board holds, in turn, the duty of sample k - whole - 1 for `fraction`
   // and the duty of sample k - whole for the rest.
   const int whole = static_cast<int>(std::floor(lag_s / period_s));
   const double fraction = lag_s - whole * period_s;
-  const int delayed = whole + (fraction > 0 ? 1 : 0);
   const int n = 4 + delayed;
   SampledPlant out;
   out.period_s = period_s;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 namespace furuta::config {
 namespace {
@@ -121,6 +122,27 @@ TEST(TomlSection, NumberListsHaveAnyLengthAndABadEntryIsNamedAtItsLine) {
   EXPECT_STREQ(error_of("x = 1\n", positive).what(), "t.toml:1: x: must be an array of numbers");
   EXPECT_STREQ(error_of("x = [[1]]\n", positive).what(),
                "t.toml:1: x: must be an array of numbers");
+}
+
+TEST(TomlSection, ARequiredListOfNumbersHasItsLengthAndFiniteEntries) {
+  const toml::table root = parse_toml("k = [1, 2.5, -3e-2]\n", "t.toml");
+  Section top(root, "t.toml");
+  EXPECT_EQ(top.required_numbers("k", "the gain", 2, 4), (std::vector<double>{1.0, 2.5, -0.03}));
+  top.reject_unknown_keys();
+  const auto read = [](std::size_t min, std::size_t max) {
+    return [=](Section& top) { top.required_numbers("k", "the gain", min, max); };
+  };
+  EXPECT_STREQ(error_of("k = [1, 2]\n", read(3, 5)).what(),
+               "t.toml:1: k: must be an array of 3 to 5 numbers");
+  EXPECT_STREQ(error_of("k = [1, 2]\n", read(3, 3)).what(),
+               "t.toml:1: k: must be an array of 3 numbers");
+  EXPECT_STREQ(error_of("k = [1, \"2\"]\n", read(2, 2)).what(),
+               "t.toml:1: k: must be an array of numbers");
+  EXPECT_STREQ(error_of("k = 1\n", read(1, 1)).what(), "t.toml:1: k: must be an array of numbers");
+  // An entry's problem is at its own line.
+  EXPECT_STREQ(error_of("k = [\n  1,\n  inf,\n]\n", read(2, 2)).what(),
+               "t.toml:3: k: must be finite");
+  EXPECT_STREQ(error_of("x = 1\n", read(1, 2)).what(), "t.toml: k: missing: the gain");
 }
 
 TEST(TomlSection, KeysNeverReadAreUnknown) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <utility>
 
 #include "furuta/config/rig_config.hpp"
 
@@ -134,6 +135,59 @@ TEST(UprightLqr, TheGainBalancesTheNonlinearPendulumWithLagSaturationAndQuantisa
   EXPECT_LT(worst_late, 0.5 * kPi / 180.0) << "the pendulum does not settle upright";
   EXPECT_LT(std::abs(x(0)), 0.2) << "the arm drifts";
   EXPECT_GT(largest_duty, 0.0);
+}
+
+TEST(UprightLqr, TheDriveConstantsAreEq4AtTheSupply) {
+  const DesignPlant plant = simulated_rig();
+  const DriveConstants drive = drive_constants(plant);
+  const double scale = plant.supply_v / plant.motor.nominal_voltage_v;
+  // torque = kd duty - kw dq1 wherever eq. 4 is evaluated.
+  for (const auto& [duty, dq1] :
+       {std::pair{0.3, 0.0}, std::pair{-0.7, 4.0}, std::pair{0.0, -9.0}}) {
+    EXPECT_NEAR(drive.duty_torque_nm * duty - drive.back_emf_nm_s * dq1,
+                plant.motor.arm_torque(duty * scale, dq1), 1e-12)
+        << duty << " " << dq1;
+  }
+  EXPECT_GT(drive.duty_torque_nm, 0.0);
+  EXPECT_GT(drive.back_emf_nm_s, 0.0);
+  // The linearisation's input column is the duty's torque through the inverse mass matrix.
+  const LinearPlant lin = linearize_upright(plant);
+  const model::Parameters<double>& p = plant.parameters;
+  const double det = p.mu1 * p.mu4 - p.mu3 * p.mu3;
+  EXPECT_NEAR(lin.b(2), p.mu4 / det * drive.duty_torque_nm, 1e-9 * std::abs(lin.b(2)));
+}
+
+TEST(UprightLqr, TheBoardsRampIsHalfItsDurationAsADelay) {
+  // d / (2 r) with r = pct / 100 duty per s.
+  EXPECT_DOUBLE_EQ(ramp_lag_s(6250.0, 0.05), 0.0004);
+  EXPECT_DOUBLE_EQ(ramp_lag_s(6250.0, kRampStepDuty), 0.0004);
+  EXPECT_DOUBLE_EQ(ramp_lag_s(25.0, 0.05), 0.1);
+  EXPECT_DOUBLE_EQ(ramp_lag_s(3125.0, 0.1), 4 * ramp_lag_s(6250.0, 0.05));
+  EXPECT_EQ(ramp_lag_s(0.0, 0.05), 0.0);  // no ramp
+  EXPECT_EQ(ramp_lag_s(6250.0, 0.0), 0.0);
+  EXPECT_THROW(ramp_lag_s(-1.0, 0.05), std::invalid_argument);
+  EXPECT_THROW(ramp_lag_s(std::nan(""), 0.05), std::invalid_argument);
+  EXPECT_THROW(ramp_lag_s(6250.0, -0.05), std::invalid_argument);
+  EXPECT_THROW(ramp_lag_s(6250.0, HUGE_VAL), std::invalid_argument);
+  // The numerical check of "half its duration": a ramp to d at rate r against a step to d lags by
+  // the area between them over d.
+  const double r = 62.5, d = 0.05, h = 1e-7;
+  double area = 0;
+  for (double t = 0.5 * h; t < d / r; t += h) area += (d - r * t) * h;
+  EXPECT_NEAR(area / d, ramp_lag_s(100 * r, d), 1e-9);
+}
+
+TEST(UprightLqr, DelayedDutiesIsWhatSamplingCarries) {
+  const LinearPlant lin = linearize_upright(simulated_rig());
+  for (const double lag : {0.0, 0.0004, 0.002, 0.0024, 0.016, 0.021, 0.035, 0.064}) {
+    EXPECT_EQ(delayed_duties(0.016, lag), sample(lin, 0.016, lag).delayed) << lag;
+  }
+  EXPECT_EQ(delayed_duties(0.016, 0.0), 0);
+  EXPECT_EQ(delayed_duties(0.016, 0.0024), 1);
+  EXPECT_EQ(delayed_duties(0.016, 0.035), 3);
+  EXPECT_THROW(delayed_duties(0.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(delayed_duties(0.016, -1e-3), std::invalid_argument);
+  EXPECT_THROW(delayed_duties(1e-9, 1e9), std::invalid_argument);  // no count fits an int
 }
 
 TEST(UprightLqr, BadPeriodsLagsAndWeightsAreRefused) {

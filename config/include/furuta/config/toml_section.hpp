@@ -88,6 +88,9 @@ class Section {
   // <rule>"); a bad entry is reported at its own line, as a long list spans several.
   std::vector<double> number_list(const std::string& key, const std::vector<double>& fallback,
                                   const NumberRule& valid = {}, const char* rule = "");
+  // An array of min_count to max_count numbers, each finite; absent, the error "missing: <what>".
+  std::vector<double> required_numbers(const std::string& key, const std::string& what,
+                                       std::size_t min_count, std::size_t max_count);
   // An array of strings, each one of `allowed`, no repeats.
   std::vector<std::string> choices(const std::string& key, const std::vector<std::string>& fallback,
                                    std::initializer_list<const char*> allowed);

@@ -9,6 +9,8 @@
 
 #include <array>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 #include <string_view>
 
 #include "furuta/model/parameters.hpp"
@@ -76,9 +78,23 @@ struct BalanceStep {
   double energy_ratio = 0;  // E / E0: 0 hanging at rest, 1 upright at rest
 };
 
+// What BalanceLaw's constructor throws: the spec's member out of range, by its path in
+// BalanceControllerSpec ("max_duty", "parameters.mu1", "swing_up.max_duty", "region.catch_rad"),
+// so that a reader of a controller file can point at the key the value came from.
+class BalanceSpecError : public std::invalid_argument {
+ public:
+  BalanceSpecError(std::string field, std::string rule);
+  const std::string& field() const noexcept { return field_; }
+  const std::string& rule() const noexcept { return rule_; }  // "must be in (0, 1]"
+
+ private:
+  std::string field_;
+  std::string rule_;
+};
+
 class BalanceLaw {
  public:
-  // Throws std::invalid_argument naming the field that is out of range.
+  // Throws BalanceSpecError (a std::invalid_argument) naming the field that is out of range.
   explicit BalanceLaw(const BalanceControllerSpec& spec);
   BalanceLaw() = default;
 

@@ -27,6 +27,14 @@ struct DesignPlant {
   double supply_v = 12.0;
 };
 
+// Eq. 4 as it is affine in the duty and the arm's speed: torque = duty_torque duty - back_emf dq1,
+// the duty scaled by the supply over the motor's nominal voltage (the PWM chops the supply).
+struct DriveConstants {
+  double duty_torque_nm = 0;  // kd, at the plant's supply
+  double back_emf_nm_s = 0;   // kw
+};
+DriveConstants drive_constants(const DesignPlant& plant);
+
 // dx/dt = a x + b duty about upright, x = [q1, q2 - pi, dq1, dq2].
 struct LinearPlant {
   Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
@@ -47,6 +55,20 @@ struct SampledPlant {
 // Throws std::invalid_argument for a period that is not > 0 or a lag that is negative or not
 // finite.
 SampledPlant sample(const LinearPlant& plant, double period_s, double lag_s);
+// The `delayed` of sample(plant, period_s, lag_s): how many duties a gain designed with that lag
+// carries. Same arguments and errors as sample().
+int delayed_duties(double period_s, double lag_s);
+
+// The duty step the board's ramp is judged on: a typical correction of the balancing loop.
+inline constexpr double kRampStepDuty = 0.05;
+// The motor board's duty ramp (acceleration_pct_per_s, a rate r = pct / 100 duty per s) as a pure
+// delay: a step of step_duty becomes a ramp lasting step_duty / r, which lags the step by half
+// that on average, step_duty / (2 r). The design adds it to the data path's lag. 0 is read as no
+// ramp at all, 0 s; the board adapters' own 0 ("the board's fastest") is a finite rate, but the
+// rig configuration never holds 0 (it asks for the rate in the board's range), so the design is
+// always given the rate the board runs at. Throws std::invalid_argument for a negative or
+// non-finite rate or step.
+double ramp_lag_s(double acceleration_pct_per_s, double step_duty);
 
 // The cost sum of x' Q x + r u^2 over the samples, Q diagonal over x (the delayed duties carry no
 // weight of their own).
