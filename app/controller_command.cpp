@@ -130,20 +130,20 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   const double ramp_lag_s =
       control::ramp_lag_s(rig.excitation.board_acceleration_pct_per_s, control::kRampStepDuty);
   const control::DesignPlant plant{*parameters, rig.motor, supply_v};
+  const double max_duty = rig.limits.max_amplitude_duty;
   control::BalanceGain gain;
+  control::BalanceControllerSpec spec;
   try {
-    gain = control::design_lqr(
-        control::sample(control::linearize_upright(plant), period_s, lag_s + ramp_lag_s),
-        options.weights);
+    const control::SampledPlant sampled =
+        control::sample(control::linearize_upright(plant), period_s, lag_s + ramp_lag_s);
+    gain = control::design_lqr(sampled, options.weights);
+    spec = control::balance_spec(plant, sampled, gain, max_duty,
+                                 config::motor_resolution(rig).duty_step);
   } catch (const std::exception& e) {
     return refuse(std::string("the design failed: ") + e.what());
   }
-  const control::DriveConstants drive = control::drive_constants(plant);
-  const double max_duty = rig.limits.max_amplitude_duty;
-  control::SwingUp swing_up;
-  // The swing-up never asks for more than the controller may.
-  swing_up.max_duty = std::min(swing_up.max_duty, max_duty);
-  const control::CatchRegion region;
+  const control::SwingUp& swing_up = spec.swing_up;
+  const control::CatchRegion& region = spec.region;
 
   std::ostringstream file;
   file << "# A balance controller designed by `furuta controller design` (docs/control.md): the "
@@ -181,8 +181,8 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
        << "\nclosed_loop_poles_im = " << array_text(im)
        << "\nspectral_radius = " << exact(gain.spectral_radius) << "\n\n";
   file << "[drive]\n# eq. 4 at supply_v: torque = duty_torque_nm duty - back_emf_nm_s dq1\n"
-       << "duty_torque_nm = " << exact(drive.duty_torque_nm)
-       << "\nback_emf_nm_s = " << exact(drive.back_emf_nm_s) << "\n\n";
+       << "duty_torque_nm = " << exact(spec.duty_torque_nm)
+       << "\nback_emf_nm_s = " << exact(spec.back_emf_nm_s) << "\n\n";
   file << "[swing_up]\nenergy_gain = " << exact(swing_up.energy_gain)
        << "\nmax_acceleration = " << exact(swing_up.max_acceleration)
        << "\narm_gain = " << exact(swing_up.arm_gain)
@@ -194,8 +194,8 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
        << "\nrelease_deg = " << exact(region.release_rad / kDegToRad)
        << "\nsettle_s = " << exact(region.settle_s)
        << "\nfall_deg = " << exact(region.fall_rad / kDegToRad) << "\n\n";
-  file << "[limits]\nmax_duty = " << exact(max_duty)
-       << "\nduty_step = " << exact(config::motor_resolution(rig).duty_step) << "\n";
+  file << "[limits]\nmax_duty = " << exact(spec.max_duty)
+       << "\nduty_step = " << exact(spec.duty_step) << "\n";
 
   // What is written is what the loop's reader accepts: a rig whose limits the balance law refuses
   // (a duty limit below one duty step) gets no file.

@@ -148,10 +148,9 @@ std::vector<double> Section::required_numbers(const std::string& key, const std:
   const std::vector<double> out = number_list(key, {});
   if (out.size() < min_count || out.size() > max_count) {
     fail(key, node(key),
-         min_count == max_count
-             ? "must be an array of " + std::to_string(min_count) + " numbers"
-             : "must be an array of " + std::to_string(min_count) + " to " +
-                   std::to_string(max_count) + " numbers");
+         min_count == max_count ? "must be an array of " + std::to_string(min_count) + " numbers"
+                                : "must be an array of " + std::to_string(min_count) + " to " +
+                                      std::to_string(max_count) + " numbers");
   }
   return out;
 }

@@ -5,8 +5,10 @@
 // fixed point.
 #include "furuta/control/upright_lqr.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <unsupported/Eigen/MatrixFunctions>
 
 namespace furuta::control {
@@ -172,6 +174,30 @@ BalanceGain design_lqr(const SampledPlant& plant, const LqrWeights& weights) {
     out.spectral_radius = std::max(out.spectral_radius, std::abs(poles(i)));
   }
   return out;
+}
+
+BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant& sampled,
+                                   const BalanceGain& gain, double max_duty, double duty_step) {
+  if (sampled.delayed > kMaxDelayedDuties || gain.k.size() != 4 + sampled.delayed) {
+    throw std::invalid_argument(
+        "a lag of " + std::to_string(sampled.lag_s) + " s is " + std::to_string(sampled.delayed) +
+        " duties on their way at a period of " + std::to_string(sampled.period_s) +
+        " s; the balance law carries at most " + std::to_string(kMaxDelayedDuties));
+  }
+  BalanceControllerSpec spec;
+  spec.period_s = sampled.period_s;
+  spec.delayed = sampled.delayed;
+  for (Eigen::Index i = 0; i < gain.k.size(); ++i) {
+    spec.gain[static_cast<std::size_t>(i)] = gain.k(i);
+  }
+  spec.max_duty = max_duty;
+  spec.duty_step = duty_step;
+  spec.parameters = plant.parameters;
+  const DriveConstants drive = drive_constants(plant);
+  spec.duty_torque_nm = drive.duty_torque_nm;
+  spec.back_emf_nm_s = drive.back_emf_nm_s;
+  spec.swing_up.max_duty = std::min(spec.swing_up.max_duty, max_duty);
+  return spec;
 }
 
 }  // namespace furuta::control

@@ -41,18 +41,9 @@ Rig simulated_rig() {
 BalanceControllerSpec spec_for(const Rig& rig, const model::Parameters<double>& design) {
   constexpr double kPeriod = 0.016;
   constexpr double kLag = 0.002;
-  const SampledPlant sampled =
-      sample(linearize_upright({design, rig.motor, rig.supply_v}), kPeriod, kLag);
-  const BalanceGain gain = design_lqr(sampled, LqrWeights{});
-  BalanceControllerSpec spec;
-  spec.period_s = kPeriod;
-  spec.delayed = sampled.delayed;
-  for (Eigen::Index i = 0; i < gain.k.size(); ++i)
-    spec.gain[static_cast<std::size_t>(i)] = gain.k(i);
-  spec.parameters = design;
-  spec.duty_torque_nm = rig.motor.arm_torque(1.0, 0.0) * rig.supply_v / rig.motor.nominal_voltage_v;
-  spec.back_emf_nm_s = -rig.motor.arm_torque(0.0, 1.0);
-  return spec;
+  const DesignPlant plant{design, rig.motor, rig.supply_v};
+  const SampledPlant sampled = sample(linearize_upright(plant), kPeriod, kLag);
+  return balance_spec(plant, sampled, design_lqr(sampled, LqrWeights{}), 0.5, 1.0 / 255);
 }
 
 struct Outcome {

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -47,10 +48,10 @@ struct SwingUp {
 // catching -> swing_up beyond release_rad (> catch_rad: the hysteresis); catching -> balance after
 // settle_s inside catch_rad; balance -> fallen beyond fall_rad. fallen is final.
 struct CatchRegion {
-  double catch_rad = 0.436;    // 25 deg
-  double release_rad = 0.733;  // 42 deg
+  double catch_rad = 25 * std::numbers::pi / 180;
+  double release_rad = 42 * std::numbers::pi / 180;
   double settle_s = 1.0;
-  double fall_rad = 0.698;  // 40 deg
+  double fall_rad = 40 * std::numbers::pi / 180;
 };
 
 struct BalanceControllerSpec {

@@ -15,6 +15,7 @@
 #include <complex>
 #include <vector>
 
+#include "furuta/control/balance_law.hpp"
 #include "furuta/model/model.hpp"
 
 namespace furuta::control {
@@ -88,5 +89,12 @@ struct BalanceGain {
 // std::runtime_error when the Riccati iteration does not settle (a plant the duty cannot
 // stabilise).
 BalanceGain design_lqr(const SampledPlant& plant, const LqrWeights& weights);
+
+// What the loop runs (balance_law.hpp) for a design: the gain and the sampled plant's period and
+// delayed duties, the plant's parameters and drive, the swing-up's and catch region's defaults,
+// the duty limit and step, the swing-up never asking for more than max_duty. Throws
+// std::invalid_argument when the gain has more entries than the law can carry.
+BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant& sampled,
+                                   const BalanceGain& gain, double max_duty, double duty_step);
 
 }  // namespace furuta::control
