@@ -121,6 +121,14 @@ SessionLog load_session_log(const std::filesystem::path& path) {
       furuta::rig_fault_t fault;
       decoded = decode_exactly(event.data, fault);
       if (decoded) log.faults.push_back(std::move(fault));
+    } else if (channel == kChannelControl) {
+      furuta::rig_control_t control;
+      decoded = decode_exactly(event.data, control);
+      if (decoded) log.control.push_back(std::move(control));
+    } else if (channel == kChannelController) {
+      furuta::rig_controller_t controller;
+      decoded = decode_exactly(event.data, controller);
+      if (decoded && !log.controller) log.controller = std::move(controller);
     } else if (channel == kChannelSignedCommand) {
       furuta::rig_signed_command_t command;
       decoded = decode_exactly(event.data, command);

@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "furuta/firmware_bridge/usb_trace.hpp"
+#include "furuta/rig_control_t.hpp"
+#include "furuta/rig_controller_t.hpp"
 #include "furuta/rig_fault_t.hpp"
 #include "furuta/rig_log_seal_t.hpp"
 #include "furuta/rig_sample_t.hpp"
@@ -27,6 +29,9 @@ inline constexpr const char* kChannelCommand = "RIG_COMMAND";
 inline constexpr const char* kChannelSignedCommand = "RIG_COMMAND_SIGNED";
 inline constexpr const char* kChannelUsb = "RIG_USB";
 inline constexpr const char* kChannelFault = "RIG_FAULT";
+// Balance sessions: the controller's cycle beside each sample, and the controller file it ran.
+inline constexpr const char* kChannelControl = "RIG_CONTROL";
+inline constexpr const char* kChannelController = "RIG_CONTROLLER";
 // A log's last event, never published: what the log held when written (rig_log_seal_t).
 inline constexpr const char* kChannelSeal = "RIG_LOG_SEAL";
 
@@ -40,6 +45,9 @@ struct SessionLog {
   std::vector<furuta::rig_sample_t> samples;
   std::vector<furuta::rig_usb_report_t> usb_reports;
   std::vector<furuta::rig_fault_t> faults;
+  // A balance session's: the controller's cycles, and the controller file (the first record).
+  std::vector<furuta::rig_control_t> control;
+  std::optional<furuta::rig_controller_t> controller;
   LogReadStats read_stats;
   std::uint64_t undecodable_events = 0;  // intact on disk but not a message of its channel's type
   std::uint64_t unknown_channel_events = 0;
