@@ -17,7 +17,7 @@ set(FURUTA_MODULE_DEPENDENCIES
   "lcmtypes:"
   "command_auth:lcmtypes,common"
   "session_log:lcmtypes,firmware_bridge"
-  "daemon:firmware_bridge,simulator,config,session_log,lcmtypes,model,command_auth,common"
+  "daemon:firmware_bridge,simulator,config,session_log,lcmtypes,model,control,command_auth,common"
   "identification:model,interval,config,session_log,validated"
   "validated:model,interval,common"
   "validated_research:validated,model,interval,common"

@@ -257,7 +257,12 @@ int main(int argc, char** argv) {
                 << "; every start is refused until it can ([daemon] command_state_file)\n";
     }
     if (replayed) {
-      daemon.start_replayed_session(*replayed->start);
+      if (!daemon.start_replayed_session(*replayed->start,
+                                         replayed->controller ? &*replayed->controller : nullptr)) {
+        std::cerr << "furutad: cannot replay " << replay_log
+                  << ": a balance session without a readable controller record\n";
+        return 2;
+      }
       daemon.loop().exit_when_idle();
     }
     const daemon::RealtimeResult rt = daemon.start();

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <ctime>
 #include <exception>
+#include <numbers>
 #include <system_error>
 #include <thread>
 
@@ -321,6 +322,11 @@ void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_
     return;
   }
   excitation_ = request.excitation;
+  balance_ = request.balance;
+  if (balance_) {
+    balance_law_ = request.balance_law;
+    balance_law_.reset();
+  }
   session_ = request.session;
   running_ = true;
   session_start_ns_ = now_ns;
@@ -341,6 +347,7 @@ void ControlLoop::begin_session(const SessionRequest& request, std::int64_t now_
   s.label = request.label;
   s.request_id = request.request_id;
   s.excitation = excitation_.spec();
+  s.balance = balance_;
   s.period_ns = settings_.period_ns;
   s.monotonic_ns = now_ns;
   s.wall_time_ns = wall_time_ns();
@@ -481,7 +488,30 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
   const double t_s = static_cast<double>(deadline_ns - session_start_ns_) * 1e-9;
   StopReason reason = StopReason::none;
   if (usb_failure_ != TransportStatus::ok) reason = StopReason::usb_error;
-  const double duty = excitation_.duty(t_s, sample.arm_angle_rad);
+  double duty = 0;
+  sample.control.present = balance_;
+  if (balance_) {
+    // Real time, whatever the loop's clock: the law's cost is the figure, also in virtual time.
+    const auto law_start = std::chrono::steady_clock::now();
+    const control::BalanceStep step =
+        balance_law_.step(sample.arm_angle_rad, sample.pendulum_angle_rad);
+    ControlFigures& c = sample.control;
+    c.mode = static_cast<std::uint8_t>(step.mode);
+    c.upright_error_rad = step.upright_error_rad;
+    c.arm_rate_rad_s = step.arm_rate_rad_s;
+    c.pendulum_rate_rad_s = step.pendulum_rate_rad_s;
+    c.energy_ratio = step.energy_ratio;
+    c.law_duty = step.duty;
+    c.law_time_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                        std::chrono::steady_clock::now() - law_start)
+                        .count();
+    duty = step.duty;
+    if (step.mode == control::BalanceMode::fallen && reason == StopReason::none) {
+      reason = StopReason::pendulum_fell;
+    }
+  } else {
+    duty = excitation_.duty(t_s, sample.arm_angle_rad);
+  }
   if (reason == StopReason::none) {
     SafetyInput in;
     in.arm_angle_rad = sample.arm_angle_rad;
@@ -510,6 +540,13 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
     }
     const char* detail =
         reason == StopReason::usb_error ? bridge::to_string(usb_failure_).data() : "";
+    char fell[kDetailChars];
+    if (reason == StopReason::pendulum_fell) {
+      std::snprintf(fell, sizeof fell, "%.1f deg from upright, beyond the fall limit of %.1f deg",
+                    std::fabs(sample.control.upright_error_rad) * 180 / std::numbers::pi,
+                    balance_law_.spec().region.fall_rad * 180 / std::numbers::pi);
+      detail = fell;
+    }
     event_.end.final_command.length = 0;  // the sample above carries it
     end_session(reason, detail, deadline_ns);
     return;

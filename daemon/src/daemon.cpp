@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "furuta/common/wire_text.hpp"
+#include "furuta/config/controller_file.hpp"
 #include "furuta/session_log/session_log.hpp"
 
 namespace furuta::daemon {
@@ -520,13 +521,29 @@ furuta::rig_status_t Daemon::handle_signed_command(const furuta::rig_signed_comm
   return reply_for(verdict.command.request_id, take_signed(message, verdict.command));
 }
 
-bool Daemon::start_replayed_session(const furuta::rig_session_t& start) {
+bool Daemon::start_replayed_session(const furuta::rig_session_t& start,
+                                    const furuta::rig_controller_t* controller) {
   ExcitationSpec spec = settings_.default_excitation;
   spec.kind = parse_profile_kind(start.profile).value_or(spec.kind);
   spec.amplitude_duty = start.amplitude_duty;
   spec.duration_s = start.duration_s;
   spec.seed = static_cast<std::uint64_t>(start.seed);
   SessionRequest request;
+  if (start.profile == kBalanceProfile) {
+    // The law the session ran, from the log's own record of its controller file.
+    if (!controller) return false;
+    try {
+      const config::ControllerFile file =
+          config::parse_controller_file(controller->controller_toml, controller->path);
+      request.balance_law = control::BalanceLaw(file.spec);
+    } catch (const std::exception&) {
+      return false;
+    }
+    request.balance = true;
+    spec.kind = ProfileKind::free_decay;
+    recorder_->note_controller(0,
+                               {controller->path, controller->sha256, controller->controller_toml});
+  }
   request.excitation = Excitation(spec);
   copy_to(request.session, start.session + "_replay");
   copy_to(request.label, start.label);
@@ -534,6 +551,47 @@ bool Daemon::start_replayed_session(const furuta::rig_session_t& start) {
   request.arm_zero_counts = start.arm_zero_counts;
   std::lock_guard lock(command_mutex_);  // the request queue has a single producer at a time
   return loop_->request_session(request);
+}
+
+std::string Daemon::prepare_balance(const furuta::rig_command_t& command, ExcitationSpec& spec,
+                                    SessionRequest& request) {
+  // Everything is checked before anything moves: a file that does not read, is not the one
+  // signed, or was designed for another rig or period is refused with the motor at rest.
+  config::ControllerFile file;
+  try {
+    file = config::load_controller_file(command.controller_path);
+  } catch (const std::exception& e) {
+    return std::string("controller: ") + e.what();
+  }
+  if (file.sha256 != command.controller_sha256) {
+    return "controller: " + command.controller_path + " has SHA-256 " + file.sha256 + ", not the " +
+           command.controller_sha256 + " the command was signed with";
+  }
+  if (file.rig != settings_.rig_name) {
+    return "controller: " + command.controller_path + " was designed for rig '" + file.rig +
+           "', this is '" + settings_.rig_name + "'";
+  }
+  if (file.period_ns != settings_.loop.period_ns) {
+    return "controller: " + command.controller_path + " was designed for a period of " +
+           std::to_string(file.period_ns) + " ns, the loop's is " +
+           std::to_string(settings_.loop.period_ns) + " ns";
+  }
+  if (!(file.spec.max_duty <= settings_.loop.safety.max_duty)) {
+    return "controller: " + command.controller_path + " may ask for a duty of " +
+           std::to_string(file.spec.max_duty) + ", above the safety limit " +
+           std::to_string(settings_.loop.safety.max_duty);
+  }
+  try {
+    request.balance_law = control::BalanceLaw(file.spec);
+  } catch (const std::exception& e) {
+    return "controller: " + command.controller_path + ": " + e.what();
+  }
+  request.balance = true;
+  // The session's amplitude is the law's limit, checked against the command limits next.
+  spec.amplitude_duty = file.spec.max_duty;
+  recorder_->note_controller(command.request_id,
+                             {command.controller_path, file.sha256, std::move(file.text)});
+  return {};
 }
 
 furuta::rig_status_t Daemon::handle_command(const furuta::rig_command_t& command) {
@@ -573,7 +631,13 @@ CommandDecision Daemon::carry_out(const furuta::rig_command_t& command) {
       SessionRequest request;
       request.request_id = command.request_id;
       try {
-        const ExcitationSpec spec = spec_from_command(command, settings_.default_excitation);
+        ExcitationSpec spec = spec_from_command(command, settings_.default_excitation);
+        if (command.profile == kBalanceProfile) {
+          if (std::string why = prepare_balance(command, spec, request); !why.empty()) {
+            decision = {false, why, CommandRefusal::invalid};
+            break;
+          }
+        }
         if (std::string why = check_spec_limits(spec, settings_.command_limits); !why.empty()) {
           decision = {false, why, CommandRefusal::invalid};
           break;

@@ -147,6 +147,7 @@ ExcitationSpec excitation_from_config(const config::ExcitationConfig& e) {
 
 DaemonSettings daemon_settings_from_config(const config::RigConfig& config) {
   DaemonSettings d;
+  d.rig_name = config.name;
   LoopSettings& loop = d.loop;
   loop.period_ns = config.daemon.period_ns;
   loop.safety.arm_limit_rad = config.safety.arm_limit_rad;

@@ -56,9 +56,24 @@ bool allowed_in_label(char c) {
          c == '_' || c == '.' || c == ' ';
 }
 
+bool is_sha256_hex(const std::string& text) {
+  return text.size() == 64 && std::all_of(text.begin(), text.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
+}
+
 std::string check_start_session(const rig_command_t& command, const CommandLimits& limits) {
-  if (!parse_profile_kind(command.profile)) {
-    return "profile: " + printable_quoted(command.profile) + " is not one of " + known_profiles();
+  const bool balance = command.profile == kBalanceProfile;
+  if (!balance && !parse_profile_kind(command.profile)) {
+    return "profile: " + printable_quoted(command.profile) + " is not one of " + known_profiles() +
+           ", " + std::string(kBalanceProfile);
+  }
+  if (balance && command.controller_path.empty()) {
+    return "controller_path: a balance session needs its controller file";
+  }
+  if (balance && !is_sha256_hex(command.controller_sha256)) {
+    return "controller_sha256: " + printable_quoted(command.controller_sha256) +
+           " is not a SHA-256 in lowercase hex (64 characters)";
   }
   if (auto problem =
           check_positive_up_to("amplitude_duty", command.amplitude_duty, amplitude_limit(limits));
@@ -179,7 +194,9 @@ CommandDecision CommandValidator::validate(const rig_command_t& command, std::in
 }
 
 ExcitationSpec spec_from_command(const rig_command_t& command, const ExcitationSpec& defaults) {
-  const auto kind = parse_profile_kind(command.profile);
+  // A balance session's excitation only times it: the law drives the motor, free decay sends 0.
+  const auto kind = command.profile == kBalanceProfile ? std::optional(ProfileKind::free_decay)
+                                                       : parse_profile_kind(command.profile);
   if (!kind) {
     throw std::invalid_argument("profile: " + printable_quoted(command.profile) +
                                 " is not one of " + known_profiles());

@@ -135,6 +135,12 @@ void SessionRecorder::note_signed_start(std::int64_t request_id,
   while (signed_starts_.size() > 8) signed_starts_.pop_front();
 }
 
+void SessionRecorder::note_controller(std::int64_t request_id, ControllerRecord controller) {
+  std::lock_guard lock(signed_starts_mutex_);
+  controllers_.emplace_back(request_id, std::move(controller));
+  while (controllers_.size() > 8) controllers_.pop_front();
+}
+
 void SessionRecorder::start_session(const SessionStartEvent& start) {
   session_ = text_of(start.session);
   session_faulted_ = false;
@@ -171,7 +177,8 @@ void SessionRecorder::start_session(const SessionStartEvent& start) {
   m.event = furuta::rig_session_t::EVENT_START;
   m.session = session_;
   m.label = text_of(start.label);
-  m.profile = std::string(to_string(start.excitation.kind));
+  m.profile =
+      start.balance ? std::string("balance") : std::string(to_string(start.excitation.kind));
   m.amplitude_duty = start.excitation.amplitude_duty;
   m.duration_s = start.excitation.duration_s;
   m.seed = static_cast<std::int64_t>(start.excitation.seed);
@@ -196,6 +203,26 @@ void SessionRecorder::start_session(const SessionStartEvent& start) {
     // Logged only: the command was on the bus already.
     if (!signed_start.empty()) {
       log_bytes(session_log::kChannelSignedCommand, signed_start, start.monotonic_ns);
+    }
+  }
+  if (start.balance) {
+    std::optional<ControllerRecord> controller;
+    {
+      std::lock_guard lock(signed_starts_mutex_);
+      for (auto& [id, record] : controllers_) {
+        if (id == start.request_id) controller = std::move(record);
+      }
+    }
+    if (controller) {
+      furuta::rig_controller_t c;
+      c.session = session_;
+      c.path = controller->path;
+      c.sha256 = controller->sha256;
+      c.controller_toml = controller->text;
+      const int size = c.getEncodedSize();
+      buffer_.resize(static_cast<std::size_t>(size));
+      c.encode(buffer_.data(), 0, size);
+      log_bytes(session_log::kChannelController, buffer_, start.monotonic_ns);
     }
   }
   if (log_ && !log_failed_) {
@@ -235,6 +262,20 @@ void SessionRecorder::record_sample(const RigSample& s) {
   }
   log_bytes(session_log::kChannelSample, sample_buffer_, s.monotonic_ns);
   if (log_ && !log_failed_) ++samples_logged_;
+  if (s.control.present) {
+    static_assert(furuta::rig_control_t::MODE_FALLEN == 3, "modes in control::BalanceMode's order");
+    control_msg_.seq = s.seq;
+    control_msg_.monotonic_ns = s.monotonic_ns;
+    control_msg_.session = session_;
+    control_msg_.mode = static_cast<std::int8_t>(s.control.mode);
+    control_msg_.upright_error_rad = s.control.upright_error_rad;
+    control_msg_.arm_rate_rad_s = s.control.arm_rate_rad_s;
+    control_msg_.pendulum_rate_rad_s = s.control.pendulum_rate_rad_s;
+    control_msg_.energy_ratio = s.control.energy_ratio;
+    control_msg_.law_duty = s.control.law_duty;
+    control_msg_.law_time_ns = s.control.law_time_ns;
+    publish_and_log(session_log::kChannelControl, control_msg_, s.monotonic_ns);
+  }
   ++samples_published_;
 }
 

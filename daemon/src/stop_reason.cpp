@@ -38,13 +38,16 @@ std::string_view to_string(StopReason reason) {
       return "log_error";
     case StopReason::exception:
       return "exception";
+    case StopReason::pendulum_fell:
+      return "pendulum_fell";
   }
   return "unknown";
 }
 
 bool is_fault(StopReason reason) {
+  // A fall ends a balance session as its outcome, not as a fault of the rig.
   return reason != StopReason::none && reason != StopReason::duration_reached &&
-         reason != StopReason::stop_command;
+         reason != StopReason::stop_command && reason != StopReason::pendulum_fell;
 }
 
 }  // namespace furuta::daemon

@@ -15,6 +15,7 @@
 
 #include "allocation_counter.hpp"
 #include "daemon_test_support.hpp"
+#include "furuta/control/upright_lqr.hpp"
 #include "furuta/daemon/control_loop.hpp"
 #include "furuta/daemon/rig_connection.hpp"
 
@@ -98,6 +99,7 @@ class EventDrain {
     if (thread_.joinable()) thread_.join();
   }
   int samples = 0;
+  int balanced = 0;  // samples whose controller cycle was in balance mode
   int sessions_started = 0;
   std::optional<StopReason> end_reason;
   std::map<std::string, int> faults;  // by `what`
@@ -112,6 +114,11 @@ class EventDrain {
         switch (event->kind) {
           case LoopEvent::Kind::sample:
             ++samples;
+            if (event->sample.control.present &&
+                event->sample.control.mode ==
+                    static_cast<std::uint8_t>(control::BalanceMode::balance)) {
+              ++balanced;
+            }
             break;
           case LoopEvent::Kind::session_start:
             ++sessions_started;
@@ -216,6 +223,28 @@ TEST(LoopAllocation, MultisineSessionDoesNotAllocateOnTheLoopThread) {
   expect_no_allocation(run.link, 3000);
   EXPECT_EQ(run.drain.end_reason, StopReason::duration_reached);
   EXPECT_EQ(run.drain.samples, 3125);
+}
+
+TEST(LoopAllocation, BalanceSessionDoesNotAllocateOnTheLoopThread) {
+  LoopRig s;
+  ExcitationSpec spec = session_spec(s, ProfileKind::free_decay);
+  SessionRequest request = s.request(spec);
+  // The law as `furuta controller design` makes it, from the simulated rig's true parameters.
+  const control::DesignPlant plant{s.config.simulation.parameters, s.config.motor,
+                                   s.config.simulation.supply_voltage_v};
+  const control::SampledPlant sampled =
+      control::sample(control::linearize_upright(plant), 0.016, 0.002);
+  request.balance = true;
+  request.balance_law = control::BalanceLaw(control::balance_spec(
+      plant, sampled, control::design_lqr(sampled, control::LqrWeights{}), 0.5, 1.0 / 255));
+  CountedRun run(s, 50);
+  ASSERT_TRUE(run.loop.request_session(request));
+  run.run();
+  expect_no_allocation(run.link, 3000);
+  EXPECT_EQ(run.drain.end_reason, StopReason::duration_reached);
+  EXPECT_EQ(run.drain.samples, 3125);
+  // Swung up, caught and held: the swing-up, the catch and the balance all ran in the scope.
+  EXPECT_GT(run.drain.balanced, 2500);
 }
 
 // The scope is not vacuous: with the simulated rig recording its truth (a vector that grows on the

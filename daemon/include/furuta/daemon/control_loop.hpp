@@ -16,6 +16,7 @@
 #include <memory>
 #include <string>
 
+#include "furuta/control/balance_law.hpp"
 #include "furuta/daemon/board_link.hpp"
 #include "furuta/daemon/excitation.hpp"
 #include "furuta/daemon/loop_events.hpp"
@@ -78,7 +79,12 @@ struct SessionRequest {
   std::array<char, kNameChars> session{};  // the log's name
   std::array<char, kNameChars> label{};
   std::int64_t request_id = 0;  // the command's, so the status can give its verdict
+  // The duration (and, outside balance sessions, the duty) of the session.
   Excitation excitation;
+  // A balance session: the law decides each cycle's duty from the angles; a fall ends the session
+  // (StopReason::pendulum_fell).
+  bool balance = false;
+  control::BalanceLaw balance_law;
   // Replay: the arm's zero as the original session recorded it (the replayed traffic starts at the
   // session, after the board's absolute position was already known).
   bool has_arm_zero = false;
@@ -180,6 +186,8 @@ class ControlLoop {
   bool have_pending_ = false;
   std::int64_t pending_since_ns_ = 0;
   Excitation excitation_;
+  bool balance_ = false;
+  control::BalanceLaw balance_law_;
   std::array<char, kNameChars> session_{};
   std::int64_t session_start_ns_ = 0;
   std::int64_t seq_ = 0;

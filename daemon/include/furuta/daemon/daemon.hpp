@@ -26,6 +26,7 @@
 namespace furuta::daemon {
 
 struct DaemonSettings {
+  std::string rig_name;  // [rig] name: a balance controller must have been designed for it
   LoopSettings loop;
   RecorderSettings recorder;
   CommandLimits command_limits;
@@ -93,7 +94,10 @@ class Daemon {
   // What RIG_COMMAND_SIGNED takes: a command whose tag, time and freshness check out.
   furuta::rig_status_t handle_signed_command(const furuta::rig_signed_command_t& message);
   // Replay: start a session as a log's start record describes it (the same excitation and zeros).
-  bool start_replayed_session(const furuta::rig_session_t& start);
+  // A balance session's law comes from `controller`, the log's RIG_CONTROLLER record (false
+  // without one, or when it does not read).
+  bool start_replayed_session(const furuta::rig_session_t& start,
+                              const furuta::rig_controller_t* controller = nullptr);
 
   ControlLoop& loop() { return *loop_; }
   SessionRecorder& recorder() { return *recorder_; }
@@ -158,6 +162,10 @@ class Daemon {
   std::int64_t monotonic_now_ns() const;
   // An accepted command's action, under command_mutex_; a start may still be refused.
   CommandDecision carry_out(const furuta::rig_command_t& command);
+  // A balance start: reads and checks its controller file into `request` (the law) and `spec`
+  // (the amplitude); the refusal's reason, or empty.
+  std::string prepare_balance(const furuta::rig_command_t& command, ExcitationSpec& spec,
+                              SessionRequest& request);
 
   DaemonSettings settings_;
   lcm::LCM& lcm_;

@@ -13,6 +13,9 @@ namespace furuta::daemon {
 enum class ProfileKind : std::uint8_t { bang_bang, free_decay, step, prbs, chirp, multisine };
 std::optional<ProfileKind> parse_profile_kind(std::string_view name);  // "bang_bang", ...
 std::string_view to_string(ProfileKind kind);
+// The session kind a start command names instead of a profile when the balance controller drives
+// the motor (rig_command_t::controller_path, controller_sha256).
+inline constexpr std::string_view kBalanceProfile = "balance";
 
 inline constexpr std::size_t kMaxMultisineComponents = 16;
 

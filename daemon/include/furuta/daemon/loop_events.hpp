@@ -46,6 +46,18 @@ inline constexpr std::int32_t kSampleMotorLost = furuta::rig_sample_t::FLAG_MOTO
 inline constexpr std::int32_t kSampleEncoderLost = furuta::rig_sample_t::FLAG_ENCODER_LOST;
 inline constexpr std::int32_t kSampleOverrun = furuta::rig_sample_t::FLAG_OVERRUN;
 
+// The balance controller's cycle (rig_control_t), beside the sample of a balance session.
+struct ControlFigures {
+  bool present = false;   // false outside balance sessions
+  std::uint8_t mode = 0;  // rig_control_t::MODE_*, in control::BalanceMode's order
+  double upright_error_rad = 0;
+  double arm_rate_rad_s = 0;
+  double pendulum_rate_rad_s = 0;
+  double energy_ratio = 0;
+  double law_duty = 0;
+  std::int64_t law_time_ns = 0;
+};
+
 struct RigSample {
   std::int64_t seq = 0;
   std::int64_t monotonic_ns = 0;  // the cycle's deadline (its wake-up is monotonic_ns + latency)
@@ -71,6 +83,7 @@ struct RigSample {
   std::int32_t encoder_lost_reports = 0;  // cumulative in the session
   std::int32_t overruns = 0;              // cumulative missed cycles in the session
   std::int32_t flags = 0;                 // kSample*
+  ControlFigures control;
 };
 
 struct SessionStartEvent {
@@ -78,6 +91,7 @@ struct SessionStartEvent {
   std::array<char, kNameChars> label{};
   std::int64_t request_id = 0;  // the start command's (0: a replay)
   ExcitationSpec excitation;
+  bool balance = false;  // the balance controller, not the excitation, drives the motor
   std::int64_t period_ns = 0;
   std::int64_t monotonic_ns = 0;
   std::int64_t wall_time_ns = 0;

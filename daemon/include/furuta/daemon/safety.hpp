@@ -30,6 +30,7 @@ enum class StopReason : std::uint8_t {
   pendulum_encoder_stuck,  // the pendulum's count stands still while the arm swings
   log_error,               // the session log could not be written (disk full, I/O error)
   exception,               // anything thrown inside the loop
+  pendulum_fell,           // a balance session: the pendulum left the fall limit after the catch
 };
 std::string_view to_string(StopReason reason);  // snake_case, stable: logs and tests match on it
 bool is_fault(StopReason reason);               // everything but duration/stop/none

@@ -54,6 +54,14 @@ class SessionRecorder {
   // into that session's log right after its start record, so the log shows who started it. From
   // any thread; only the latest few are kept.
   void note_signed_start(std::int64_t request_id, std::vector<std::uint8_t> encoded);
+  // The controller file behind balance start request `request_id`: written into that session's
+  // log (RIG_CONTROLLER) after its start record. From any thread; only the latest few are kept.
+  struct ControllerRecord {
+    std::string path;
+    std::string sha256;
+    std::string text;
+  };
+  void note_controller(std::int64_t request_id, ControllerRecord controller);
   void sync_if_due(std::chrono::steady_clock::time_point now);
 
   // Called with the final path of each log when its session ends.
@@ -123,6 +131,8 @@ class SessionRecorder {
   std::vector<std::uint8_t> buffer_;
   std::mutex signed_starts_mutex_;
   std::deque<std::pair<std::int64_t, std::vector<std::uint8_t>>> signed_starts_;
+  std::deque<std::pair<std::int64_t, ControllerRecord>> controllers_;  // under signed_starts_mutex_
+  furuta::rig_control_t control_msg_;
   furuta::rig_sample_t sample_msg_;
   std::vector<std::uint8_t> sample_buffer_;  // the encoded sample, published then logged
   furuta::rig_usb_report_t usb_msg_;
