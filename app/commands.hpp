@@ -67,6 +67,8 @@ struct StartOptions {
   std::optional<double> duration_s;
   std::string label;
   std::optional<std::int64_t> seed;
+  // A balance session: the controller file (`furuta controller design`) instead of a profile.
+  std::optional<std::filesystem::path> balance;
 };
 enum class RemoteKind { start, stop, estop, status };
 // Sends one command and reports the daemon's verdict on it. Only answers signed under the

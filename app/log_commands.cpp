@@ -13,6 +13,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "balance_text.hpp"
 #include "commands.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
@@ -148,7 +149,11 @@ int run_log_info_command(const std::filesystem::path& path, std::ostream& out, s
   for (const auto& f : log.faults) {
     if (f.fatal) out << "; fatal: " << f.reason << (f.detail.empty() ? "" : " (" + f.detail + ")");
   }
-  out << "\n  motor     " << last_motor_command(log);
+  if (const auto balance = pipeline::summarize_balance(log))
+    out << "\n" << balance_text(*balance);
+  else
+    out << "\n";
+  out << "  motor     " << last_motor_command(log);
   out << "\n  end       "
       << (log.end ? log.end->end_reason + ", " + std::to_string(log.end->samples) + " samples"
                   : std::string("missing: the session was cut short"))
@@ -306,7 +311,11 @@ int run_replay_command(const std::filesystem::path& path, const std::filesystem:
   std::optional<std::filesystem::path> replay_log;
   {
     daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
-    daemon.start_replayed_session(*log.start);
+    if (!daemon.start_replayed_session(*log.start, log.controller ? &*log.controller : nullptr)) {
+      err << "furuta replay: " << path.string()
+          << ": a balance session without a readable controller record\n";
+      return 2;
+    }
     daemon.loop().exit_when_idle();
     daemon.start();
     daemon.wait();

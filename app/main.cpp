@@ -71,6 +71,12 @@ int main(int argc, char** argv) {
         ->check(furuta::app::finite_number());
     cmd->add_option("--label", start.label, "A label for the session's name");
     cmd->add_option("--seed", start.seed, "Seed of randomised profiles");
+    cmd->add_option("--balance", start.balance,
+                    "Swing the pendulum up and balance it with this controller file (`furuta "
+                    "controller design`) instead of an excitation profile; --duration as usual")
+        ->check(CLI::ExistingFile)
+        ->excludes("--profile")
+        ->excludes("--amplitude");
   };
   // The daemon answers a command at once; the session starts (or is refused) or ends a moment
   // later.

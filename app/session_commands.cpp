@@ -15,10 +15,12 @@
 #include <sstream>
 #include <thread>
 
+#include "balance_text.hpp"
 #include "commands.hpp"
 #include "daemon_channel.hpp"
 #include "furuta/command_auth/command_auth.hpp"
 #include "furuta/command_auth/status_signature.hpp"
+#include "furuta/config/controller_file.hpp"
 #include "furuta/config/rig_config.hpp"
 #include "furuta/daemon/daemon.hpp"
 #include "furuta/daemon/rig_connection.hpp"
@@ -202,13 +204,32 @@ const char* command_name(RemoteKind kind) {
   return "?";
 }
 
-void fill_start_command(const StartOptions& start, const config::ExcitationConfig& defaults,
-                        furuta::rig_command_t& command) {
+// False, said on `err`, when the controller file of a balance start does not read: nothing is
+// sent or started.
+bool fill_start_command(const StartOptions& start, const config::ExcitationConfig& defaults,
+                        furuta::rig_command_t& command, const std::string& name,
+                        std::ostream& err) {
   command.profile = start.profile.value_or(defaults.profile);
   command.amplitude_duty = start.amplitude_duty.value_or(defaults.amplitude_duty);
   command.duration_s = start.duration_s.value_or(defaults.duration_s);
   command.seed = start.seed.value_or(defaults.seed);
   command.label = start.label;
+  if (start.balance) {
+    // Read and checked here, before anything is sent: a bad file is refused without motion. The
+    // daemon reads it again and takes it only if its bytes are still the ones hashed here.
+    config::ControllerFile controller;
+    try {
+      controller = config::load_controller_file(*start.balance);
+    } catch (const config::ConfigError& e) {
+      err << name << ": " << e.what() << "; nothing was started\n";
+      return false;
+    }
+    command.profile = std::string(daemon::kBalanceProfile);
+    command.amplitude_duty = controller.spec.max_duty;
+    command.controller_path = std::filesystem::absolute(*start.balance).lexically_normal().string();
+    command.controller_sha256 = controller.sha256;
+  }
+  return true;
 }
 
 // A session value the configuration's [limits] can never accept (an amplitude above
@@ -358,8 +379,8 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
     case RemoteKind::start: {
       const config::RigConfig rig = config::load_rig_config(remote.config_path);
       command.kind = furuta::rig_command_t::KIND_START_SESSION;
-      fill_start_command(start, rig.excitation, command);
-      if (!session_values_usable(name, command, rig, remote.config_path, err)) {
+      if (!fill_start_command(start, rig.excitation, command, name, err) ||
+          !session_values_usable(name, command, rig, remote.config_path, err)) {
         return kExitNotDone;
       }
       const std::filesystem::path key_path =
@@ -507,12 +528,12 @@ int run_remote_command(RemoteKind kind, DaemonChannel& channel, const RemoteOpti
 
 int run_session_command(const RunOptions& options, std::ostream& out, std::ostream& err) {
   const config::RigConfig rig = config::load_rig_config(options.config_path);
-  {
-    furuta::rig_command_t command{};
-    fill_start_command(options.session, rig.excitation, command);
-    if (!session_values_usable("furuta run", command, rig, options.config_path, err)) {
-      return kExitNotDone;
-    }
+  // Made once, before anything runs: the controller file is read here, not again.
+  furuta::rig_command_t command{};
+  command.kind = furuta::rig_command_t::KIND_START_SESSION;
+  if (!fill_start_command(options.session, rig.excitation, command, "furuta run", err) ||
+      !session_values_usable("furuta run", command, rig, options.config_path, err)) {
+    return kExitNotDone;
   }
   daemon::DaemonSettings settings = daemon::daemon_settings_from_config(rig);
   if (!options.logs_dir.empty()) settings.recorder.logs_dir = options.logs_dir;
@@ -544,9 +565,6 @@ int run_session_command(const RunOptions& options, std::ostream& out, std::ostre
     return 2;
   }
   daemon::Daemon daemon(settings, *rig_io.motor_link, *rig_io.encoder_link, *rig_io.clock, lcm);
-  furuta::rig_command_t command{};
-  command.kind = furuta::rig_command_t::KIND_START_SESSION;
-  fill_start_command(options.session, rig.excitation, command);
   const furuta::rig_status_t reply = daemon.handle_command(command);
   if (!reply.request_accepted) {
     err << "furuta run: refused: " << reply.request_reason << "\n";
@@ -560,13 +578,19 @@ int run_session_command(const RunOptions& options, std::ostream& out, std::ostre
   out << "session ended: " << daemon::to_string(stop);
   if (log) out << "; log " << log->string();
   out << "\n";
+  if (log && options.session.balance) {
+    if (const auto balance = pipeline::summarize_balance(session_log::load_session_log(*log))) {
+      out << balance_text(*balance);
+    }
+  }
   if (!log) {
     err << "furuta run: no log was written"
         << (daemon.recorder().last_fault().empty() ? "" : ": " + daemon.recorder().last_fault())
         << "\n";
     return 1;
   }
-  return daemon::is_fault(stop) ? 1 : 0;
+  // A fall is a balance session's outcome, not a fault of the rig; it is still not done.
+  return daemon::is_fault(stop) || stop == daemon::StopReason::pendulum_fell ? 1 : 0;
 }
 
 }  // namespace furuta::app

@@ -475,6 +475,66 @@ TEST(RemoteCommand, AnEstopIsSentAgainUntilAnswered) {
   EXPECT_GE(daemon.sent(furuta::rig_command_t::KIND_ESTOP), 4);
 }
 
+// A balance start is signed like any other and carries the controller file's SHA-256: the daemon
+// reads the file and runs it only while its bytes are the ones signed. Stop and e-stop during the
+// balance end it with the zero written last, as for every session.
+TEST(RemoteCommand, ABalanceStartCarriesTheControllersHashAndStopsLikeAnyOther) {
+  TempDir dir("furuta-remote-balance");
+  ControllerDesignOptions design;
+  design.results = FURUTA_SOURCE_DIR "/tests/data/golden/results.json";
+  design.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  design.output = dir.path() / "controller.toml";
+  std::ostringstream design_out, design_err;
+  ASSERT_EQ(run_controller_design_command(design, design_out, design_err), 0) << design_err.str();
+  StartOptions start;
+  start.balance = design.output;
+  start.duration_s = 60;
+  start.label = "upright";
+
+  for (const RemoteKind how : {RemoteKind::stop, RemoteKind::estop}) {
+    SteppedDaemon daemon;
+    daemon.step_cycles(70);  // past the rest check
+    const Said started = remote(daemon, RemoteKind::start, start);
+    ASSERT_EQ(started.code, 0) << started.out << started.err;
+    EXPECT_TRUE(started.has("_upright running")) << started.out;
+    daemon.step_cycles(250);  // 4 s: swung up and caught
+    const Said ended = remote(daemon, how);
+    const std::string reason = how == RemoteKind::stop ? "stop_command" : "estop_command";
+    EXPECT_EQ(ended.code, 0) << ended.out << ended.err;
+    EXPECT_TRUE(ended.has("_upright ended: " + reason)) << ended.out;
+
+    const auto path = daemon.daemon().recorder().last_log();
+    ASSERT_TRUE(path.has_value());
+    const session_log::SessionLog log = session_log::load_session_log(*path);
+    ASSERT_TRUE(log.start.has_value());
+    EXPECT_EQ(log.start->profile, "balance");
+    ASSERT_TRUE(log.start_command.has_value());  // who started it, signed
+    ASSERT_TRUE(log.controller.has_value());
+    EXPECT_EQ(log.controller->path, fs::absolute(design.output).lexically_normal().string());
+    bool balanced = false;
+    for (const auto& c : log.control) {
+      balanced = balanced || c.mode == furuta::rig_control_t::MODE_BALANCE;
+    }
+    EXPECT_TRUE(balanced) << "never reached balance before the " << reason;
+    ASSERT_TRUE(log.end.has_value());
+    EXPECT_EQ(log.end->end_reason.rfind(reason, 0), 0u) << log.end->end_reason;
+    const auto writes = session_log::motor_command_writes(log, "1065");
+    ASSERT_FALSE(writes.empty());
+    EXPECT_EQ(writes.back().duty, 0.0);
+
+    if (how == RemoteKind::estop) {
+      // The file changes between signing and the daemon's reading: refused, nothing moves.
+      daemon.watch_signed([&](const furuta::rig_signed_command_t&) {
+        std::ofstream(design.output, std::ios::app) << "# edited after it was hashed\n";
+      });
+      const Said refused = remote(daemon, RemoteKind::start, start);
+      EXPECT_EQ(refused.code, 1) << refused.out << refused.err;
+      EXPECT_TRUE(refused.has("the command was signed with")) << refused.err;
+      EXPECT_EQ(daemon.daemon().recorder().last_log(), path);  // no new session
+    }
+  }
+}
+
 // status: no latency figures before any session ("no data yet", not 0.0), no fault since start-up;
 // after an e-stop and a later good session, the fault with its time and session, and that one
 // session ended well since.
