@@ -92,7 +92,9 @@ int main(int argc, char** argv) {
       std::ostringstream run_out, run_err;
       app::run_session_command(run, run_out, run_err);
       fs::path log;
-      for (const auto& entry : fs::directory_iterator(run.logs_dir)) log = entry.path();
+      for (const auto& entry : fs::directory_iterator(run.logs_dir)) {
+        if (entry.path().extension() == ".lcmlog") log = entry.path();
+      }
       const auto b = pipeline::summarize_balance(session_log::load_session_log(log));
       fs::remove(log);
       ++all;
