@@ -132,12 +132,18 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   const control::DesignPlant plant{*parameters, rig.motor, supply_v};
   const double max_duty = rig.limits.max_amplitude_duty;
   control::BalanceGain gain;
+  control::ObserverGain observer;
+  control::ObserverWeights observer_weights;
+  // The filter trusts each angle to within a count of its encoder.
+  observer_weights.arm_count_rad = bridge::resolution_rad(rig.arm_encoder);
+  observer_weights.pendulum_count_rad = bridge::resolution_rad(rig.pendulum_encoder);
   control::BalanceControllerSpec spec;
   try {
     const control::SampledPlant sampled =
         control::sample(control::linearize_upright(plant), period_s, lag_s + ramp_lag_s);
     gain = control::design_lqr(sampled, options.weights);
-    spec = control::balance_spec(plant, sampled, gain, max_duty,
+    observer = control::design_observer(sampled, observer_weights);
+    spec = control::balance_spec(plant, sampled, gain, observer, max_duty,
                                  config::motor_resolution(rig).duty_step);
   } catch (const std::exception& e) {
     return refuse(std::string("the design failed: ") + e.what());
@@ -180,6 +186,19 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   file << "[prediction]\nclosed_loop_poles_re = " << array_text(re)
        << "\nclosed_loop_poles_im = " << array_text(im)
        << "\nspectral_radius = " << exact(gain.spectral_radius) << "\n\n";
+  std::vector<double> m;
+  for (int i = 0; i < 4; ++i) {
+    for (int j = 0; j < 2; ++j) m.push_back(observer.m(i, j));
+  }
+  file << "[observer]\n# the filter's velocities: x^ = x^- + m ([q1, q2 - pi] - x^-[0..1]), m "
+          "row-major "
+          "4 x 2,\n# x^- the model's prediction from the last estimate and the duties sent\n"
+       << "arm_acceleration_sd = " << exact(observer_weights.arm_acceleration_sd)
+       << "\npendulum_acceleration_sd = " << exact(observer_weights.pendulum_acceleration_sd)
+       << "\narm_count_rad = " << exact(observer_weights.arm_count_rad)
+       << "\npendulum_count_rad = " << exact(observer_weights.pendulum_count_rad)
+       << "\nm = " << array_text(m) << "\nspectral_radius = " << exact(observer.spectral_radius)
+       << "\n\n";
   file << "[drive]\n# eq. 4 at supply_v: torque = duty_torque_nm duty - back_emf_nm_s dq1\n"
        << "duty_torque_nm = " << exact(spec.duty_torque_nm)
        << "\nback_emf_nm_s = " << exact(spec.back_emf_nm_s) << "\n\n";
@@ -188,6 +207,7 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
        << "\narm_gain = " << exact(swing_up.arm_gain)
        << "\narm_damping = " << exact(swing_up.arm_damping)
        << "\nmax_duty = " << exact(swing_up.max_duty)
+       << "\nenergy_margin = " << exact(swing_up.energy_margin)
        << "\nstart_below_energy_ratio = " << exact(swing_up.start_below_energy_ratio)
        << "\nstart_acceleration = " << exact(swing_up.start_acceleration) << "\n\n";
   file << "[catch]\n# angles from upright\ncatch_deg = " << exact(region.catch_rad / kDegToRad)

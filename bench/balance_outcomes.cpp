@@ -5,7 +5,7 @@
 // from upright while balancing, the duty it used, how far the arm went, and the law's own time.
 //
 //   balance_outcomes [--results tests/data/golden/results.json] [--seeds 10] [--duration 70]
-//                    [--jitter-ns 0] [--tap-mnm-s X --tap-at-s T]
+//                    [--jitter-ns 0] [--angle-noise-rad 0] [--tap-mnm-s X --tap-at-s T]
 //
 // Figures, never pass/fail: docs/control.md keeps the table with this command.
 #include <toml++/toml.h>
@@ -27,16 +27,24 @@ namespace {
 using namespace furuta;
 namespace fs = std::filesystem;
 
-// The shipped configuration with the simulated rig's seed, USB jitter and taps set.
-fs::path configuration(const fs::path& dir, std::int64_t seed, std::int64_t jitter_ns,
-                       double tap_mnm_s, double tap_at_s) {
+struct RigChanges {
+  std::int64_t jitter_ns = 0;
+  double angle_noise_rad = 0;
+  double tap_mnm_s = 0;
+  double tap_at_s = 40;
+};
+
+// The shipped configuration with the simulated rig's seed, USB jitter, encoder noise and taps.
+fs::path configuration(const fs::path& dir, std::int64_t seed, const RigChanges& c) {
   toml::table rig = toml::parse_file(FURUTA_SOURCE_DIR "/config/rig.toml");
   toml::table& sim = *rig["simulation"].as_table();
   sim.insert_or_assign("seed", seed);
-  sim.insert_or_assign("usb_latency_jitter_ns", jitter_ns);
-  if (tap_mnm_s != 0) {
-    sim.insert_or_assign("tap_times_s", toml::array{tap_at_s});
-    sim.insert_or_assign("tap_impulse_mnm_s", tap_mnm_s);
+  sim.insert_or_assign("usb_latency_jitter_ns", c.jitter_ns);
+  sim.insert_or_assign("arm_angle_noise_rad", c.angle_noise_rad);
+  sim.insert_or_assign("pendulum_angle_noise_rad", c.angle_noise_rad);
+  if (c.tap_mnm_s != 0) {
+    sim.insert_or_assign("tap_times_s", toml::array{c.tap_at_s});
+    sim.insert_or_assign("tap_impulse_mnm_s", c.tap_mnm_s);
   }
   const fs::path path = dir / ("rig-" + std::to_string(seed) + ".toml");
   std::ofstream(path) << rig << "\n";
@@ -50,21 +58,21 @@ int main(int argc, char** argv) {
   fs::path results = FURUTA_SOURCE_DIR "/tests/data/golden/results.json";
   int seeds = 10;
   double duration_s = 70;
-  std::int64_t jitter_ns = 0;
-  double tap_mnm_s = 0;
-  double tap_at_s = 40;
+  RigChanges changes;
   app.add_option("--results", results, "results.json the controllers are designed from");
   app.add_option("--seeds", seeds, "Simulated-rig seeds per controller (1..N)");
   app.add_option("--duration", duration_s, "Seconds per session");
-  app.add_option("--jitter-ns", jitter_ns, "[simulation] usb_latency_jitter_ns");
-  app.add_option("--tap-mnm-s", tap_mnm_s, "A tap on the pendulum, mN m s (0: none)");
-  app.add_option("--tap-at-s", tap_at_s, "When the tap comes, s after the rig starts");
+  app.add_option("--jitter-ns", changes.jitter_ns, "[simulation] usb_latency_jitter_ns");
+  app.add_option("--angle-noise-rad", changes.angle_noise_rad,
+                 "[simulation] arm_ and pendulum_angle_noise_rad (the seed draws it)");
+  app.add_option("--tap-mnm-s", changes.tap_mnm_s, "A tap on the pendulum, mN m s (0: none)");
+  app.add_option("--tap-at-s", changes.tap_at_s, "When the tap comes, s after the rig starts");
   CLI11_PARSE(app, argc, argv);
 
   const fs::path dir = fs::temp_directory_path() / ("balance_outcomes." + std::to_string(getpid()));
   fs::create_directories(dir);
-  std::printf("%-13s %4s %9s %10s %9s %9s %9s %8s %9s\n", "parameters", "seed", "caught_s",
-              "balanced_s", "rms_deg", "max_deg", "duty_rms", "arm_deg", "law_ns");
+  std::printf("%-13s %4s %9s %10s %9s %9s %9s %8s %9s  %s\n", "parameters", "seed", "caught_s",
+              "balanced_s", "rms_deg", "max_deg", "duty_rms", "arm_deg", "law_ns", "end");
   int all = 0;
   int held = 0;
   for (const auto source : {app::ControllerParameters::output_error,
@@ -81,7 +89,7 @@ int main(int argc, char** argv) {
     }
     for (int seed = 1; seed <= seeds; ++seed) {
       app::RunOptions run;
-      run.config_path = configuration(dir, seed, jitter_ns, tap_mnm_s, tap_at_s);
+      run.config_path = configuration(dir, seed, changes);
       run.simulated = true;
       run.virtual_time = true;
       run.logs_dir = dir / "logs";
@@ -103,12 +111,16 @@ int main(int argc, char** argv) {
                     run_err.str().c_str());
         continue;
       }
-      // Held: caught within 10 s and balanced to the end without falling.
-      if (b->caught_at_s && *b->caught_at_s < 10 && !b->fell) ++held;
-      std::printf("%-13s %4d %9.2f %10.2f %9.3f %9.3f %9.4f %8.1f %9lld%s\n",
+      // Held: caught within 10 s and balanced until the session's end, nothing stopping it.
+      const bool ended_well = b->end_reason == "duration_reached";
+      if (b->caught_at_s && *b->caught_at_s < 10 && ended_well) ++held;
+      const std::string end = !b->caught_at_s ? "not caught"
+                              : ended_well    ? "held"
+                                              : b->end_reason.substr(0, b->end_reason.find(':'));
+      std::printf("%-13s %4d %9.2f %10.2f %9.3f %9.3f %9.4f %8.1f %9lld  %s\n",
                   app::to_string(source), seed, b->caught_at_s.value_or(-1), b->balanced_s,
                   b->upright_rms_deg, b->upright_max_deg, b->duty_rms, b->max_abs_arm_deg,
-                  static_cast<long long>(b->law_time_p50_ns), b->fell ? "  FELL" : "");
+                  static_cast<long long>(b->law_time_p50_ns), end.c_str());
     }
   }
   std::printf("caught within 10 s and held: %d of %d sessions\n", held, all);

@@ -57,7 +57,8 @@ std::int64_t required_controller_integer(Section& s, const std::string& key,
 
 // The tables of one file, kept to point at a key after they are read.
 struct ControllerTables {
-  Section controller, parameters, weights, gain, prediction, drive, swing_up, catch_region, limits;
+  Section controller, parameters, weights, gain, prediction, observer, drive, swing_up,
+      catch_region, limits;
 };
 
 // The table and key a member of BalanceControllerSpec was read from (BalanceSpecError::field).
@@ -69,7 +70,8 @@ std::optional<std::pair<const Section*, std::string>> key_of_spec_member(const C
   };
   if (auto key = after("parameters.")) return std::pair{&t.parameters, *key};
   if (auto key = after("swing_up.")) return std::pair{&t.swing_up, *key};
-  static const std::array<std::array<const char*, 3>, 11> kPlain = {{
+  static const std::array<std::array<const char*, 3>, 12> kPlain = {{
+      {"observer_gain", "observer", "m"},
       {"period_s", "controller", "period_ns"},
       {"delayed", "gain", "k"},
       {"gain", "gain", "k"},
@@ -87,6 +89,7 @@ std::optional<std::pair<const Section*, std::string>> key_of_spec_member(const C
     const std::string_view name = table;
     const Section* s = name == "controller" ? &t.controller
                        : name == "gain"     ? &t.gain
+                       : name == "observer" ? &t.observer
                        : name == "limits"   ? &t.limits
                        : name == "drive"    ? &t.drive
                                             : &t.catch_region;
@@ -174,6 +177,35 @@ void read_prediction_table(Section& s, const ControllerFile& f) {
   s.reject_unknown_keys();
 }
 
+void read_observer_table(Section& s, ControllerFile& f) {
+  for (const char* key :
+       {"arm_acceleration_sd", "pendulum_acceleration_sd", "arm_count_rad", "pendulum_count_rad"}) {
+    s.required_number(key, std::string("the filter's ") + key, detail::positive, "> 0");
+  }
+  const std::vector<double> m = s.required_numbers("m", "the filter's gain (4 x 2)", 8, 8);
+  for (std::size_t i = 0; i < m.size(); ++i) f.spec.observer_gain[i] = m[i];
+  s.required_number(
+      "spectral_radius", "the estimation error's largest pole's magnitude",
+      [](double v) { return v >= 0 && v < 1; }, "in [0, 1) (a filter that converges)");
+  s.reject_unknown_keys();
+}
+
+// The sampled plant the filter predicts with, from the file's model, drive, period and lags: the
+// numbers the design sampled, so they are not written twice.
+void sample_the_plant(ControllerFile& f) {
+  const control::LinearPlant linear =
+      control::linearize_upright(f.spec.parameters, {f.spec.duty_torque_nm, f.spec.back_emf_nm_s});
+  control::set_continuous_plant(linear, f.spec);
+  const control::SampledPlant sampled =
+      control::sample(linear, f.spec.period_s, f.lag_s + f.ramp_lag_s);
+  for (Eigen::Index i = 0; i < sampled.phi.rows(); ++i) {
+    f.spec.gamma[static_cast<std::size_t>(i)] = sampled.gamma(i);
+    for (Eigen::Index j = 0; j < sampled.phi.cols(); ++j) {
+      f.spec.phi[static_cast<std::size_t>(i * control::kMaxGains + j)] = sampled.phi(i, j);
+    }
+  }
+}
+
 void read_drive_table(Section& s, ControllerFile& f) {
   f.spec.duty_torque_nm =
       s.required_number("duty_torque_nm", "eq. 4's torque per unit duty at the supply");
@@ -188,6 +220,7 @@ void read_swing_up_table(Section& s, ControllerFile& f) {
   u.arm_gain = s.required_number("arm_gain", "the swing-up's gain on the arm's angle");
   u.arm_damping = s.required_number("arm_damping", "the swing-up's gain on the arm's speed");
   u.max_duty = s.required_number("max_duty", "the swing-up's duty limit");
+  u.energy_margin = s.required_number("energy_margin", "how far above E0 the swing-up aims");
   u.start_below_energy_ratio =
       s.required_number("start_below_energy_ratio", "the energy ratio below which it starts");
   u.start_acceleration = s.required_number("start_acceleration", "the starting acceleration");
@@ -227,6 +260,7 @@ ControllerFile parse_controller_file(std::string_view text, const std::string& f
       required_controller_table(top, "weights", "the LQR's weights"),
       required_controller_table(top, "gain", "the LQR's gain"),
       required_controller_table(top, "prediction", "the closed loop's poles"),
+      required_controller_table(top, "observer", "the filter that estimates the velocities"),
       required_controller_table(top, "drive", "eq. 4 as the swing-up uses it"),
       required_controller_table(top, "swing_up", "the swing-up's settings"),
       required_controller_table(top, "catch", "the catch region"),
@@ -238,7 +272,9 @@ ControllerFile parse_controller_file(std::string_view text, const std::string& f
   read_weights_table(t.weights);
   read_gain_table(t.gain, f);
   read_prediction_table(t.prediction, f);
+  read_observer_table(t.observer, f);
   read_drive_table(t.drive, f);
+  sample_the_plant(f);
   read_swing_up_table(t.swing_up, f);
   read_catch_table(t.catch_region, f);
   read_limits_table(t.limits, f);

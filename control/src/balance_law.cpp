@@ -54,6 +54,11 @@ BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
   require(spec.delayed >= 0 && spec.delayed <= kMaxDelayedDuties, "delayed",
           "must be 0 to 4 (the lag, in whole periods rounded up)");
   for (const double g : spec.gain) require(std::isfinite(g), "gain", "must be finite numbers");
+  for (const double v : spec.phi) require(std::isfinite(v), "phi", "must be finite numbers");
+  for (const double v : spec.gamma) require(std::isfinite(v), "gamma", "must be finite numbers");
+  for (const double v : spec.observer_gain) {
+    require(std::isfinite(v), "observer_gain", "must be finite numbers");
+  }
   for (int i = 4 + spec.delayed; i < kMaxGains; ++i) {
     require(spec.gain[static_cast<std::size_t>(i)] == 0, "gain",
             "has more entries than the state (4 plus the delayed duties)");
@@ -77,6 +82,8 @@ BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
                                     std::pair{s.arm_damping, "swing_up.arm_damping"}}) {
     require(std::isfinite(value) && value >= 0, name, "must be a finite number >= 0");
   }
+  require(std::isfinite(s.energy_margin) && s.energy_margin >= 0 && s.energy_margin < 1,
+          "swing_up.energy_margin", "must be in [0, 1)");
   require(finite_positive(s.max_acceleration), "swing_up.max_acceleration",
           "must be a finite number > 0");
   require(finite_positive(s.start_acceleration) && s.start_acceleration <= s.max_acceleration,
@@ -105,7 +112,51 @@ void BalanceLaw::reset() noexcept {
   inside_s_ = 0;
   start_s_ = 0;
   arm_velocity_ = 0;
+  estimating_ = false;
+  estimate_.fill(0.0);
   sent_.fill(0.0);
+}
+
+void BalanceLaw::estimate(double q1, double error, double dq1, double dq2, double arm_age_s,
+                          double pendulum_age_s) noexcept {
+  if (!estimating_) {
+    // The first cycle near upright starts from the angles and the differences.
+    estimate_ = {q1, error, dq1, dq2};
+    estimating_ = true;
+    return;
+  }
+  // z[k - 1] = [x^[k - 1]; u[k - 1 - d], ..., u[k - 2]], u[k - 1] the newest duty sent.
+  const auto delayed = static_cast<std::size_t>(spec_.delayed);
+  std::array<double, kMaxGains> previous{};
+  for (std::size_t i = 0; i < 4; ++i) previous[i] = estimate_[i];
+  for (std::size_t i = 0; i < delayed; ++i) {
+    previous[4 + i] = sent_[sent_.size() - 1 - delayed + i];
+  }
+  const double newest = sent_.back();
+  std::array<double, 4> predicted{};
+  for (std::size_t i = 0; i < 4; ++i) {
+    double v = spec_.gamma[i] * newest;
+    for (std::size_t j = 0; j < 4 + delayed; ++j) v += spec_.phi[i * kMaxGains + j] * previous[j];
+    predicted[i] = v;
+  }
+  // Each angle was read `age` before this instant: the prediction taken back to then along the
+  // model (second order in the age, the duty applied now held), x(t - a) = x - a x' + a^2 / 2 x''.
+  std::array<double, 4> rate{};
+  for (std::size_t i = 0; i < 4; ++i) {
+    double v = spec_.b_continuous[i] * newest;
+    for (std::size_t j = 0; j < 4; ++j) v += spec_.a_continuous[i * 4 + j] * predicted[j];
+    rate[i] = v;
+  }
+  const auto back = [&](std::size_t angle, double age) {
+    if (!(age > 0) || !std::isfinite(age)) return predicted[angle];
+    return predicted[angle] - age * rate[angle] + 0.5 * age * age * rate[angle + 2];
+  };
+  const double innovation_arm = q1 - back(0, arm_age_s);
+  const double innovation_pendulum = error - back(1, pendulum_age_s);
+  for (std::size_t i = 0; i < 4; ++i) {
+    estimate_[i] = predicted[i] + spec_.observer_gain[i * 2] * innovation_arm +
+                   spec_.observer_gain[i * 2 + 1] * innovation_pendulum;
+  }
 }
 
 double BalanceLaw::limit(double duty) const noexcept {
@@ -115,7 +166,8 @@ double BalanceLaw::limit(double duty) const noexcept {
   return std::clamp(steps, -max_steps, max_steps) * spec_.duty_step;
 }
 
-BalanceStep BalanceLaw::step(double q1, double q2) noexcept {
+BalanceStep BalanceLaw::step(double q1, double q2, double arm_age_s,
+                             double pendulum_age_s) noexcept {
   BalanceStep out;
   const double t = spec_.period_s;
   const double dq1 = have_previous_ ? (q1 - previous_q1_) / t : 0.0;
@@ -161,9 +213,14 @@ BalanceStep BalanceLaw::step(double q1, double q2) noexcept {
 
   double duty = 0;
   if (mode_ == BalanceMode::swing_up) {
+    estimating_ = false;
     const SwingUp& s = spec_.swing_up;
     const double phase = dq2 * std::cos(q2);
-    double pump = s.energy_gain * (upright_energy - energy) * (phase > 0 ? -1.0 : 1.0);
+    // Aiming a little above E0 brings the pendulum over the top at a walking pace, into the
+    // catch region, where aiming at E0 itself approaches upright ever more slowly and any loss
+    // or bias in the estimated energy leaves the swing short of it.
+    const double target = upright_energy * (1 + s.energy_margin);
+    double pump = s.energy_gain * (target - energy) * (phase > 0 ? -1.0 : 1.0);
     if (out.energy_ratio < s.start_below_energy_ratio) {
       const double natural_rad_s = std::sqrt(p.mug / p.mu4);
       pump = std::sin(natural_rad_s * start_s_) >= 0 ? s.start_acceleration : -s.start_acceleration;
@@ -180,12 +237,22 @@ BalanceStep BalanceLaw::step(double q1, double q2) noexcept {
            spec_.duty_torque_nm;
     duty = std::clamp(duty, -s.max_duty, s.max_duty);
   } else if (mode_ == BalanceMode::catching || mode_ == BalanceMode::balance) {
-    const std::array<double, 4> x = {q1, error, dq1, dq2};
+    // Catching, the pendulum may be far from where the linear model holds and fast: the
+    // differences. Balancing, near upright, the filter, started from the differences.
+    std::array<double, 4> x = {q1, error, dq1, dq2};
+    if (mode_ == BalanceMode::balance) {
+      estimate(q1, error, dq1, dq2, arm_age_s, pendulum_age_s);
+      x = estimate_;
+      out.arm_rate_rad_s = x[2];
+      out.pendulum_rate_rad_s = x[3];
+    }
     for (std::size_t i = 0; i < 4; ++i) duty -= spec_.gain[i] * x[i];
     const auto delayed = static_cast<std::size_t>(spec_.delayed);
     for (std::size_t i = 0; i < delayed; ++i) {
-      duty -= spec_.gain[4 + i] * sent_[kMaxDelayedDuties - delayed + i];
+      duty -= spec_.gain[4 + i] * sent_[sent_.size() - delayed + i];
     }
+  } else {
+    estimating_ = false;
   }
   out.duty = limit(duty);
   for (std::size_t i = 0; i + 1 < sent_.size(); ++i) sent_[i] = sent_[i + 1];

@@ -39,9 +39,12 @@ DriveConstants drive_constants(const DesignPlant& plant) {
 }
 
 LinearPlant linearize_upright(const DesignPlant& plant) {
-  const model::Parameters<double>& p = plant.parameters;
+  return linearize_upright(plant.parameters, drive_constants(plant));
+}
+
+LinearPlant linearize_upright(const model::Parameters<double>& p, const DriveConstants& drive) {
   // tau = kd duty - kw dq1 (drive_constants).
-  const auto [kd, kw] = drive_constants(plant);
+  const auto [kd, kw] = drive;
   // At q2 = pi: sin = 0, cos = -1; the velocity products of B(q, dq) vanish to first order, and
   // gravity's mug sin(q2) becomes -mug (q2 - pi). M = [mu1, -mu3; -mu3, mu4].
   Eigen::Matrix2d mass;
@@ -176,8 +179,73 @@ BalanceGain design_lqr(const SampledPlant& plant, const LqrWeights& weights) {
   return out;
 }
 
+ObserverGain design_observer(const SampledPlant& plant, const ObserverWeights& weights) {
+  for (const double w : {weights.arm_acceleration_sd, weights.pendulum_acceleration_sd,
+                         weights.arm_count_rad, weights.pendulum_count_rad}) {
+    if (!(w > 0) || !std::isfinite(w)) {
+      throw std::invalid_argument(
+          "design_observer: acceleration deviations and counts must be finite and > 0");
+    }
+  }
+  // The duties on their way are known to the law: only the four physical states are estimated,
+  // and their own motion over a period is phi's top-left block.
+  const Eigen::Matrix4d a = plant.phi.topLeftCorner<4, 4>();
+  Eigen::Matrix<double, 2, 4> c = Eigen::Matrix<double, 2, 4>::Zero();
+  c(0, 0) = 1.0;
+  c(1, 1) = 1.0;
+  // An acceleration error w held over the period T moves (angle, speed) by (T^2 / 2, T) w.
+  const double t = plant.period_s;
+  Eigen::Matrix4d w = Eigen::Matrix4d::Zero();
+  const std::array<double, 2> sd = {weights.arm_acceleration_sd, weights.pendulum_acceleration_sd};
+  for (int j = 0; j < 2; ++j) {
+    const double var = sd[static_cast<std::size_t>(j)] * sd[static_cast<std::size_t>(j)];
+    w(j, j) = var * t * t * t * t / 4;
+    w(j, j + 2) = w(j + 2, j) = var * t * t * t / 2;
+    w(j + 2, j + 2) = var * t * t;
+  }
+  Eigen::Matrix2d v = Eigen::Matrix2d::Zero();
+  v(0, 0) = weights.arm_count_rad * weights.arm_count_rad / 12;
+  v(1, 1) = weights.pendulum_count_rad * weights.pendulum_count_rad / 12;
+  // The prior covariance P- = A P A' + W with P = (I - M C) P-, iterated to its fixed point.
+  Eigen::Matrix4d prior = w;
+  Eigen::Matrix<double, 4, 2> m = Eigen::Matrix<double, 4, 2>::Zero();
+  bool settled = false;
+  constexpr int kMaxIterations = 200000;
+  for (int i = 0; i < kMaxIterations && !settled; ++i) {
+    m = prior * c.transpose() * (c * prior * c.transpose() + v).inverse();
+    const Eigen::Matrix4d posterior = (Eigen::Matrix4d::Identity() - m * c) * prior;
+    Eigen::Matrix4d next = a * posterior * a.transpose() + w;
+    next = 0.5 * (next + next.transpose());
+    const double change = (next - prior).norm();
+    if (!std::isfinite(change)) break;
+    settled = change <= 1e-12 * std::max(1e-30, next.norm());
+    prior = next;
+  }
+  if (!settled) {
+    throw std::runtime_error("design_observer: the filter's Riccati recursion did not settle");
+  }
+  ObserverGain out;
+  out.m = prior * c.transpose() * (c * prior * c.transpose() + v).inverse();
+  const Eigen::Matrix4d error = (Eigen::Matrix4d::Identity() - out.m * c) * a;
+  const Eigen::Vector4cd poles = error.eigenvalues();
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    out.spectral_radius = std::max(out.spectral_radius, std::abs(poles(i)));
+  }
+  return out;
+}
+
+void set_continuous_plant(const LinearPlant& plant, BalanceControllerSpec& spec) {
+  for (int i = 0; i < 4; ++i) {
+    spec.b_continuous[static_cast<std::size_t>(i)] = plant.b(i);
+    for (int j = 0; j < 4; ++j) {
+      spec.a_continuous[static_cast<std::size_t>(i * 4 + j)] = plant.a(i, j);
+    }
+  }
+}
+
 BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant& sampled,
-                                   const BalanceGain& gain, double max_duty, double duty_step) {
+                                   const BalanceGain& gain, const ObserverGain& observer,
+                                   double max_duty, double duty_step) {
   if (sampled.delayed > kMaxDelayedDuties || gain.k.size() != 4 + sampled.delayed) {
     throw std::invalid_argument(
         "a lag of " + std::to_string(sampled.lag_s) + " s is " + std::to_string(sampled.delayed) +
@@ -187,9 +255,21 @@ BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant&
   BalanceControllerSpec spec;
   spec.period_s = sampled.period_s;
   spec.delayed = sampled.delayed;
-  for (Eigen::Index i = 0; i < gain.k.size(); ++i) {
+  const Eigen::Index n = sampled.phi.rows();
+  for (Eigen::Index i = 0; i < n; ++i) {
     spec.gain[static_cast<std::size_t>(i)] = gain.k(i);
+    spec.gamma[static_cast<std::size_t>(i)] = sampled.gamma(i);
+    for (Eigen::Index j = 0; j < n; ++j) {
+      spec.phi[static_cast<std::size_t>(i * kMaxGains + j)] = sampled.phi(i, j);
+    }
   }
+  for (std::size_t i = 0; i < 4; ++i) {
+    for (std::size_t j = 0; j < 2; ++j) {
+      spec.observer_gain[i * 2 + j] =
+          observer.m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+    }
+  }
+  set_continuous_plant(linearize_upright(plant), spec);
   spec.max_duty = max_duty;
   spec.duty_step = duty_step;
   spec.parameters = plant.parameters;

@@ -52,7 +52,8 @@ std::optional<BalanceSummary> summarize_balance(const session_log::SessionLog& l
     out.upright_rms_deg = std::sqrt(sum_error2 / static_cast<double>(balance_cycles)) * kDeg;
     out.duty_rms = std::sqrt(sum_duty2 / static_cast<double>(balance_cycles));
   }
-  out.fell = log.end && log.end->end_reason == "pendulum_fell";
+  out.fell = log.end && log.end->end_reason.rfind("pendulum_fell", 0) == 0;
+  if (log.end) out.end_reason = log.end->end_reason;
   if (!law_ns.empty()) {
     std::sort(law_ns.begin(), law_ns.end());
     out.law_time_p50_ns = law_ns[law_ns.size() / 2];

@@ -137,6 +137,41 @@ TEST(UprightLqr, TheGainBalancesTheNonlinearPendulumWithLagSaturationAndQuantisa
   EXPECT_GT(largest_duty, 0.0);
 }
 
+// The filter on the sampled plant it was designed for: its error dynamics converge, and from a
+// wrong start (velocities unknown) its estimate of the true state, fed the exact angles and the
+// duties sent, closes in on it: the velocities it gives the gain are the plant's.
+TEST(UprightLqr, TheFilterRecoversTheVelocitiesFromTheAngles) {
+  const DesignPlant plant = simulated_rig();
+  const SampledPlant s = sample(linearize_upright(plant), 0.016, 0.002);
+  ObserverWeights weights;
+  weights.arm_count_rad = 2 * kPi / (1024.0 * plant.motor.total_ratio());
+  weights.pendulum_count_rad = 2 * kPi / 4096.0;
+  const ObserverGain filter = design_observer(s, weights);
+  EXPECT_GT(filter.spectral_radius, 0.0);
+  EXPECT_LT(filter.spectral_radius, 1.0);
+
+  const BalanceGain gain = design_lqr(s, LqrWeights{});
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(5);
+  z << 0.05, 0.03, 0.4, -0.6, 0.0;                 // the truth, in z's coordinates
+  Eigen::Vector4d estimate(z(0), z(1), 0.0, 0.0);  // the angles only
+  double duty = 0;
+  for (int k = 0; k < 60; ++k) {
+    // The loop: predict with the duties sent, correct with this sample's angles, decide.
+    Eigen::VectorXd previous(5);
+    previous << estimate, z(4);
+    const double sent = duty;
+    z = s.phi * z + s.gamma * sent;
+    const Eigen::VectorXd predicted = s.phi * previous + s.gamma * sent;
+    const Eigen::Vector2d innovation(z(0) - predicted(0), z(1) - predicted(1));
+    estimate = predicted.head<4>() + filter.m * innovation;
+    Eigen::VectorXd used(5);
+    used << estimate, z(4);
+    duty = -(gain.k * used)(0);
+  }
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(estimate(i), z(i), 1e-6) << i;
+  EXPECT_THROW(design_observer(s, ObserverWeights{}), std::invalid_argument);  // no counts
+}
+
 TEST(UprightLqr, TheDriveConstantsAreEq4AtTheSupply) {
   const DesignPlant plant = simulated_rig();
   const DriveConstants drive = drive_constants(plant);

@@ -235,8 +235,12 @@ TEST(LoopAllocation, BalanceSessionDoesNotAllocateOnTheLoopThread) {
   const control::SampledPlant sampled =
       control::sample(control::linearize_upright(plant), 0.016, 0.002);
   request.balance = true;
-  request.balance_law = control::BalanceLaw(control::balance_spec(
-      plant, sampled, control::design_lqr(sampled, control::LqrWeights{}), 0.5, 1.0 / 255));
+  control::ObserverWeights filter;
+  filter.arm_count_rad = bridge::resolution_rad(s.config.arm_encoder);
+  filter.pendulum_count_rad = bridge::resolution_rad(s.config.pendulum_encoder);
+  request.balance_law = control::BalanceLaw(
+      control::balance_spec(plant, sampled, control::design_lqr(sampled, control::LqrWeights{}),
+                            control::design_observer(sampled, filter), 0.5, 1.0 / 255));
   CountedRun run(s, 50);
   ASSERT_TRUE(run.loop.request_session(request));
   run.run();

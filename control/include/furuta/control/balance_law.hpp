@@ -37,6 +37,7 @@ struct SwingUp {
   double arm_gain = 40.0;           // rad/s^2 per rad
   double arm_damping = 8.0;         // rad/s^2 per rad/s
   double max_duty = 0.5;
+  double energy_margin = 0.2;  // the pump aims at E0 (1 + energy_margin)
   // Below this E / E0 (hanging nearly at rest, where sign(dq2 cos q2) says nothing) the pump is
   // +-start_acceleration flipped every half period of the pendulum's small swing, sqrt(mug / mu4):
   // resonance starts the swing.
@@ -59,6 +60,17 @@ struct BalanceControllerSpec {
   // duty = -gain . [q1, q2 - pi, dq1, dq2, the `delayed` duties still on their way, oldest first]
   std::array<double, kMaxGains> gain{};
   int delayed = 0;
+  // The sampled plant about upright, z[k+1] = phi z[k] + gamma u[k] on the same z (row-major,
+  // kMaxGains columns; the first 4 + delayed rows and columns used), and the filter's gain: from
+  // each cycle's prediction x^- of [q1, q2 - pi, dq1, dq2], x^ = x^- + m ([q1, q2 - pi] -
+  // x^-[0..1]), m row-major 4 x 2. Balancing uses x^, so its velocities are the filter's.
+  std::array<double, kMaxGains * kMaxGains> phi{};
+  std::array<double, kMaxGains> gamma{};
+  std::array<double, 8> observer_gain{};
+  // dx/dt = a x + b duty about upright (row-major 4 x 4): the filter takes each angle back from
+  // the sample's instant to when the encoder read it.
+  std::array<double, 16> a_continuous{};
+  std::array<double, 4> b_continuous{};
   double max_duty = 0.5;           // the law never asks for more, in any mode
   double duty_step = 1.0 / 255.0;  // the board's resolution: every duty is a whole number of steps
   // The model the swing-up inverts, and eq. 4 as torque = duty_torque duty - back_emf dq1.
@@ -74,7 +86,9 @@ struct BalanceStep {
   double duty = 0;  // what to command, within +-max_duty, a whole number of duty steps
   BalanceMode mode = BalanceMode::swing_up;
   double upright_error_rad = 0;  // q2 - pi wrapped into (-pi, pi]
-  double arm_rate_rad_s = 0;     // the velocities the law used (differences over a period)
+  // The velocities the law used: differences over a period while swinging up and catching, the
+  // filter's estimates while balancing.
+  double arm_rate_rad_s = 0;
   double pendulum_rate_rad_s = 0;
   double energy_ratio = 0;  // E / E0: 0 hanging at rest, 1 upright at rest
 };
@@ -101,7 +115,10 @@ class BalanceLaw {
 
   // The angles of this cycle (q2 = 0 hanging down); returns the duty to send now. Once fallen it
   // returns 0.
-  BalanceStep step(double arm_angle_rad, double pendulum_angle_rad) noexcept;
+  // `*_age_s`: how long before this call each angle was read (its report's age; 0 when it is the
+  // angle at this instant), which the filter accounts for.
+  BalanceStep step(double arm_angle_rad, double pendulum_angle_rad, double arm_age_s = 0,
+                   double pendulum_age_s = 0) noexcept;
   // Back to the first call's state (no velocities yet, no duties on their way, swinging up).
   void reset() noexcept;
 
@@ -110,6 +127,10 @@ class BalanceLaw {
 
  private:
   double limit(double duty) const noexcept;
+  // The filter's step: predicts this cycle's state from the last estimate and the duties sent,
+  // corrects it with the angles; starts from the angles and differences on its first cycle.
+  void estimate(double q1, double error, double dq1, double dq2, double arm_age_s,
+                double pendulum_age_s) noexcept;
 
   BalanceControllerSpec spec_;
   bool have_previous_ = false;
@@ -119,8 +140,12 @@ class BalanceLaw {
   double inside_s_ = 0;      // time in the catch region while catching
   double start_s_ = 0;       // time spent starting the swing
   double arm_velocity_ = 0;  // the swing-up's arm velocity, rad/s
+  // The filter's estimate of [q1, q2 - pi, dq1, dq2] while catching and balancing.
+  bool estimating_ = false;
+  std::array<double, 4> estimate_{};
   // The duties sent, newest last: the last `delayed` of them are still on their way.
-  std::array<double, kMaxDelayedDuties> sent_{};
+  // One more than the delays: the filter's prediction needs the duties of the previous cycle's z.
+  std::array<double, kMaxDelayedDuties + 1> sent_{};
 };
 
 }  // namespace furuta::control

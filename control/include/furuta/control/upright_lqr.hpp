@@ -6,7 +6,10 @@
 //   2. sample: held over each loop period and reaching the board `lag_s` after its sample (the
 //      data path), as x[k+1] = Phi x[k] + Gamma u[k] on a state that carries the duties still on
 //      their way;
-//   3. design_lqr: the discrete-time LQR of that sampled plant, its gain and closed-loop poles.
+//   3. design_lqr: the discrete-time LQR of that sampled plant, its gain and closed-loop poles;
+//   4. design_observer: the steady-state Kalman filter that gives the LQR its velocities from the
+//      two encoders' counts (a difference over a period lags by half a period, and against an arm
+//      that follows its duty within a period that lag rings at the sampling's Nyquist rate).
 //
 // Numbers in, numbers out: the controller file and its text are made elsewhere.
 
@@ -42,6 +45,9 @@ struct LinearPlant {
   Eigen::Vector4d b = Eigen::Vector4d::Zero();
 };
 LinearPlant linearize_upright(const DesignPlant& plant);
+// The same from the parameters and eq. 4's constants (what a controller file holds).
+LinearPlant linearize_upright(const model::Parameters<double>& parameters,
+                              const DriveConstants& drive);
 
 // x[k+1] = phi x[k] + gamma u[k] on z = [x; the duties sent but not yet applied, oldest first]:
 // a duty computed at sample k reaches the board lag_s later and is held until the next one
@@ -90,11 +96,34 @@ struct BalanceGain {
 // stabilise).
 BalanceGain design_lqr(const SampledPlant& plant, const LqrWeights& weights);
 
-// What the loop runs (balance_law.hpp) for a design: the gain and the sampled plant's period and
-// delayed duties, the plant's parameters and drive, the swing-up's and catch region's defaults,
-// the duty limit and step, the swing-up never asking for more than max_duty. Throws
-// std::invalid_argument when the gain has more entries than the law can carry.
+// What the filter assumes: the model's accelerations are off by white noise of these standard
+// deviations (rad/s^2, held over each period), and each angle is read to within a count (a
+// uniform error of one count, variance count^2 / 12).
+struct ObserverWeights {
+  double arm_acceleration_sd = 10.0;
+  double pendulum_acceleration_sd = 2.0;
+  double arm_count_rad = 0;  // the encoders' resolutions at the joints
+  double pendulum_count_rad = 0;
+};
+struct ObserverGain {
+  // x^ = x^- + m (y - C x^-), y = [q1, q2 - pi]: the correction of the predicted state by the
+  // measured angles.
+  Eigen::Matrix<double, 4, 2> m = Eigen::Matrix<double, 4, 2>::Zero();
+  double spectral_radius = 0;  // of the estimation error's dynamics, (I - m C) A; < 1
+};
+// Throws std::invalid_argument for weights or counts that are not finite and > 0, and
+// std::runtime_error when the filter's Riccati recursion does not settle.
+ObserverGain design_observer(const SampledPlant& plant, const ObserverWeights& weights);
+
+// What the loop runs (balance_law.hpp) for a design: the gain and the sampled plant (period,
+// delayed duties, phi and gamma for the filter), the filter's gain, the plant's parameters and
+// drive, the swing-up's and catch region's defaults, the duty limit and step, the swing-up never
+// asking for more than max_duty. Throws std::invalid_argument when the plant carries more duties
+// than the law can.
+// The spec's continuous plant (a_continuous, b_continuous) from `plant`.
+void set_continuous_plant(const LinearPlant& plant, BalanceControllerSpec& spec);
 BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant& sampled,
-                                   const BalanceGain& gain, double max_duty, double duty_step);
+                                   const BalanceGain& gain, const ObserverGain& observer,
+                                   double max_duty, double duty_step);
 
 }  // namespace furuta::control

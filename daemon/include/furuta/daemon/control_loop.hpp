@@ -188,6 +188,9 @@ class ControlLoop {
   Excitation excitation_;
   bool balance_ = false;
   control::BalanceLaw balance_law_;
+  // When the newest angle of each board was read (its report's arrival, on the loop's clock).
+  std::int64_t arm_read_ns_ = 0;
+  std::int64_t pendulum_read_ns_ = 0;
   std::array<char, kNameChars> session_{};
   std::int64_t session_start_ns_ = 0;
   std::int64_t seq_ = 0;

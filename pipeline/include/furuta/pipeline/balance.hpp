@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "furuta/session_log/session_log.hpp"
@@ -24,6 +25,7 @@ struct BalanceSummary {
   double max_abs_duty = 0;     // over the whole session, as commanded
   double max_abs_arm_deg = 0;  // over the whole session
   bool fell = false;           // the session ended with pendulum_fell
+  std::string end_reason;      // the end record's (empty: cut short)
   std::int64_t law_time_p50_ns = 0;
   std::int64_t law_time_max_ns = 0;
   // Each cycle's time from the session start and mode (rig_control_t::MODE_*), for plots.
