@@ -3,6 +3,7 @@
 //
 //   daemon_latency --period-us 16000 --seconds 60 [--session bang-bang|balance|both]
 //                  [--balance CONTROLLER.toml] [--fifo] [--cpu C] [--lcm-url URL] [--json FILE]
+//                  [--samples-csv PREFIX]
 //
 // Each session runs in a daemon of its own on a fresh simulated rig (at rest, as it starts), with
 // the same settings, one after the other: a bang-bang excitation, or a balance session (swing-up,
@@ -94,6 +95,7 @@ struct SessionFigures {
   SessionKind kind = SessionKind::bang_bang;
   // The session's own cycles, from its samples: the whole lateness, the missed periods included.
   daemon::LatencyHistogram wake;
+  std::vector<std::int64_t> wake_ns;  // the same, for pooling sessions of a kind
   // The loop's over its whole run: the rest check before the session and the cycle after it too.
   daemon::LatencyHistogram loop_wake;
   std::int64_t overruns = 0, cycles = 0, cpu_ns = 0, samples_logged = 0;
@@ -105,6 +107,15 @@ struct SessionFigures {
   std::array<LawTimes, kModes> law_by_mode;
   std::array<std::int64_t, kModes> mode_cycles{};
   double balanced_from_s = -1;
+  // Per sample, for --samples-csv: what explains a tail (when the late cycles came, in which mode).
+  struct Sample {
+    std::int64_t seq, wake_ns;
+    std::int32_t overruns;
+    int mode;  // -1 outside balance sessions
+    std::int64_t law_ns;
+    double arm_rad, pendulum_rad, duty;
+  };
+  std::vector<Sample> samples;
 };
 
 struct Setup {
@@ -117,6 +128,7 @@ struct Setup {
   int cpu = -1;
   std::filesystem::path controller_path;  // absolute
   std::string controller_sha256;
+  bool keep_samples = false;
 };
 
 // One session in a daemon of its own; nullopt (said on stderr) when the daemon refuses the start.
@@ -145,6 +157,8 @@ std::optional<SessionFigures> run_session(const Setup& setup, SessionKind kind) 
   f.subscriber = std::make_unique<SubscriberLatency>(slots);
   SubscriberLatency& subscriber = *f.subscriber;
   f.law.ns.reserve(slots);
+  f.wake_ns.reserve(slots);
+  if (setup.keep_samples) f.samples.reserve(slots);
   for (LawTimes& m : f.law_by_mode) m.ns.reserve(slots);
   sub_lcm.subscribe(session_log::kChannelSample, &SubscriberLatency::on_sample, &subscriber);
   std::atomic<bool> stop_subscriber{false};
@@ -169,6 +183,15 @@ std::optional<SessionFigures> run_session(const Setup& setup, SessionKind kind) 
           const std::int64_t missed = s.overruns - overruns_before;
           overruns_before = s.overruns;
           f.wake.record(s.wake_latency_ns + missed * period_ns);
+          if (f.wake_ns.size() < f.wake_ns.capacity()) {
+            f.wake_ns.push_back(s.wake_latency_ns + missed * period_ns);
+          }
+          if (f.samples.size() < f.samples.capacity()) {
+            f.samples.push_back({s.seq, s.wake_latency_ns + missed * period_ns, s.overruns,
+                                 s.control.present ? static_cast<int>(s.control.mode) : -1,
+                                 s.control.present ? s.control.law_time_ns : 0, s.arm_angle_rad,
+                                 s.pendulum_angle_rad, s.commanded_duty});
+          }
           if (s.control.present) {
             f.law.ns.push_back(s.control.law_time_ns);
             const std::size_t mode = std::min<std::size_t>(s.control.mode, kModes - 1);
@@ -331,6 +354,7 @@ int main(int argc, char** argv) {
   int cpu = -1;
   std::string lcm_url = "memq://";
   std::string json_path;
+  std::string samples_csv;
   std::string config_path = config::default_rig_config_path().string();
   std::vector<std::string> session_names{"bang-bang"};
   std::string balance_path;
@@ -351,6 +375,9 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", lcm_url,
                  "LCM for samples; udpm needs a multicast route (see bench/README.md)");
   app.add_option("--json", json_path, "Write the figures as JSON");
+  app.add_option("--samples-csv", samples_csv,
+                 "Write each session's samples (wake-up latency, mode, law time, angles, duty) "
+                 "to PREFIX-<session>-<n>.csv");
   app.add_option("--config", config_path)->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
 
@@ -367,6 +394,7 @@ int main(int argc, char** argv) {
   }
 
   Setup setup;
+  setup.keep_samples = !samples_csv.empty();
   setup.period_ns = static_cast<std::int64_t>(period_us * 1000);
   setup.seconds = seconds;
   setup.fifo = fifo;
@@ -420,6 +448,17 @@ int main(int argc, char** argv) {
               << " session ...\n";
     std::optional<SessionFigures> f = run_session(setup, kind);
     if (!f) return 1;
+    if (!samples_csv.empty()) {
+      const std::string path = samples_csv + "-" + std::string(to_string(kind)) + "-" +
+                               std::to_string(sessions.size()) + ".csv";
+      std::ofstream csv(path);
+      csv << "seq,t_s,wake_latency_us,overruns,mode,law_time_ns,arm_rad,pendulum_rad,duty\n";
+      for (const auto& x : f->samples) {
+        csv << x.seq << "," << static_cast<double>(x.seq * setup.period_ns) * 1e-9 << ","
+            << static_cast<double>(x.wake_ns) * 1e-3 << "," << x.overruns << "," << x.mode << ","
+            << x.law_ns << "," << x.arm_rad << "," << x.pendulum_rad << "," << x.duty << "\n";
+      }
+    }
     sessions.push_back(std::move(*f));
   }
 
@@ -452,19 +491,41 @@ int main(int argc, char** argv) {
               << f.wake.quantile_us(0.5) / std::max(floor_row.p50, 1.0) << ", p99 "
               << f.wake.quantile_us(0.99) / std::max(floor_row.p99, 1.0) << "\n";
   }
-  const auto first = [&](SessionKind kind) -> const SessionFigures* {
-    const auto it = std::ranges::find(sessions, kind, &SessionFigures::kind);
-    return it == sessions.end() ? nullptr : &*it;
+  // Each kind's sessions together: a run that alternates them (bang-bang,balance,balance,bang-bang)
+  // compares the two kinds under the same drift of the machine's load.
+  struct Pooled {
+    daemon::LatencyHistogram wake;
+    LawTimes law;
+    int sessions = 0;
   };
-  const SessionFigures* bang = first(SessionKind::bang_bang);
-  const SessionFigures* balance = first(SessionKind::balance);
-  if (bang && balance) {
+  std::array<Pooled, 2> pooled;  // by SessionKind
+  for (const SessionFigures& f : sessions) {
+    Pooled& p = pooled[static_cast<std::size_t>(f.kind)];
+    ++p.sessions;
+    for (const std::int64_t w : f.wake_ns) p.wake.record(w);
+    p.law.ns.insert(p.law.ns.end(), f.law.ns.begin(), f.law.ns.end());
+  }
+  for (Pooled& p : pooled) p.law.finish();
+  const Pooled& bang = pooled[static_cast<std::size_t>(SessionKind::bang_bang)];
+  const Pooled& balance = pooled[static_cast<std::size_t>(SessionKind::balance)];
+  for (const SessionKind kind : {SessionKind::bang_bang, SessionKind::balance}) {
+    const Pooled& p = pooled[static_cast<std::size_t>(kind)];
+    if (p.sessions < 2) continue;
+    std::cout << "all " << p.sessions << " " << to_string(kind)
+              << " sessions: " << std::setprecision(0) << quantiles(p.wake) << ", mean "
+              << p.wake.mean_us() << std::setprecision(2) << "\n";
+  }
+  if (bang.sessions > 0 && balance.sessions > 0) {
     const auto ratio = [&](double q) {
-      return balance->wake.quantile_us(q) / std::max(bang->wake.quantile_us(q), 1.0);
+      return balance.wake.quantile_us(q) / std::max(bang.wake.quantile_us(q), 1.0);
     };
-    std::cout << "ratio balance/bang_bang: p50 " << ratio(0.5) << ", p99 " << ratio(0.99)
-              << ", p99.9 " << ratio(0.999) << ", max "
-              << balance->wake.max_us() / std::max(bang->wake.max_us(), 1.0) << "\n";
+    std::cout << "ratio balance/bang_bang" << (bang.sessions + balance.sessions > 2 ? " (all)" : "")
+              << ": p50 " << ratio(0.5) << ", p99 " << ratio(0.99) << ", p99.9 " << ratio(0.999)
+              << ", max " << balance.wake.max_us() / std::max(bang.wake.max_us(), 1.0) << "\n";
+  }
+  if (balance.sessions > 1) {
+    std::cout << std::setprecision(0) << "balance law per cycle [ns], all " << balance.sessions
+              << " balance sessions: " << law_quantiles(balance.law) << "\n";
   }
   for (const SessionFigures& f : sessions) {
     std::cout << std::fixed << std::setprecision(0);
@@ -476,7 +537,11 @@ int main(int argc, char** argv) {
         std::cout << "  " << control::to_string(static_cast<control::BalanceMode>(m)) << ": "
                   << law_quantiles(f.law_by_mode[m]) << "\n";
       }
-      std::cout << std::setprecision(2) << "  balanced from t = " << f.balanced_from_s << " s\n";
+      if (f.balanced_from_s >= 0) {
+        std::cout << std::setprecision(2) << "  balanced from t = " << f.balanced_from_s << " s\n";
+      } else {
+        std::cout << "  never balanced\n";
+      }
     }
     const SubscriberLatency& s = *f.subscriber;
     std::cout << name
@@ -498,7 +563,9 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < sessions.size(); ++i) {
       json << (i ? "," : "") << session_json(sessions[i]);
     }
-    json << "]}\n";
+    json << "],\"pooled\":{\"bang_bang\":" << histogram_json(bang.wake)
+         << ",\"balance\":" << histogram_json(balance.wake)
+         << ",\"balance_law\":" << law_json(balance.law) << "}}\n";
   }
   return 0;
 }

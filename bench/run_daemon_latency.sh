@@ -7,7 +7,8 @@
 # With CONTROLLER.toml (designed for config/rig.toml at 16 ms: `furuta controller design
 # tests/data/golden/results.json -o CONTROLLER.toml`), the 16 ms configurations run a balance
 # session after the bang-bang one, under the same set-up; the 1 ms ones stay bang-bang only, the
-# controller being designed for the rig's 16 ms period.
+# controller being designed for the rig's 16 ms period. FURUTA_BENCH_SESSIONS sets their order
+# (daemon_latency --session: `both` by default; e.g. bang-bang,balance,balance,bang-bang).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${1:-build/release}"
@@ -19,7 +20,7 @@ url="udpm://239.255.77.$((RANDOM % 200 + 10)):$((20000 + RANDOM % 20000))?ttl=0"
 for period in 16000 1000; do
   sessions=""
   if [ -n "$controller" ] && [ "$period" = 16000 ]; then
-    sessions="--session both --balance '$controller'"
+    sessions="--session ${FURUTA_BENCH_SESSIONS:-both} --balance '$controller'"
   fi
   for fifo in "" "--fifo --cpu 1"; do
     name="daemon_${period}us${fifo:+_fifo_cpu1}"
