@@ -29,6 +29,7 @@
 #include "furuta/identification/windowed_set.hpp"
 #include "furuta/interval/box.hpp"
 #include "furuta/model/model.hpp"
+#include "furuta/pipeline/balance.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "furuta/validated/scenarios.hpp"
 
@@ -59,6 +60,8 @@ struct SessionSummary {
   std::string end_reason;             // the end record's ("arm_angle_limit", ...); "" without one
   std::uint64_t damaged_regions = 0;  // skipped by the checked reader
   bool truncated_tail = false;
+  // A balance session's figures and cycles (summarize_balance); none for an excitation session.
+  std::optional<BalanceSummary> balance;
 };
 SessionSummary summarize_session(const session_log::SessionLog& log, std::string role);
 
