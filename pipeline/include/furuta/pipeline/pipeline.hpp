@@ -73,6 +73,9 @@ struct Recording {
   // raw reports and command writes, an intact part's cut to its time); absent for CSVs (run()
   // makes it from `experiment`).
   std::optional<identification::OeExperiment> oe;
+  // The input came from a controller closing the loop on the measured angles (a balance
+  // session's cycles): least squares is then biased, which the physical check must know.
+  bool closed_loop = false;
 };
 // A session log as a recording (its samples resampled, its summary, its OeExperiment read with
 // `rig`'s encoders and motor).
