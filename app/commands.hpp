@@ -188,6 +188,19 @@ struct SimulateCommandOptions {
 int run_simulate_command(const SimulateCommandOptions& options, std::ostream& out,
                          std::ostream& err);
 
+// --- balance sessions' report ---
+struct ReportCommandOptions {
+  std::vector<std::filesystem::path> logs;  // session logs, reported in this order
+  // Holds this report's files only: replaced whole, as IdentifyCommandOptions::output_dir.
+  std::filesystem::path output_dir;
+};
+// report.html (a section per log), balance.json and balance_<n>.svg (report::write_balance_report).
+// 0 written; 1 written, but a log is not intact (reported as far as it goes) or is not a balance
+// session (its section says what it is), each named on err; 2 no log, a file that is no session
+// log, or an -o it may not use (report::RunDirectory's refusals, an input inside it): nothing
+// written.
+int run_report_command(const ReportCommandOptions& options, std::ostream& out, std::ostream& err);
+
 // --- the identification trigger (log_processor.hpp) ---
 // --- the balance controller (control/, docs/control.md) ---
 enum class ControllerParameters { output_error, lsmi, cad };

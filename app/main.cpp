@@ -290,6 +290,21 @@ int main(int argc, char** argv) {
       ->required()
       ->check(not_empty_path());
 
+  furuta::app::ReportCommandOptions report;
+  CLI::App* report_cmd = app.add_subcommand(
+      "report",
+      "Balance sessions' report from their logs: report.html (figures, plots over time) and "
+      "balance.json; exit 1 when a log is not intact or not a balance session (named)");
+  report_cmd->add_option("LOG", report.logs, "Session logs (.lcmlog) of balance sessions")
+      ->required()
+      ->check(CLI::ExistingFile);
+  report_cmd
+      ->add_option("-o,--output", report.output_dir,
+                   "Directory for the report's files, replaced whole: new, empty or a previous "
+                   "run's")
+      ->required()
+      ->check(not_empty_path());
+
   furuta::app::ProcessLogsOptions process_logs;
   process_logs.config_path = furuta::config::default_rig_config_path();
   CLI::App* process_logs_cmd = app.add_subcommand(
@@ -354,6 +369,7 @@ int main(int argc, char** argv) {
       return furuta::app::run_process_logs_command(process_logs, std::cout, std::cerr);
     }
     if (*identify_cmd) return furuta::app::run_identify_command(identify, std::cout, std::cerr);
+    if (*report_cmd) return furuta::app::run_report_command(report, std::cout, std::cerr);
     if (*design_cmd) {
       using furuta::app::ControllerParameters;
       design.parameters = parameter_source == "lsmi"  ? ControllerParameters::lsmi

@@ -93,6 +93,11 @@ std::string where_to_look(LikelyCause cause, RecordingSource source) {
     case LikelyCause::spike:
       return csv ? "Check the CSV's angle columns for readings that jump and come back"
                  : "Check the encoders' cables and the log (furuta log info)";
+    case LikelyCause::closed_loop:
+      return "The output-error fit, which simulates the model with the applied duty, is the "
+             "estimate to use (Table I's output-error column; `furuta controller design "
+             "--parameters output-error`); or identify open-loop sessions (an excitation "
+             "--profile)";
     case LikelyCause::none:
     case LikelyCause::unknown:
       break;
@@ -126,6 +131,10 @@ std::string cause_text(LikelyCause cause) {
     case LikelyCause::spike:
       return "samples that jump faster than " + number(kFastestJointRadS) +
              " rad/s, which no joint can (spikes in the angles)";
+    case LikelyCause::closed_loop:
+      return "closed-loop data: the duty came from the balance controller acting on the measured "
+             "angles, so it is correlated with their noise and least squares on it is biased "
+             "(its signs point at no recording mistake)";
     case LikelyCause::none:
     case LikelyCause::unknown:
       break;
@@ -212,6 +221,8 @@ const char* cause_name(LikelyCause cause) {
       return "too short";
     case LikelyCause::spike:
       return "spike";
+    case LikelyCause::closed_loop:
+      return "closed loop";
     case LikelyCause::unknown:
       return "unknown";
   }
@@ -225,6 +236,10 @@ bool RecordingEvidence::short_recording() const {
 bool RecordingEvidence::spikes() const {
   return fast_steps > 0 &&
          static_cast<double>(fast_steps) <= kSpikeShare * static_cast<double>(steps);
+}
+
+bool RecordingEvidence::closed_loop() const {
+  return closed_loop_share > 0.5;
 }
 
 bool RecordingEvidence::angles_not_radians() const {
@@ -374,6 +389,19 @@ PhysicalCheck check_physical(const model::Parameters<double>& p,
     std::erase(out.candidates, LikelyCause::unknown);
     if (out.candidates.empty()) out.candidates = {LikelyCause::unknown};
   }
+  // On closed-loop data the patterns of signs and magnitudes are the loop's bias, not a recording
+  // mistake: the controller's duty follows the measured angles, noise included. Only what the
+  // recordings themselves show stays beside it.
+  if (!out.candidates.empty() && evidence != nullptr && evidence->closed_loop()) {
+    std::vector<LikelyCause> kept = {LikelyCause::closed_loop};
+    for (const auto& [shown, cause] :
+         {std::pair{evidence->short_recording(), LikelyCause::too_short},
+          std::pair{evidence->spikes(), LikelyCause::spike},
+          std::pair{evidence->angles_not_radians(), LikelyCause::angle_unit}}) {
+      if (shown) kept.push_back(cause);
+    }
+    out.candidates = std::move(kept);
+  }
   out.cause = out.candidates.empty() ? LikelyCause::none : out.candidates.front();
   return out;
 }
@@ -418,8 +446,11 @@ std::string physical_warning(const PhysicalCheck& check, RecordingSource source,
   for (std::size_t i = 1; i < check.candidates.size(); ++i) {
     w << ". " << where_to_look(check.candidates[i], source);
   }
-  w << " (`furuta identify --diagnose` refits each candidate mistake: "
-    << (source == RecordingSource::csv ? "docs/csv-import.md" : "docs/model.md") << ")";
+  // The refits undo recording mistakes; the loop's bias is none.
+  if (check.cause != LikelyCause::closed_loop) {
+    w << " (`furuta identify --diagnose` refits each candidate mistake: "
+      << (source == RecordingSource::csv ? "docs/csv-import.md" : "docs/model.md") << ")";
+  }
   return w.str();
 }
 

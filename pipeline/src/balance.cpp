@@ -4,6 +4,9 @@
 #include <cmath>
 #include <numbers>
 #include <unordered_map>
+#include <utility>
+
+#include "furuta/config/controller_file.hpp"
 
 namespace furuta::pipeline {
 
@@ -52,12 +55,30 @@ std::optional<BalanceSummary> summarize_balance(const session_log::SessionLog& l
     out.upright_rms_deg = std::sqrt(sum_error2 / static_cast<double>(balance_cycles)) * kDeg;
     out.duty_rms = std::sqrt(sum_duty2 / static_cast<double>(balance_cycles));
   }
-  out.fell = log.end && log.end->end_reason.rfind("pendulum_fell", 0) == 0;
+  // The end reason may carry its detail after the kind ("pendulum_fell: beyond the fall limit").
   if (log.end) out.end_reason = log.end->end_reason;
+  out.fell = out.end_reason.rfind("pendulum_fell", 0) == 0;
   if (!law_ns.empty()) {
     std::sort(law_ns.begin(), law_ns.end());
     out.law_time_p50_ns = law_ns[law_ns.size() / 2];
     out.law_time_max_ns = law_ns.back();
+  }
+  if (log.controller) {
+    BalanceController c;
+    c.path = log.controller->path;
+    c.sha256 = log.controller->sha256;
+    // The file as the loop read it; one that no longer reads (a newer format) still names itself
+    // by path and digest.
+    try {
+      const config::ControllerFile file =
+          config::parse_controller_file(log.controller->controller_toml, c.path);
+      c.parameters_source = file.parameters_source;
+      c.results = file.results;
+      c.rig = file.rig;
+    } catch (const config::ConfigError& e) {
+      c.unreadable = e.what();
+    }
+    out.controller = std::move(c);
   }
   return out;
 }

@@ -102,7 +102,8 @@ IntactParts intact_part_recordings(const session_log::SessionLog& log, Role role
     }
     std::optional<SessionSummary> summary;
     if (i == 0) summary = summarize_session(log, role_name);
-    parts.recordings.push_back({std::move(e), std::move(summary), std::move(oe)});
+    parts.recordings.push_back(
+        {std::move(e), std::move(summary), std::move(oe), !log.control.empty()});
   }
   return parts;
 }

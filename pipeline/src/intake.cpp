@@ -391,11 +391,12 @@ std::optional<Batch> batch_from_csvs(const BatchRequest& request, Refusals& refu
     return identification::experiment_from_csv(identification::import_csv(path, spec),
                                                path.filename().string());
   };
-  for (const auto& path : request.csvs) in.fit.push_back({load(path), std::nullopt, std::nullopt});
+  for (const auto& path : request.csvs)
+    in.fit.push_back({load(path), std::nullopt, std::nullopt, false});
   if (!excited(in.fit, spec, request, refusals)) return std::nullopt;
   in.files = request.csvs;
   if (!request.validate.empty()) {
-    in.held_out = Recording{load(request.validate), std::nullopt, std::nullopt};
+    in.held_out = Recording{load(request.validate), std::nullopt, std::nullopt, false};
     in.files.push_back(request.validate);
   }
   in.files.push_back(request.import_spec);

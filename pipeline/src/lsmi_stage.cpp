@@ -29,14 +29,28 @@ std::vector<Warning> identification_warnings(const identification::Identificatio
 
 namespace {
 
+// The share of the recordings' samples whose input a controller computed (balance sessions),
+// weighted by each recording's samples; `from` and `count` pick the recordings.
+double closed_loop_share(const Batch& batch, std::size_t from, std::size_t count) {
+  double closed = 0, all = 0;
+  for (std::size_t i = from; i < from + count && i < batch.fit.size(); ++i) {
+    const double n = static_cast<double>(batch.fit[i].experiment.t_s.size());
+    all += n;
+    if (batch.fit[i].closed_loop) closed += n;
+  }
+  return all > 0 ? closed / all : 0.0;
+}
+
 // LSMI is unconstrained (the paper's reference), so its answer may be no rig at all: the combined
 // estimate is checked, and each experiment's when that one is clearly outside while the combined
 // is not (one recording of several made differently). Returns the combined estimate's check.
-identification::PhysicalCheck check_physical(identification::Identification& id, InputKind kind,
+// Mostly closed-loop recordings (balance sessions) bias least squares: the check then names that,
+// not a recording mistake.
+identification::PhysicalCheck check_physical(identification::Identification& id, const Batch& batch,
                                              std::vector<Warning>& warnings) {
   using namespace identification;
   const RecordingSource source =
-      kind == InputKind::csv_recordings ? RecordingSource::csv : RecordingSource::session_log;
+      batch.kind == InputKind::csv_recordings ? RecordingSource::csv : RecordingSource::session_log;
   const auto add = [&](const std::string& text) {
     if (text.empty()) return;
     id.warnings.push_back(text);
@@ -44,15 +58,17 @@ identification::PhysicalCheck check_physical(identification::Identification& id,
   };
   if (!id.lsmi_ran()) return {};
   // The recordings as read: a cause the magnitudes cannot tell apart is named from what they show.
-  const RecordingEvidence evidence = recording_evidence(id.raw);
+  RecordingEvidence evidence = recording_evidence(id.raw);
+  evidence.closed_loop_share = closed_loop_share(batch, 0, batch.fit.size());
   const PhysicalCheck combined = identification::check_physical(
       id.combined.estimate, id.combined.std_dev, id.nominal, &evidence);
   add(physical_warning(combined, source, "the LSMI estimate of all experiments"));
   if (combined.consistent() && combined.cause == LikelyCause::none) {
     for (std::size_t i = 0; i < id.per_experiment.size() && i < id.processed.size(); ++i) {
       const LsmiResult& r = id.per_experiment[i];
-      const RecordingEvidence own =
+      RecordingEvidence own =
           i < id.raw.size() ? recording_evidence({id.raw[i]}) : RecordingEvidence{};
+      own.closed_loop_share = closed_loop_share(batch, i, 1);
       const PhysicalCheck one =
           identification::check_physical(r.estimate, r.std_dev, id.nominal, &own);
       if (one.clear())
@@ -91,7 +107,7 @@ void run_lsmi(const Batch& batch, const Settings& settings, Run& run, Progress* 
     run.inputs.push_back({listed.string(), identification::sha256_file(path.string())});
   }
   run.warnings = identification_warnings(run.identification);
-  run.physical = check_physical(run.identification, batch.kind, run.warnings);
+  run.physical = check_physical(run.identification, batch, run.warnings);
   if (progress != nullptr) progress->lsmi_done(run.identification);
 }
 

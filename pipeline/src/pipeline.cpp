@@ -23,7 +23,7 @@ Recording log_recording(const session_log::SessionLog& log, Role role,
                         const config::RigConfig& rig) {
   Recording recording{identification::experiment_from_log(log),
                       summarize_session(log, role == Role::fit ? "fit" : "held out"),
-                      identification::oe_experiment_from_log(log, rig)};
+                      identification::oe_experiment_from_log(log, rig), !log.control.empty()};
   for (const std::string& note : session_log::integrity_notes(log)) {
     recording.experiment.warnings.push_back(log.path.filename().string() + ": " + note);
   }

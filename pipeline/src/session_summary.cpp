@@ -1,6 +1,7 @@
 // What a session log says about itself.
 #include <utility>
 
+#include "furuta/pipeline/balance.hpp"
 #include "furuta/pipeline/pipeline.hpp"
 
 namespace furuta::pipeline {
@@ -34,6 +35,7 @@ SessionSummary summarize_session(const session_log::SessionLog& log, std::string
   if (log.end) s.end_reason = log.end->end_reason;
   s.damaged_regions = log.read_stats.damaged_regions;
   s.truncated_tail = log.read_stats.truncated_tail;
+  s.balance = summarize_balance(log);
   return s;
 }
 

@@ -14,35 +14,6 @@ namespace furuta::report {
 
 namespace {
 
-constexpr const char* kStyle = R"(
-body { font-family: sans-serif; max-width: 1200px; margin: 2em auto; padding: 0 1em; color: #222;
-       line-height: 1.4; }
-h1 { margin-bottom: 0.2em; }
-h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
-.meta { color: #666; }
-nav ol { columns: 2; }
-table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
-caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
-th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }
-.table { overflow-x: auto; }
-thead th { background: #f0f0f0; }
-tbody th { text-align: left; font-weight: normal; overflow-wrap: break-word; }
-code { overflow-wrap: anywhere; }
-#sessions tbody th { overflow-wrap: anywhere; min-width: 12em; }
-.keys { font-size: 0.9em; margin-top: -0.5em; }
-.keys li { overflow-wrap: anywhere; }
-figure { margin: 1em 0; }
-figure svg { max-width: 100%; height: auto; border: 1px solid #eee; }
-figcaption { font-size: 0.9em; color: #444; }
-.warnings li { margin: 0.2em 0; }
-.warnings li.failed, .warnings li.suspect { border-left: 3px solid #b00020; padding-left: 0.4em; }
-.topic { display: inline-block; min-width: 6em; font-weight: bold; color: #8a4b00; }
-.absent { color: #666; font-style: italic; }
-.none { color: #2a6e2a; }
-.physical { border: 3px solid #b00020; background: #fff0f0; padding: 0.2em 1em; margin: 1em 0; }
-.physical h2 { color: #b00020; border: none; margin-top: 0.5em; }
-)";
-
 // The units as a reader writes them, not as a terminal must.
 std::string pretty_unit(const std::string& unit) {
   std::string out = unit;
@@ -77,7 +48,7 @@ void page_head(Html& h, const ReportInput& in) {
   h.raw("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
   h.element("title", in.title);
   h.raw("\n<style>");
-  h.raw(kStyle);
+  h.raw(kPageStyle);
   h.raw("</style>\n</head>\n<body>\n<header>\n");
   h.element("h1", in.title);
   h.paragraph(in.software_version +
@@ -88,10 +59,19 @@ void page_head(Html& h, const ReportInput& in) {
   h.raw("</header>\n");
 }
 
+// The balance sessions among the logs, as their sections show them (file names).
+std::vector<BalanceLogEntry> balance_logs(const ReportInput& in) {
+  std::vector<BalanceLogEntry> out;
+  for (const SessionSummary& s : in.sessions) {
+    if (s.balance) out.push_back({s.file, s, {}});
+  }
+  return out;
+}
+
 // The table of contents: one link per section.
-void contents(Html& h) {
+void contents(Html& h, bool balance) {
   h.raw("<nav>\n<ol>\n");
-  const std::vector<std::pair<std::string, std::string>> contents = {
+  std::vector<std::pair<std::string, std::string>> contents = {
       {"summary", "Rig and sessions"},
       {"warnings", "Warnings"},
       {"lsmi", "Least squares (Table I)"},
@@ -100,6 +80,7 @@ void contents(Html& h) {
       {"sivia", "Guaranteed identification (Table II, Fig. 4)"},
       {"guaranteed", "Guaranteed set from the angles"},
       {"simulation", "Validated simulation (Table III, Fig. 6)"}};
+  if (balance) contents.insert(contents.begin() + 1, {"balance", "Balance sessions"});
   for (const auto& [id, name] : contents) {
     h.raw("<li><a href=\"#" + id + "\">");
     h.text(name);
@@ -152,6 +133,21 @@ void section_rig_and_sessions(Html& h, const ReportInput& in) {
     }
     h.raw("</p>\n");
   }
+  h.raw("</section>\n");
+}
+
+// What each balance session among the logs did (the identification fits its applied duty like
+// any other input); no section when there is none.
+void section_balance(Html& h, const std::vector<BalanceLogEntry>& logs) {
+  if (logs.empty()) return;
+  h.raw("<section id=\"balance\">\n");
+  h.element("h2", "Balance sessions");
+  h.paragraph(
+      "The sessions that ran the balance controller: when it caught the pendulum, how well it "
+      "held it, the duty and arm travel it took and the controller file. Their input was "
+      "computed from the measured angles (closed loop), which biases least squares; the "
+      "output-error fit simulates the model with the applied duty.");
+  balance_log_sections(h, logs, "h3");
   h.raw("</section>\n");
 }
 
@@ -539,8 +535,10 @@ std::string render_html(const ReportInput& in) {
   Html h;
   page_head(h, in);
   section_physical(h, in);
-  contents(h);
+  const std::vector<BalanceLogEntry> balance = balance_logs(in);
+  contents(h, !balance.empty());
   section_rig_and_sessions(h, in);
+  section_balance(h, balance);
   section_warnings(h, in);
   section_lsmi(h, in);
   section_data(h, in);

@@ -4,9 +4,41 @@
 #include <string>
 #include <vector>
 
+#include "furuta/report/balance_page.hpp"
 #include "furuta/report/report.hpp"
 
 namespace furuta::report {
+
+// The pages' one style sheet (report.html of identify and of `furuta report`).
+inline constexpr const char* kPageStyle = R"(
+body { font-family: sans-serif; max-width: 1200px; margin: 2em auto; padding: 0 1em; color: #222;
+       line-height: 1.4; }
+h1 { margin-bottom: 0.2em; }
+h2 { border-bottom: 1px solid #ccc; padding-bottom: 0.2em; margin-top: 2em; }
+.meta { color: #666; }
+nav ol { columns: 2; }
+table { border-collapse: collapse; margin: 1em 0; font-size: 0.9em; }
+caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
+th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; text-align: right; }
+.table { overflow-x: auto; }
+thead th { background: #f0f0f0; }
+tbody th { text-align: left; font-weight: normal; overflow-wrap: break-word; }
+code { overflow-wrap: anywhere; }
+#sessions tbody th { overflow-wrap: anywhere; min-width: 12em; }
+.keys { font-size: 0.9em; margin-top: -0.5em; }
+.keys li { overflow-wrap: anywhere; }
+figure { margin: 1em 0; }
+figure svg { max-width: 100%; height: auto; border: 1px solid #eee; }
+figcaption { font-size: 0.9em; color: #444; }
+.warnings li { margin: 0.2em 0; }
+.warnings li.failed, .warnings li.suspect { border-left: 3px solid #b00020; padding-left: 0.4em; }
+.topic { display: inline-block; min-width: 6em; font-weight: bold; color: #8a4b00; }
+.absent { color: #666; font-style: italic; }
+.none { color: #2a6e2a; }
+.physical { border: 3px solid #b00020; background: #fff0f0; padding: 0.2em 1em; margin: 1em 0; }
+.physical h2 { color: #b00020; border: none; margin-top: 0.5em; }
+.balance-log h3 { margin-top: 1.5em; }
+)";
 
 class Html {
  public:
@@ -70,5 +102,12 @@ class Html {
   }
   std::string out_;
 };
+
+// The balance sessions' parts of a page (balance_page.cpp), one <section class="balance-log"> per
+// log with its heading as `heading` (h2 on its own page, h3 inside the identification's): a
+// balance session's figures table and figure (ids "balance-figures-<n>", "fig-balance-<n>", n
+// from 1 in the logs' order), another log's profile and samples.
+void balance_log_sections(Html& h, const std::vector<BalanceLogEntry>& logs,
+                          const std::string& heading);
 
 }  // namespace furuta::report

@@ -117,6 +117,12 @@ TEST(BalanceSession, SwingsUpCatchesAndBalancesAndTheLogSaysSo) {
   EXPECT_LT(b->upright_rms_deg, 1.0);
   EXPECT_FALSE(b->fell);
   EXPECT_LT(b->max_abs_arm_deg, 150.0);
+  // The controller the session ran, from its record: the file's digest and what it was designed
+  // from.
+  ASSERT_TRUE(b->controller.has_value());
+  EXPECT_EQ(b->controller->sha256, log.controller->sha256);
+  EXPECT_EQ(b->controller->parameters_source, "output-error");
+  EXPECT_TRUE(b->controller->unreadable.empty()) << b->controller->unreadable;
   // Held upright: the last seconds are all balance.
   EXPECT_EQ(log.control.back().mode, +furuta::rig_control_t::MODE_BALANCE);
 
@@ -161,6 +167,11 @@ TEST(BalanceSession, ASmallTapIsRecoveredFromAndALargeOneEndsInAFallWithTheMotor
   EXPECT_GT(fell_at_s, 13.0);
   EXPECT_EQ(log.samples.back().commanded_duty, 0.0);
   EXPECT_EQ(log.control.back().mode, +furuta::rig_control_t::MODE_FALLEN);
+  // The end reason carries the fall's detail; the summary still knows it fell.
+  const auto fallen = pipeline::summarize_balance(log);
+  ASSERT_TRUE(fallen.has_value());
+  EXPECT_TRUE(fallen->fell);
+  EXPECT_EQ(fallen->end_reason, log.end->end_reason);
   const auto writes = session_log::motor_command_writes(log, "1065");
   ASSERT_FALSE(writes.empty());
   EXPECT_EQ(writes.back().duty, 0.0);

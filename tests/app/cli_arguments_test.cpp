@@ -153,7 +153,7 @@ TEST(CliArguments, TheSameThingHasTheSameOptionNameInEveryCommand) {
     EXPECT_EQ(o.exit_code, 0) << command;
     EXPECT_TRUE(has(o, "-c,--config")) << command << "\n" << o.output;
   }
-  for (const char* command : {"identify", "simulate", "process-logs", "log export-csv"}) {
+  for (const char* command : {"identify", "simulate", "process-logs", "log export-csv", "report"}) {
     const Outcome o = run(cli + " " + command + " --help");
     EXPECT_TRUE(has(o, "-o,--output")) << command << "\n" << o.output;
   }

@@ -228,8 +228,8 @@ TEST_F(Outputs, AnEmptyOutputOnTheCommandLineIsBadUsage) {
   fs::create_directories(logs);
   for (const std::string& args :
        {" process-logs " + logs + " -o ''", " identify " + log_copy_.string() + " -o ''",
-        std::string(" simulate --truth -o ''"),
-        " log export-csv " + log_copy_.string() + " -o ''"}) {
+        std::string(" simulate --truth -o ''"), " log export-csv " + log_copy_.string() + " -o ''",
+        " report " + log_copy_.string() + " -o ''"}) {
     FILE* pipe = ::popen((cli + args + " 2>&1").c_str(), "r");
     ASSERT_NE(pipe, nullptr);
     std::string text;

@@ -249,5 +249,49 @@ TEST(PhysicalCheck, ACauseTheMagnitudesCannotTellIsNamedOnlyFromTheRecordings) {
   EXPECT_EQ(cause_name(LikelyCause::too_short), std::string("too short"));
 }
 
+// Balance sessions: the duty follows the measured angles, noise included, so least squares is
+// biased and may give mug < 0 with mu3 > 0, the pattern of a pendulum zeroed upright and counted
+// the other way. On mostly closed-loop recordings that pattern names the loop, not the encoder.
+TEST(PhysicalCheck, OnClosedLoopRecordingsTheCauseIsTheLoopNotARecordingMistake) {
+  const P t = truth();
+  P biased = t;
+  biased.mug = -0.4 * t.mug;
+  RecordingEvidence open_loop = recording_evidence({swinging(30)});
+  EXPECT_FALSE(open_loop.closed_loop());
+  EXPECT_EQ(check_physical(biased, one_percent(t), t, &open_loop).cause,
+            LikelyCause::pendulum_zero_and_sign);
+
+  RecordingEvidence closed = open_loop;
+  closed.closed_loop_share = 0.8;
+  EXPECT_TRUE(closed.closed_loop());
+  const PhysicalCheck c = check_physical(biased, one_percent(t), t, &closed);
+  EXPECT_EQ(c.cause, LikelyCause::closed_loop);
+  EXPECT_EQ(c.candidates, std::vector<LikelyCause>{LikelyCause::closed_loop});
+  EXPECT_EQ(cause_name(LikelyCause::closed_loop), std::string("closed loop"));
+  const std::string text = physical_warning(c, RecordingSource::session_log, "it");
+  EXPECT_NE(text.find("Likely cause: closed-loop data"), std::string::npos) << text;
+  EXPECT_NE(text.find("least squares on it is biased"), std::string::npos) << text;
+  EXPECT_NE(text.find("The output-error fit, which simulates the model with the applied duty, is "
+                      "the estimate to use"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("zero upright"), std::string::npos) << text;
+  EXPECT_EQ(text.find("[encoders.pendulum]"), std::string::npos) << text;
+  EXPECT_EQ(text.find("--diagnose"), std::string::npos) << "no recording mistake to refit";
+
+  // What the recordings themselves show still stands beside the loop.
+  RecordingEvidence closed_short = recording_evidence({swinging(1.4)});
+  closed_short.closed_loop_share = 1.0;
+  EXPECT_EQ(check_physical(biased, one_percent(t), t, &closed_short).candidates,
+            (std::vector<LikelyCause>{LikelyCause::closed_loop, LikelyCause::too_short}));
+  // Half the samples or fewer in closed loop: the open-loop causes as before.
+  RecordingEvidence half = open_loop;
+  half.closed_loop_share = 0.5;
+  EXPECT_EQ(check_physical(biased, one_percent(t), t, &half).cause,
+            LikelyCause::pendulum_zero_and_sign);
+  // A consistent estimate has no cause, closed loop or not.
+  EXPECT_EQ(check_physical(t, one_percent(t), t, &closed).cause, LikelyCause::none);
+}
+
 }  // namespace
 }  // namespace furuta::identification

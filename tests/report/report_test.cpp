@@ -558,5 +558,94 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
               png.c_str(), image.size());
 }
 
+// `furuta report` on a balance session of the simulated rig, opened in the browser: its figure of
+// four panels laid out with labelled time and value axes, its figures table within the page.
+TEST(ReportInBrowser, ABalanceReportRendersItsFigureAndTable) {
+  const std::string chromium = chromium_command();
+  ASSERT_FALSE(chromium.empty()) << "headless Chromium is needed: install Debian's chromium";
+  TempDir dir;
+  app::ControllerDesignOptions design;
+  design.results = FURUTA_SOURCE_DIR "/tests/data/golden/results.json";
+  design.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  design.output = dir.path() / "controller.toml";
+  std::ostringstream design_out, design_err;
+  ASSERT_EQ(app::run_controller_design_command(design, design_out, design_err), 0)
+      << design_err.str();
+  app::RunOptions session;
+  session.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+  session.simulated = true;
+  session.virtual_time = true;
+  session.logs_dir = dir.path() / "logs";
+  session.lcm_url = "memq://";
+  session.session.balance = design.output;
+  session.session.duration_s = 20.0;
+  std::ostringstream run_out, run_err;
+  ASSERT_EQ(app::run_session_command(session, run_out, run_err), 0) << run_err.str();
+  app::ReportCommandOptions options;
+  for (const auto& entry : fs::directory_iterator(session.logs_dir)) {
+    if (entry.path().extension() == ".lcmlog") options.logs.push_back(entry.path());
+  }
+  ASSERT_EQ(options.logs.size(), 1u);
+  options.output_dir = dir.path() / "balance";
+  std::ostringstream out, err;
+  ASSERT_EQ(app::run_report_command(options, out, err), 0) << err.str();
+  const fs::path report = options.output_dir / "report.html";
+  const std::string html = read_text(report);
+  expect_self_contained(html);
+
+  const fs::path checked = dir.path() / "checked.html";
+  std::string with_script = html;
+  with_script.insert(with_script.rfind("</body>"), kCheckScript);
+  write_text(checked, with_script);
+  const fs::path dom = dir.path() / "dom.html";
+  const int rc =
+      run_chromium(chromium, dir.path() / "profile",
+                   "--window-size=1280,2000 --dump-dom 'file://" + checked.string() + "'", dom,
+                   dir.path() / "chromium.log");
+  ASSERT_EQ(rc, 0) << read_text(dir.path() / "chromium.log");
+  const std::string dumped = read_text(dom);
+  const std::string open = "<pre id=\"report-check\">";
+  const std::size_t at = dumped.find(open);
+  ASSERT_NE(at, std::string::npos) << "the check script did not run: " << dumped.substr(0, 500);
+  const std::size_t end = dumped.find("</pre>", at);
+  const nlohmann::json check =
+      nlohmann::json::parse(unescape_text(dumped.substr(at + open.size(), end - at - open.size())));
+  ASSERT_EQ(check["figures"].size(), 1u);
+  const auto& f = check["figures"][0];
+  EXPECT_EQ(f["id"], "fig-balance-1");
+  EXPECT_TRUE(f["svg"].get<bool>());
+  EXPECT_GT(f["height"].get<double>(), 400) << "four panels stacked";
+  EXPECT_GT(f["shown_width"].get<double>(), 600) << "laid out on the page";
+  EXPECT_FALSE(f["caption"].get<std::string>().empty());
+  std::size_t time_axes = 0, value_axes = 0;
+  for (const auto& a : f["axes"]) {
+    EXPECT_GE(a["ticks"].get<int>(), 3) << a.dump();
+    EXPECT_FALSE(a["label"].get<std::string>().empty()) << a.dump();
+    if (a["kind"] == "x" && a["label"] == "t [s]") ++time_axes;
+    if (a["kind"] == "y") ++value_axes;
+  }
+  EXPECT_EQ(time_axes, 4u) << "each panel on the time axis";
+  EXPECT_EQ(value_axes, 3u) << "the angle from upright, the arm angle, the duty; the mode is bands";
+  ASSERT_EQ(check["tables"].size(), 1u);
+  const auto& t = check["tables"][0];
+  EXPECT_EQ(t["id"], "balance-figures-1");
+  EXPECT_GE(t["rows"].get<int>(), 12);
+  EXPECT_LE(t["width"].get<int>(), t["room"].get<int>()) << t.dump();
+  EXPECT_FALSE(t["scrolls"].get<bool>()) << t.dump();
+  EXPECT_LE(check["page_width"].get<int>(), 1280);
+
+  const fs::path keep = fs::current_path() / "report_test_output";
+  fs::create_directories(keep);
+  const fs::path png = keep / "balance.png";
+  fs::remove(png);
+  const int shot = run_chromium(chromium, dir.path() / "profile",
+                                "--hide-scrollbars --window-size=1280,1400 --screenshot='" +
+                                    png.string() + "' 'file://" + report.string() + "'",
+                                dir.path() / "shot.out", dir.path() / "shot.log");
+  ASSERT_EQ(shot, 0) << read_text(dir.path() / "shot.log");
+  EXPECT_TRUE(fs::exists(png));
+  fs::copy_file(report, keep / "balance.html", fs::copy_options::overwrite_existing);
+}
+
 }  // namespace
 }  // namespace furuta::report::report_test

@@ -55,7 +55,10 @@ enum class LikelyCause {
   input_gain,              // every parameter off by one factor: the input's scale
   too_short,               // a recording shorter than kShortRecordingS
   spike,                   // a few samples jump faster than any joint can move
-  unknown,                 // a clear violation no check above found a cause for
+  // Not a mistake: the input came from a controller acting on the measured angles, so it is
+  // correlated with their noise and least squares is biased (any sign pattern may follow).
+  closed_loop,
+  unknown,  // a clear violation no check above found a cause for
 };
 
 // What the recordings themselves show, so that a cause the parameters' magnitudes cannot tell
@@ -67,10 +70,15 @@ struct RecordingEvidence {
   std::size_t fast_steps = 0, steps = 0;
   // The arm's largest |q1 - q1 at the start| over the samples no fast step leads into.
   double largest_arm_travel_rad = 0;
+  // The share of the samples whose input a controller computed from the angles (balance
+  // sessions); recording_evidence cannot tell, its caller sets it from where the samples came.
+  double closed_loop_share = 0;
 
   bool short_recording() const;
   bool spikes() const;
   bool angles_not_radians() const;
+  // Most samples are in closed loop: a sign pattern is then the loop's bias, not a mistake.
+  bool closed_loop() const;
 };
 RecordingEvidence recording_evidence(const std::vector<RawExperiment>& experiments);
 
@@ -121,6 +129,8 @@ struct PhysicalCheck {
 // pattern would otherwise be missed (inertias 30 times off CAD: an angle or time unit).
 // `evidence` (the recordings'): a cause the magnitudes point at is named only when the data show
 // it (too short, spikes, angles not in radians); without evidence, or when none shows, "unknown".
+// When the evidence says closed loop, the cause is closed_loop (and what the data themselves show),
+// never a recording mistake read from the signs.
 PhysicalCheck check_physical(const model::Parameters<double>& estimate,
                              const std::optional<model::Parameters<double>>& std_dev = {},
                              const std::optional<model::Parameters<double>>& nominal = {},

@@ -12,6 +12,16 @@
 
 namespace furuta::pipeline {
 
+// The controller file a balance session ran, as its log's controller record names it.
+struct BalanceController {
+  std::string path;    // as the daemon read it
+  std::string sha256;  // hex, of the file's bytes
+  // From the record's TOML when config::parse_controller_file reads it: which estimate
+  // ([parameters] source: output-error, lsmi, cad) of which results.json, for which rig.
+  std::string parameters_source, results, rig;
+  std::string unreadable;  // why the TOML did not read; "" when it did
+};
+
 struct BalanceSummary {
   std::int64_t cycles = 0;  // samples with a controller cycle beside them
   // The start of the catch that held: the first cycle in catch mode after which the controller
@@ -25,7 +35,7 @@ struct BalanceSummary {
   double max_abs_duty = 0;     // over the whole session, as commanded
   double max_abs_arm_deg = 0;  // over the whole session
   bool fell = false;           // the session ended with pendulum_fell
-  std::string end_reason;      // the end record's (empty: cut short)
+  std::string end_reason;      // the end record's, in full; "" when the log has none (cut short)
   std::int64_t law_time_p50_ns = 0;
   std::int64_t law_time_max_ns = 0;
   // Each cycle's time from the session start and mode (rig_control_t::MODE_*), for plots.
@@ -34,6 +44,7 @@ struct BalanceSummary {
   std::vector<double> upright_error_deg;
   std::vector<double> arm_deg;
   std::vector<double> duty;
+  std::optional<BalanceController> controller;  // none: the log has no controller record
 };
 
 // nullopt when the log has no controller cycles (not a balance session).

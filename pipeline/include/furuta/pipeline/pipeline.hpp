@@ -29,6 +29,7 @@
 #include "furuta/identification/windowed_set.hpp"
 #include "furuta/interval/box.hpp"
 #include "furuta/model/model.hpp"
+#include "furuta/pipeline/balance.hpp"
 #include "furuta/session_log/session_log.hpp"
 #include "furuta/validated/scenarios.hpp"
 
@@ -59,6 +60,8 @@ struct SessionSummary {
   std::string end_reason;             // the end record's ("arm_angle_limit", ...); "" without one
   std::uint64_t damaged_regions = 0;  // skipped by the checked reader
   bool truncated_tail = false;
+  // A balance session's figures and cycles (summarize_balance); none for an excitation session.
+  std::optional<BalanceSummary> balance;
 };
 SessionSummary summarize_session(const session_log::SessionLog& log, std::string role);
 
@@ -70,6 +73,9 @@ struct Recording {
   // raw reports and command writes, an intact part's cut to its time); absent for CSVs (run()
   // makes it from `experiment`).
   std::optional<identification::OeExperiment> oe;
+  // The input came from a controller closing the loop on the measured angles (a balance
+  // session's cycles): least squares is then biased, which the physical check must know.
+  bool closed_loop = false;
 };
 // A session log as a recording (its samples resampled, its summary, its OeExperiment read with
 // `rig`'s encoders and motor).
