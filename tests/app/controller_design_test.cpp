@@ -18,6 +18,7 @@
 #include "furuta/control/upright_lqr.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/report/json.hpp"
+#include "sha256sum.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::app::controller_design_test {
@@ -76,15 +77,7 @@ control::BalanceGain design_for(const config::RigConfig& rig,
       control::LqrWeights{});
 }
 
-std::string sha256sum(const fs::path& file) {
-  FILE* pipe = ::popen(("sha256sum '" + file.string() + "'").c_str(), "r");
-  if (pipe == nullptr) return "";
-  std::string text;
-  char buffer[256];
-  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) text += buffer;
-  ::pclose(pipe);
-  return text.substr(0, text.find(' '));
-}
+using furuta::testing::sha256sum;
 
 TEST(ControllerDesign, TheFileHoldsTheGainOfTheNamedParametersAndWhereTheyCameFrom) {
   TempDir dir;

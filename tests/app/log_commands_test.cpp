@@ -53,11 +53,20 @@ class LogCommands : public ::testing::Test {
   static void TearDownTestSuite() { made_.reset(); }
 
   // A copy with `count` seeded random bytes written over the middle of the file.
+  // `count` bytes overwritten from the start of the log's middle event: the damage lands among
+  // the samples at the same place in the session whatever the length of the records before them.
   fs::path damaged_copy(const fs::path& log, std::size_t count = 2000) const {
     std::string bytes = read_file(log);
+    std::vector<std::uint64_t> offsets;
+    {
+      session_log::LcmLogReader reader(log);
+      session_log::LogEvent event;
+      while (reader.next(event)) offsets.push_back(event.file_offset);
+    }
+    const std::size_t from = static_cast<std::size_t>(offsets[offsets.size() / 2]);
     std::mt19937 rng(20241125);
     std::uniform_int_distribution<int> byte(0, 255);
-    for (std::size_t k = bytes.size() / 2; k < bytes.size() / 2 + count; ++k) {
+    for (std::size_t k = from; k < from + count; ++k) {
       bytes[k] = static_cast<char>(byte(rng));
     }
     const fs::path copy = dir_.path() / ("damaged_" + log.filename().string());

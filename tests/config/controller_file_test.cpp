@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "furuta/control/upright_lqr.hpp"
+#include "sha256sum.hpp"
 #include "temp_dir.hpp"
 
 namespace furuta::config::controller_file_test {
@@ -136,15 +137,7 @@ std::string with_limit(const std::string& key, const std::string& value) {
   return text;
 }
 
-std::string sha256sum(const fs::path& file) {
-  FILE* pipe = ::popen(("sha256sum '" + file.string() + "'").c_str(), "r");
-  if (pipe == nullptr) return "";
-  std::string text;
-  char buffer[256];
-  while (std::fgets(buffer, sizeof buffer, pipe) != nullptr) text += buffer;
-  ::pclose(pipe);
-  return text.substr(0, text.find(' '));
-}
+using furuta::testing::sha256sum;
 
 TEST(ControllerFile, AWholeFileIsTheSpecTheBalanceLawRuns) {
   const ControllerFile f = parse_controller_file(kValid, "C.toml");

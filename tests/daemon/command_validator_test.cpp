@@ -203,7 +203,8 @@ TEST(CommandValidator, AnUnknownProfileIsRejectedListingTheKnownOnes) {
   rig_command_t command = start();
   command.profile = "sine";
   EXPECT_EQ(check_once(command).reason,
-            "profile: \"sine\" is not one of bang_bang, free_decay, step, prbs, chirp, multisine");
+            "profile: \"sine\" is not one of bang_bang, free_decay, step, prbs, chirp, multisine, "
+            "balance");
 }
 
 TEST(CommandValidator, EchoedStringsAreEscapedAndBounded) {
