@@ -33,14 +33,6 @@ std::string controller_file_sha256(std::string_view bytes) {
   return hex.get();
 }
 
-bool is_sha256_hex(const std::string& s) {
-  if (s.size() != 64) return false;
-  for (const char c : s) {
-    if (!std::isdigit(static_cast<unsigned char>(c)) && (c < 'a' || c > 'f')) return false;
-  }
-  return true;
-}
-
 // A table the file must have: absent, the error names it (there is no line to point at).
 Section required_controller_table(Section& top, const std::string& key, const char* what) {
   if (!top.has(key))
@@ -245,6 +237,14 @@ void read_limits_table(Section& s, ControllerFile& f) {
 }
 
 }  // namespace
+
+bool is_sha256_hex(std::string_view text) {
+  if (text.size() != 64) return false;
+  for (const char c : text) {
+    if (!std::isdigit(static_cast<unsigned char>(c)) && (c < 'a' || c > 'f')) return false;
+  }
+  return true;
+}
 
 ControllerFile parse_controller_file(std::string_view text, const std::string& file_name) {
   ControllerFile f;

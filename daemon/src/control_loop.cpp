@@ -274,6 +274,12 @@ void ControlLoop::drain_boards(RigSample& sample, std::int64_t& newest_arm_count
     pendulum_counts_ += r->delta_counts;
     encoder_flags_ = r->flags;
   }
+  // When each angle was read: a board that sent nothing this cycle leaves its angle as old as
+  // its last report.
+  if (sample.motor.count > 0) arm_read_ns_ = sample.motor.readings[sample.motor.count - 1].host_ns;
+  if (sample.encoder.count > 0) {
+    pendulum_read_ns_ = sample.encoder.readings[sample.encoder.count - 1].host_ns;
+  }
   const int motor_fresh = sample.motor.count;
   const int encoder_fresh = sample.encoder.count;
   if (motor_fresh > 0) counters_.motor_reports_seen.store(true, std::memory_order_relaxed);
@@ -493,14 +499,7 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
   if (balance_) {
     // Real time, whatever the loop's clock: the law's cost is the figure, also in virtual time.
     const auto law_start = std::chrono::steady_clock::now();
-    // How old each angle is: its board's newest report, against this cycle's deadline (a board
-    // that sent nothing this cycle leaves its angle as old as its last report).
-    if (sample.motor.count > 0) {
-      arm_read_ns_ = sample.motor.readings[sample.motor.count - 1].host_ns;
-    }
-    if (sample.encoder.count > 0) {
-      pendulum_read_ns_ = sample.encoder.readings[sample.encoder.count - 1].host_ns;
-    }
+    // How old each angle is: its board's newest report against this cycle's deadline.
     const control::BalanceStep step =
         balance_law_.step(sample.arm_angle_rad, sample.pendulum_angle_rad,
                           static_cast<double>(deadline_ns - arm_read_ns_) * 1e-9,

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "furuta/common/wire_text.hpp"
+#include "furuta/config/controller_file.hpp"
 #include "furuta/config/rig_config.hpp"
 
 namespace furuta::daemon {
@@ -56,12 +57,6 @@ bool allowed_in_label(char c) {
          c == '_' || c == '.' || c == ' ';
 }
 
-bool is_sha256_hex(const std::string& text) {
-  return text.size() == 64 && std::all_of(text.begin(), text.end(), [](char c) {
-           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
-         });
-}
-
 std::string check_start_session(const rig_command_t& command, const CommandLimits& limits) {
   const bool balance = command.profile == kBalanceProfile;
   if (!balance && !parse_profile_kind(command.profile)) {
@@ -71,7 +66,7 @@ std::string check_start_session(const rig_command_t& command, const CommandLimit
   if (balance && command.controller_path.empty()) {
     return "controller_path: a balance session needs its controller file";
   }
-  if (balance && !is_sha256_hex(command.controller_sha256)) {
+  if (balance && !config::is_sha256_hex(command.controller_sha256)) {
     return "controller_sha256: " + printable_quoted(command.controller_sha256) +
            " is not a SHA-256 in lowercase hex (64 characters)";
   }

@@ -39,6 +39,8 @@ struct ControllerFile {
 
 // `file_name` names the text in errors.
 ControllerFile parse_controller_file(std::string_view text, const std::string& file_name);
+// A SHA-256 as the file's digest and the commands carry it: 64 lowercase hex digits.
+bool is_sha256_hex(std::string_view text);
 // A file that cannot be opened or read is a ConfigError naming its path.
 ControllerFile load_controller_file(const std::filesystem::path& path);
 

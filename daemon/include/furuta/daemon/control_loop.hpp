@@ -188,7 +188,8 @@ class ControlLoop {
   Excitation excitation_;
   bool balance_ = false;
   control::BalanceLaw balance_law_;
-  // When the newest angle of each board was read (its report's arrival, on the loop's clock).
+  // When the newest angle of each board was read (its report's arrival, on the loop's clock),
+  // kept by drain_boards every cycle.
   std::int64_t arm_read_ns_ = 0;
   std::int64_t pendulum_read_ns_ = 0;
   std::array<char, kNameChars> session_{};
