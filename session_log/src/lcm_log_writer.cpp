@@ -114,7 +114,7 @@ class LcmLogWriter::Impl {
     }
     if (created) detail::fsync_directory(options.logs_dir);
     if (fs::exists(final_path_, ec)) {
-      throw std::runtime_error("LCM log " + final_path_.string() + " already exists");
+      throw LogNameInUse("LCM log " + final_path_.string() + " already exists");
     }
     detail::UniqueFd created_fd = create_locked_part();
     part_lock_ = std::move(created_fd);

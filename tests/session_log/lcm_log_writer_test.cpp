@@ -191,6 +191,26 @@ TEST(LcmLogWriter, ARunningSessionsPartIsInUseNotLeftByACrash) {
   EXPECT_EQ(recover_partial_logs(dir.path()).size(), 1u);
 }
 
+// A session finished under a name holds it too: a writer of that name is told to take another
+// (the daemon then does), and the finished log is untouched.
+TEST(LcmLogWriter, AFinishedLogsNameIsInUse) {
+  TempDir dir;
+  {
+    LcmLogWriter first({dir.path(), 1000ms}, "s");
+    ASSERT_EQ(first.write("A", 1, std::vector<std::uint8_t>{1}), LogWriteStatus::ok);
+    ASSERT_EQ(first.finish(), LogWriteStatus::ok);
+  }
+  const std::vector<std::uint8_t> finished = testing::read_bytes(dir.path() / "s.lcmlog");
+  try {
+    LcmLogWriter second({dir.path(), 1000ms}, "s");
+    ADD_FAILURE() << "accepted";
+  } catch (const LogNameInUse& e) {
+    EXPECT_NE(std::string(e.what()).find("s.lcmlog already exists"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(testing::read_bytes(dir.path() / "s.lcmlog"), finished);
+  EXPECT_TRUE(fs::is_empty(dir.path() / ".partial"));
+}
+
 TEST(LcmLogWriter, ChannelsAndSizesLcmCannotCarryAreProgrammingErrors) {
   TempDir dir;
   LcmLogWriter writer({dir.path(), 1000ms}, "s");

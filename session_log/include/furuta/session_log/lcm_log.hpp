@@ -75,7 +75,8 @@ struct LogWriterOptions {
 // flush_interval of their own timestamps (utime), renamed to <logs_dir>/<name>.lcmlog by finish().
 // On any write error the writer stops accepting events; what reached the disk before stays
 // readable.
-// The name's .part is held by a session writing it now: another name is needed.
+// The name is taken, by a session writing its .part now or by a finished log: another name is
+// needed.
 class LogNameInUse : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -84,7 +85,8 @@ class LogNameInUse : public std::runtime_error {
 class LcmLogWriter {
  public:
   // Throws std::runtime_error naming the path when the file cannot be created: LogNameInUse when
-  // a live writer holds that name's .part. The writer holds an flock on its .part while it lives.
+  // a live writer holds that name's .part or the finished log exists. The writer holds an flock on
+  // its .part while it lives.
   LcmLogWriter(const LogWriterOptions& options, const std::string& name);
   ~LcmLogWriter();  // a writer never finished leaves its .part for recovery
   LcmLogWriter(const LcmLogWriter&) = delete;
