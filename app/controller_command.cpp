@@ -17,6 +17,7 @@
 #include "furuta/control/balance_law.hpp"
 #include "furuta/control/upright_lqr.hpp"
 #include "furuta/daemon/rig_connection.hpp"
+#include "furuta/firmware_bridge/phidget_ids.hpp"
 #include "furuta/identification/identify.hpp"
 #include "furuta/report/json.hpp"
 #include "furuta/report/run_directory.hpp"
@@ -129,6 +130,8 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   // delay, which the design adds to the data path's lag.
   const double ramp_lag_s =
       control::ramp_lag_s(rig.excitation.board_acceleration_pct_per_s, control::kRampStepDuty);
+  // The filter takes each duty as the board does: after the data path's lag, ramped to.
+  const control::DutyPath duty_path{lag_s, rig.excitation.board_acceleration_pct_per_s / 100};
   const control::DesignPlant plant{*parameters, rig.motor, supply_v};
   const double max_duty = rig.limits.max_amplitude_duty;
   control::BalanceGain gain;
@@ -137,13 +140,17 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   // The filter trusts each angle to within a count of its encoder.
   observer_weights.arm_count_rad = bridge::resolution_rad(rig.arm_encoder);
   observer_weights.pendulum_count_rad = bridge::resolution_rad(rig.pendulum_encoder);
+  // A board's newest report is anywhere from just read to a report period old at a sample: the
+  // gain is designed for the middle of that, and the loop gives each reading's own age.
+  observer_weights.reading_age_s =
+      0.5 * std::min(period_s, static_cast<double>(bridge::kReportPeriodNs) * 1e-9);
   control::BalanceControllerSpec spec;
   try {
     const control::SampledPlant sampled =
         control::sample(control::linearize_upright(plant), period_s, lag_s + ramp_lag_s);
     gain = control::design_lqr(sampled, options.weights);
     observer = control::design_observer(sampled, observer_weights);
-    spec = control::balance_spec(plant, sampled, gain, observer, max_duty,
+    spec = control::balance_spec(plant, sampled, gain, observer, duty_path, max_duty,
                                  config::motor_resolution(rig).duty_step);
   } catch (const std::exception& e) {
     return refuse(std::string("the design failed: ") + e.what());
@@ -161,7 +168,9 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
        << "\nlag_s = " << exact(lag_s) << "\n# the duty ramp as a delay on a step of "
        << "ramp_step_duty; the design's lag is lag_s + ramp_lag_s\nramp_lag_s = "
        << exact(ramp_lag_s) << "\nramp_step_duty = " << exact(control::kRampStepDuty)
-       << "\nsupply_v = " << exact(supply_v)
+       << "\n# the board's ramp itself (duty per second), which the filter "
+          "follows\nramp_duty_per_s = "
+       << exact(duty_path.ramp_duty_per_s) << "\nsupply_v = " << exact(supply_v)
        << "\ndesigned_by = " << quoted(daemon::kSoftwareVersion) << "\n\n";
   file << "[parameters]\nsource = \"" << to_string(options.parameters)
        << "\"\nresults = " << quoted(std::filesystem::weakly_canonical(options.results).string())
@@ -190,15 +199,17 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   for (int i = 0; i < 4; ++i) {
     for (int j = 0; j < 2; ++j) m.push_back(observer.m(i, j));
   }
-  file << "[observer]\n# the filter's velocities: x^ = x^- + m ([q1, q2 - pi] - x^-[0..1]), m "
-          "row-major "
-          "4 x 2,\n# x^- the model's prediction from the last estimate and the duties sent\n"
+  file << "[observer]\n# the filter's velocities: x^ = x^- + m ([q1, q2 - pi] - y^), m "
+          "row-major 4 x 2,\n# x^- the last sample's predicted state, y^ its angles carried "
+          "to when the angles were read\n# (reading_age_s before this sample, typically)\n"
        << "arm_acceleration_sd = " << exact(observer_weights.arm_acceleration_sd)
        << "\npendulum_acceleration_sd = " << exact(observer_weights.pendulum_acceleration_sd)
        << "\narm_count_rad = " << exact(observer_weights.arm_count_rad)
        << "\npendulum_count_rad = " << exact(observer_weights.pendulum_count_rad)
-       << "\nm = " << array_text(m) << "\nspectral_radius = " << exact(observer.spectral_radius)
-       << "\n\n";
+       << "\nreading_age_s = " << exact(observer.reading_age_s) << "\nm = " << array_text(m)
+       << "\n# the error's largest pole at reading_age_s, and at the worst age in [0, period]"
+       << "\nspectral_radius = " << exact(observer.spectral_radius)
+       << "\nworst_spectral_radius = " << exact(observer.worst_spectral_radius) << "\n\n";
   file << "[drive]\n# eq. 4 at supply_v: torque = duty_torque_nm duty - back_emf_nm_s dq1\n"
        << "duty_torque_nm = " << exact(spec.duty_torque_nm)
        << "\nback_emf_nm_s = " << exact(spec.back_emf_nm_s) << "\n\n";
@@ -209,8 +220,12 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
        << "\nmax_duty = " << exact(swing_up.max_duty)
        << "\nenergy_margin = " << exact(swing_up.energy_margin)
        << "\nstart_below_energy_ratio = " << exact(swing_up.start_below_energy_ratio)
-       << "\nstart_acceleration = " << exact(swing_up.start_acceleration) << "\n\n";
-  file << "[catch]\n# angles from upright\ncatch_deg = " << exact(region.catch_rad / kDegToRad)
+       << "\nstart_acceleration = " << exact(swing_up.start_acceleration)
+       << "\npump_arm_deg = " << exact(swing_up.pump_arm_rad / kDegToRad) << "\n\n";
+  file << "[catch]\n# angles from upright; the catch only where the gain asks for at most "
+          "entry_duty_ratio of max_duty\ncatch_deg = "
+       << exact(region.catch_rad / kDegToRad)
+       << "\nentry_duty_ratio = " << exact(region.entry_duty_ratio)
        << "\nrelease_deg = " << exact(region.release_rad / kDegToRad)
        << "\nsettle_s = " << exact(region.settle_s)
        << "\nfall_deg = " << exact(region.fall_rad / kDegToRad) << "\n\n";
@@ -232,8 +247,9 @@ int run_controller_design_command(const ControllerDesignOptions& options, std::o
   out << "designed from the " << to_string(options.parameters) << " parameters of "
       << options.results.string() << ": " << gain.k.size() << " gains, largest closed-loop pole "
       << gain.spectral_radius << " (stable) at " << period_s * 1e3 << " ms with a " << lag_s * 1e3
-      << " ms lag and a " << ramp_lag_s * 1e3 << " ms duty ramp\nwrote " << options.output.string()
-      << "\n";
+      << " ms lag and a " << ramp_lag_s * 1e3 << " ms duty ramp; the filter's error pole "
+      << observer.spectral_radius << " (at most " << observer.worst_spectral_radius
+      << " at any reading age)\nwrote " << options.output.string() << "\n";
   return kExitDone;
 }
 

@@ -60,9 +60,7 @@ std::optional<std::pair<const Section*, std::string>> key_of_spec_member(const C
     if (field.rfind(prefix, 0) != 0) return std::nullopt;
     return field.substr(prefix.size());
   };
-  if (auto key = after("parameters.")) return std::pair{&t.parameters, *key};
-  if (auto key = after("swing_up.")) return std::pair{&t.swing_up, *key};
-  static const std::array<std::array<const char*, 3>, 12> kPlain = {{
+  static const std::array<std::array<const char*, 3>, 16> kPlain = {{
       {"observer_gain", "observer", "m"},
       {"period_s", "controller", "period_ns"},
       {"delayed", "gain", "k"},
@@ -75,6 +73,10 @@ std::optional<std::pair<const Section*, std::string>> key_of_spec_member(const C
       {"region.release_rad", "catch", "release_deg"},
       {"region.settle_s", "catch", "settle_s"},
       {"region.fall_rad", "catch", "fall_deg"},
+      {"region.entry_duty_ratio", "catch", "entry_duty_ratio"},
+      {"swing_up.pump_arm_rad", "swing_up", "pump_arm_deg"},
+      {"duty_path.lag_s", "controller", "lag_s"},
+      {"duty_path.ramp_duty_per_s", "controller", "ramp_duty_per_s"},
   }};
   for (const auto& [member, table, key] : kPlain) {
     if (field != member) continue;
@@ -84,9 +86,12 @@ std::optional<std::pair<const Section*, std::string>> key_of_spec_member(const C
                        : name == "observer" ? &t.observer
                        : name == "limits"   ? &t.limits
                        : name == "drive"    ? &t.drive
+                       : name == "swing_up" ? &t.swing_up
                                             : &t.catch_region;
     return std::pair{s, std::string(key)};
   }
+  if (auto key = after("parameters.")) return std::pair{&t.parameters, *key};
+  if (auto key = after("swing_up.")) return std::pair{&t.swing_up, *key};
   return std::nullopt;
 }
 
@@ -112,6 +117,10 @@ void read_controller_table(Section& s, ControllerFile& f) {
   f.ramp_step_duty = s.required_number(
       "ramp_step_duty", "the duty step the ramp's delay is for",
       [](double v) { return v > 0 && v <= 1; }, "in (0, 1]");
+  // The filter takes duties as the board does: lag_s after their sample, ramped to.
+  f.spec.duty_path.lag_s = f.lag_s;
+  f.spec.duty_path.ramp_duty_per_s = s.required_number(
+      "ramp_duty_per_s", "the board's duty ramp (0: none)", detail::non_negative, ">= 0");
   f.supply_v =
       s.required_number("supply_v", "the supply the design assumed", detail::positive, "> 0");
   f.designed_by = s.required_text("designed_by", "the software that designed it");
@@ -174,28 +183,28 @@ void read_observer_table(Section& s, ControllerFile& f) {
        {"arm_acceleration_sd", "pendulum_acceleration_sd", "arm_count_rad", "pendulum_count_rad"}) {
     s.required_number(key, std::string("the filter's ") + key, detail::positive, "> 0");
   }
+  // The gain corrects the last sample's state with the angles read since: a gain designed for
+  // another reading (older files corrected this sample's) is refused by this key's absence.
+  const double period_s = f.spec.period_s;
+  s.required_number(
+      "reading_age_s", "the reading age the filter's gain is designed for",
+      [period_s](double v) { return v >= 0 && v <= period_s; }, "in [0, the period]");
   const std::vector<double> m = s.required_numbers("m", "the filter's gain (4 x 2)", 8, 8);
   for (std::size_t i = 0; i < m.size(); ++i) f.spec.observer_gain[i] = m[i];
-  s.required_number(
-      "spectral_radius", "the estimation error's largest pole's magnitude",
-      [](double v) { return v >= 0 && v < 1; }, "in [0, 1) (a filter that converges)");
+  for (const char* key : {"spectral_radius", "worst_spectral_radius"}) {
+    s.required_number(
+        key, "the estimation error's largest pole's magnitude",
+        [](double v) { return v >= 0 && v < 1; }, "in [0, 1) (a filter that converges)");
+  }
   s.reject_unknown_keys();
 }
 
-// The sampled plant the filter predicts with, from the file's model, drive, period and lags: the
-// numbers the design sampled, so they are not written twice.
-void sample_the_plant(ControllerFile& f) {
-  const control::LinearPlant linear =
-      control::linearize_upright(f.spec.parameters, {f.spec.duty_torque_nm, f.spec.back_emf_nm_s});
-  control::set_continuous_plant(linear, f.spec);
-  const control::SampledPlant sampled =
-      control::sample(linear, f.spec.period_s, f.lag_s + f.ramp_lag_s);
-  for (Eigen::Index i = 0; i < sampled.phi.rows(); ++i) {
-    f.spec.gamma[static_cast<std::size_t>(i)] = sampled.gamma(i);
-    for (Eigen::Index j = 0; j < sampled.phi.cols(); ++j) {
-      f.spec.phi[static_cast<std::size_t>(i * control::kMaxGains + j)] = sampled.phi(i, j);
-    }
-  }
+// The model the filter predicts with, from the file's parameters and drive: the numbers the
+// design linearised, so they are not written twice.
+void set_the_model(ControllerFile& f) {
+  control::set_continuous_plant(
+      control::linearize_upright(f.spec.parameters, {f.spec.duty_torque_nm, f.spec.back_emf_nm_s}),
+      f.spec);
 }
 
 void read_drive_table(Section& s, ControllerFile& f) {
@@ -216,6 +225,9 @@ void read_swing_up_table(Section& s, ControllerFile& f) {
   u.start_below_energy_ratio =
       s.required_number("start_below_energy_ratio", "the energy ratio below which it starts");
   u.start_acceleration = s.required_number("start_acceleration", "the starting acceleration");
+  u.pump_arm_rad = s.required_number("pump_arm_deg",
+                                     "the arm angle beyond which the pump drives it no further") *
+                   detail::kDegToRad;
   s.reject_unknown_keys();
 }
 
@@ -225,6 +237,8 @@ void read_catch_table(Section& s, ControllerFile& f) {
   r.catch_rad = s.required_number("catch_deg", "the catch angle from upright") * detail::kDegToRad;
   r.release_rad =
       s.required_number("release_deg", "the release angle from upright") * detail::kDegToRad;
+  r.entry_duty_ratio = s.required_number(
+      "entry_duty_ratio", "the largest share of max_duty the gain may ask for at the catch");
   r.settle_s = s.required_number("settle_s", "the time inside the catch angle before balancing");
   r.fall_rad = s.required_number("fall_deg", "the fall angle from upright") * detail::kDegToRad;
   s.reject_unknown_keys();
@@ -274,7 +288,7 @@ ControllerFile parse_controller_file(std::string_view text, const std::string& f
   read_prediction_table(t.prediction, f);
   read_observer_table(t.observer, f);
   read_drive_table(t.drive, f);
-  sample_the_plant(f);
+  set_the_model(f);
   read_swing_up_table(t.swing_up, f);
   read_catch_table(t.catch_region, f);
   read_limits_table(t.limits, f);

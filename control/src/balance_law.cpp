@@ -54,10 +54,26 @@ BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
   require(spec.delayed >= 0 && spec.delayed <= kMaxDelayedDuties, "delayed",
           "must be 0 to 4 (the lag, in whole periods rounded up)");
   for (const double g : spec.gain) require(std::isfinite(g), "gain", "must be finite numbers");
-  for (const double v : spec.phi) require(std::isfinite(v), "phi", "must be finite numbers");
-  for (const double v : spec.gamma) require(std::isfinite(v), "gamma", "must be finite numbers");
   for (const double v : spec.observer_gain) {
     require(std::isfinite(v), "observer_gain", "must be finite numbers");
+  }
+  for (const double v : spec.a_continuous) {
+    require(std::isfinite(v), "a_continuous", "must be finite numbers");
+  }
+  for (const double v : spec.b_continuous) {
+    require(std::isfinite(v), "b_continuous", "must be finite numbers");
+  }
+  // The duties the filter's propagate() looks back on: the lag reaches at most `delayed` samples.
+  const DutyPath& path = spec.duty_path;
+  require(std::isfinite(path.lag_s) && path.lag_s >= 0 &&
+              path.lag_s <= spec.delayed * spec.period_s * (1 + 1e-9),
+          "duty_path.lag_s", "must be in [0, delayed periods]");
+  require(std::isfinite(path.ramp_duty_per_s) && path.ramp_duty_per_s >= 0,
+          "duty_path.ramp_duty_per_s", "must be a finite number >= 0");
+  for (std::size_t i = 0; i < 4; ++i) {
+    double row = 0;
+    for (std::size_t j = 0; j < 4; ++j) row += std::fabs(spec.a_continuous[i * 4 + j]);
+    a_norm_ = std::max(a_norm_, row);
   }
   for (int i = 4 + spec.delayed; i < kMaxGains; ++i) {
     require(spec.gain[static_cast<std::size_t>(i)] == 0, "gain",
@@ -86,6 +102,8 @@ BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
           "swing_up.energy_margin", "must be in [0, 1)");
   require(finite_positive(s.max_acceleration), "swing_up.max_acceleration",
           "must be a finite number > 0");
+  require(finite_positive(s.pump_arm_rad) && s.pump_arm_rad < std::numbers::pi,
+          "swing_up.pump_arm_rad", "must be in (0, pi)");
   require(finite_positive(s.start_acceleration) && s.start_acceleration <= s.max_acceleration,
           "swing_up.start_acceleration", "must be in (0, max_acceleration]");
   require(std::isfinite(s.start_below_energy_ratio) && s.start_below_energy_ratio >= 0 &&
@@ -96,6 +114,8 @@ BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
   const CatchRegion& r = spec.region;
   require(finite_positive(r.catch_rad) && r.catch_rad < std::numbers::pi / 2, "region.catch_rad",
           "must be in (0, pi/2)");
+  require(finite_positive(r.entry_duty_ratio) && r.entry_duty_ratio <= 1, "region.entry_duty_ratio",
+          "must be in (0, 1]");
   require(std::isfinite(r.release_rad) && r.release_rad > r.catch_rad &&
               r.release_rad < std::numbers::pi,
           "region.release_rad", "must be in (catch_rad, pi)");
@@ -106,8 +126,9 @@ BalanceLaw::BalanceLaw(const BalanceControllerSpec& spec) : spec_(spec) {
 }
 
 void BalanceLaw::reset() noexcept {
-  have_previous_ = false;
-  previous_q1_ = previous_q2_ = 0;
+  clock_s_ = 0;
+  arm_ = {};
+  pendulum_ = {};
   mode_ = BalanceMode::swing_up;
   inside_s_ = 0;
   start_s_ = 0;
@@ -115,48 +136,102 @@ void BalanceLaw::reset() noexcept {
   estimating_ = false;
   estimate_.fill(0.0);
   sent_.fill(0.0);
+  applied_ = 0;
 }
 
-void BalanceLaw::estimate(double q1, double error, double dq1, double dq2, double arm_age_s,
-                          double pendulum_age_s) noexcept {
+BalanceLaw::Carried BalanceLaw::propagate(const std::array<double, 4>* x, double applied,
+                                          double after_s) const noexcept {
+  // The duty sent n samples before the last reaches the board at lag - n T from the last sample
+  // and is its target until the next one does: over [0, after_s] the board takes, in turn, the
+  // duties of n = ceil(lag / T) down to 0, and its applied duty ramps to each. In every stretch
+  // the applied duty is affine in time (ramping, or there), and the state's motion exact.
+  const double t = spec_.period_s;
+  const double lag = spec_.duty_path.lag_s;
+  const double rate = spec_.duty_path.ramp_duty_per_s;
+  const int oldest = lag > 0 ? std::min(static_cast<int>(std::ceil(lag / t - 1e-9)),
+                                        static_cast<int>(sent_.size()) - 1)
+                             : 0;
+  Carried out;
+  if (x != nullptr) out.x = *x;
+  out.applied = applied;
+  // dx/dt = a x + b u, du/dt = slope over `length` s: the Taylor series of the exact solution, in
+  // sub-steps short enough (|a| h <= 1) that its terms fall below the double's rounding within 24.
+  const auto integrate = [&](double length, double slope) {
+    if (x != nullptr) {
+      const int steps = std::max(1, static_cast<int>(std::ceil(a_norm_ * length)));
+      const double h = length / steps;
+      for (int step = 0; step < steps; ++step) {
+        const double u0 = out.applied + slope * h * step;
+        std::array<double, 4> term = out.x;
+        for (int order = 1; order <= 24; ++order) {
+          // The input's Taylor terms: u0, then slope h, then none.
+          const double input = order == 1 ? u0 : order == 2 ? slope * h : 0.0;
+          std::array<double, 4> next{};
+          double largest = 0;
+          double size = 0;
+          for (std::size_t i = 0; i < 4; ++i) {
+            double v = spec_.b_continuous[i] * input;
+            for (std::size_t j = 0; j < 4; ++j) v += spec_.a_continuous[i * 4 + j] * term[j];
+            next[i] = v * h / order;
+            out.x[i] += next[i];
+            largest = std::max(largest, std::fabs(next[i]));
+            size = std::max(size, std::fabs(out.x[i]));
+          }
+          term = next;
+          if (order > 2 && largest <= 1e-17 * size) break;
+        }
+      }
+    }
+    out.applied += slope * length;
+  };
+  for (int n = oldest; n >= 0; --n) {
+    const double from = std::max(0.0, lag - n * t);
+    const double to = n == 0 ? after_s : std::min(after_s, lag - (n - 1) * t);
+    if (!(to > from)) continue;
+    const double target = sent_[sent_.size() - 1 - static_cast<std::size_t>(n)];
+    if (!(rate > 0)) {
+      out.applied = target;
+      integrate(to - from, 0.0);
+      continue;
+    }
+    const double gap = target - out.applied;
+    const double reach_s = std::fabs(gap) / rate;
+    if (reach_s >= to - from) {
+      integrate(to - from, std::copysign(rate, gap));
+      continue;
+    }
+    if (reach_s > 0) integrate(reach_s, std::copysign(rate, gap));
+    out.applied = target;
+    integrate(to - from - reach_s, 0.0);
+  }
+  return out;
+}
+
+void BalanceLaw::estimate(double q1, double error, double dq1, double dq2,
+                          const ReadingTimes& times) noexcept {
   if (!estimating_) {
     // The first cycle near upright starts from the angles and the differences.
     estimate_ = {q1, error, dq1, dq2};
     estimating_ = true;
     return;
   }
-  // z[k - 1] = [x^[k - 1]; u[k - 1 - d], ..., u[k - 2]], u[k - 1] the newest duty sent.
-  const auto delayed = static_cast<std::size_t>(spec_.delayed);
-  std::array<double, kMaxGains> previous{};
-  for (std::size_t i = 0; i < 4; ++i) previous[i] = estimate_[i];
-  for (std::size_t i = 0; i < delayed; ++i) {
-    previous[4 + i] = sent_[sent_.size() - 1 - delayed + i];
-  }
-  const double newest = sent_.back();
-  std::array<double, 4> predicted{};
-  for (std::size_t i = 0; i < 4; ++i) {
-    double v = spec_.gamma[i] * newest;
-    for (std::size_t j = 0; j < 4 + delayed; ++j) v += spec_.phi[i * kMaxGains + j] * previous[j];
-    predicted[i] = v;
-  }
-  // Each angle was read `age` before this instant: the prediction taken back to then along the
-  // model (second order in the age, the duty applied now held), x(t - a) = x - a x' + a^2 / 2 x''.
-  std::array<double, 4> rate{};
-  for (std::size_t i = 0; i < 4; ++i) {
-    double v = spec_.b_continuous[i] * newest;
-    for (std::size_t j = 0; j < 4; ++j) v += spec_.a_continuous[i * 4 + j] * predicted[j];
-    rate[i] = v;
-  }
-  const auto back = [&](std::size_t angle, double age) {
-    if (!(age > 0) || !std::isfinite(age)) return predicted[angle];
-    return predicted[angle] - age * rate[angle] + 0.5 * age * age * rate[angle + 2];
+  // estimate_ is x^- at the last sample; the angles were read since (their age before this
+  // sample, T - age after the last), each compared with the model's angle at that instant.
+  const double t = spec_.period_s;
+  const auto innovation = [&](bool fresh, double age_s, std::size_t angle, double measured) {
+    if (!fresh || !std::isfinite(age_s)) return 0.0;
+    const double after = std::clamp(t - age_s, 0.0, 2 * t);
+    return measured - propagate(&estimate_, applied_, after).x[angle];
   };
-  const double innovation_arm = q1 - back(0, arm_age_s);
-  const double innovation_pendulum = error - back(1, pendulum_age_s);
+  const double innovation_arm = innovation(times.arm_fresh, times.arm_age_s, 0, q1);
+  const double innovation_pendulum =
+      innovation(times.pendulum_fresh, times.pendulum_age_s, 1, error);
+  std::array<double, 4> corrected{};
   for (std::size_t i = 0; i < 4; ++i) {
-    estimate_[i] = predicted[i] + spec_.observer_gain[i * 2] * innovation_arm +
+    corrected[i] = estimate_[i] + spec_.observer_gain[i * 2] * innovation_arm +
                    spec_.observer_gain[i * 2 + 1] * innovation_pendulum;
   }
+  estimate_ = propagate(&corrected, applied_, t).x;
 }
 
 double BalanceLaw::limit(double duty) const noexcept {
@@ -166,15 +241,35 @@ double BalanceLaw::limit(double duty) const noexcept {
   return std::clamp(steps, -max_steps, max_steps) * spec_.duty_step;
 }
 
-BalanceStep BalanceLaw::step(double q1, double q2, double arm_age_s,
-                             double pendulum_age_s) noexcept {
+double BalanceLaw::gain_duty(const std::array<double, 4>& x) const noexcept {
+  double duty = 0;
+  for (std::size_t i = 0; i < 4; ++i) duty -= spec_.gain[i] * x[i];
+  const auto delayed = static_cast<std::size_t>(spec_.delayed);
+  for (std::size_t i = 0; i < delayed; ++i) {
+    duty -= spec_.gain[4 + i] * sent_[sent_.size() - delayed + i];
+  }
+  return duty;
+}
+
+void BalanceLaw::Difference::add(double new_angle, double new_read_s) noexcept {
+  if (have && new_read_s > read_s) rate = (new_angle - angle) / (new_read_s - read_s);
+  have = true;
+  angle = new_angle;
+  read_s = new_read_s;
+}
+
+BalanceStep BalanceLaw::step(double q1, double q2, const ReadingTimes& times) noexcept {
   BalanceStep out;
   const double t = spec_.period_s;
-  const double dq1 = have_previous_ ? (q1 - previous_q1_) / t : 0.0;
-  const double dq2 = have_previous_ ? (q2 - previous_q2_) / t : 0.0;
-  have_previous_ = true;
-  previous_q1_ = q1;
-  previous_q2_ = q2;
+  // Each angle counts as read when its board read it: a missing or non-finite age, as now.
+  const auto read_at = [&](double age_s) {
+    return clock_s_ - (std::isfinite(age_s) ? age_s : 0.0);
+  };
+  if (times.arm_fresh || !arm_.have) arm_.add(q1, read_at(times.arm_age_s));
+  if (times.pendulum_fresh || !pendulum_.have) pendulum_.add(q2, read_at(times.pendulum_age_s));
+  clock_s_ += t;
+  const double dq1 = arm_.rate;
+  const double dq2 = pendulum_.rate;
   const double error = wrap_angle(q2 - std::numbers::pi);
   const model::Parameters<double>& p = spec_.parameters;
   const double mug = p.mug;
@@ -189,7 +284,8 @@ BalanceStep BalanceLaw::step(double q1, double q2, double arm_age_s,
   const double distance = std::fabs(error);
   switch (mode_) {
     case BalanceMode::swing_up:
-      if (distance < region.catch_rad) {
+      if (distance < region.catch_rad &&
+          std::fabs(gain_duty({q1, error, dq1, dq2})) <= region.entry_duty_ratio * spec_.max_duty) {
         mode_ = BalanceMode::catching;
         inside_s_ = 0;
       }
@@ -225,6 +321,8 @@ BalanceStep BalanceLaw::step(double q1, double q2, double arm_age_s,
       const double natural_rad_s = std::sqrt(p.mug / p.mu4);
       pump = std::sin(natural_rad_s * start_s_) >= 0 ? s.start_acceleration : -s.start_acceleration;
       start_s_ += t;
+    } else if (std::fabs(q1) > s.pump_arm_rad && pump * q1 > 0) {
+      pump = 0;
     }
     // The arm follows a duty like a velocity (its time constant, mu1 / kw, is a fraction of the
     // period): the acceleration is integrated into a velocity the duty holds, the back-EMF and
@@ -237,24 +335,20 @@ BalanceStep BalanceLaw::step(double q1, double q2, double arm_age_s,
            spec_.duty_torque_nm;
     duty = std::clamp(duty, -s.max_duty, s.max_duty);
   } else if (mode_ == BalanceMode::catching || mode_ == BalanceMode::balance) {
-    // Catching, the pendulum may be far from where the linear model holds and fast: the
-    // differences. Balancing, near upright, the filter, started from the differences.
-    std::array<double, 4> x = {q1, error, dq1, dq2};
-    if (mode_ == BalanceMode::balance) {
-      estimate(q1, error, dq1, dq2, arm_age_s, pendulum_age_s);
-      x = estimate_;
-      out.arm_rate_rad_s = x[2];
-      out.pendulum_rate_rad_s = x[3];
-    }
-    for (std::size_t i = 0; i < 4; ++i) duty -= spec_.gain[i] * x[i];
-    const auto delayed = static_cast<std::size_t>(spec_.delayed);
-    for (std::size_t i = 0; i < delayed; ++i) {
-      duty -= spec_.gain[4 + i] * sent_[sent_.size() - delayed + i];
-    }
+    // The gain on the filter's state, started from the angles and differences at the catch: a
+    // difference lags by half a period and more (a board's report is up to a period old), and
+    // catching, the duty swings far, where the board's ramp, which the filter follows, is slow
+    // against the period.
+    estimate(q1, error, dq1, dq2, times);
+    out.arm_rate_rad_s = estimate_[2];
+    out.pendulum_rate_rad_s = estimate_[3];
+    duty = gain_duty(estimate_);
   } else {
     estimating_ = false;
   }
   out.duty = limit(duty);
+  // The board's applied duty at this sample, from the duties it took since the last.
+  applied_ = propagate(nullptr, applied_, t).applied;
   for (std::size_t i = 0; i + 1 < sent_.size(); ++i) sent_[i] = sent_[i + 1];
   sent_.back() = out.duty;
   return out;

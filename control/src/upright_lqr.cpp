@@ -100,6 +100,7 @@ SampledPlant sample(const LinearPlant& plant, double period_s, double lag_s) {
   const double fraction = lag_s - whole * period_s;
   const int n = 4 + delayed;
   SampledPlant out;
+  out.continuous = plant;
   out.period_s = period_s;
   out.lag_s = lag_s;
   out.delayed = delayed;
@@ -187,14 +188,23 @@ ObserverGain design_observer(const SampledPlant& plant, const ObserverWeights& w
           "design_observer: acceleration deviations and counts must be finite and > 0");
     }
   }
+  const double t = plant.period_s;
+  if (!(weights.reading_age_s >= 0 && weights.reading_age_s <= t)) {
+    throw std::invalid_argument("design_observer: the reading age must be in [0, period]");
+  }
   // The duties on their way are known to the law: only the four physical states are estimated,
   // and their own motion over a period is phi's top-left block.
   const Eigen::Matrix4d a = plant.phi.topLeftCorner<4, 4>();
-  Eigen::Matrix<double, 2, 4> c = Eigen::Matrix<double, 2, 4>::Zero();
-  c(0, 0) = 1.0;
-  c(1, 1) = 1.0;
+  // An angle read `age` before a sample is the last sample's state carried T - age along the
+  // model (the duties' share known, so left out here).
+  const auto reading = [&](double age_s) {
+    Eigen::Matrix<double, 2, 4> c = Eigen::Matrix<double, 2, 4>::Zero();
+    c(0, 0) = 1.0;
+    c(1, 1) = 1.0;
+    return Eigen::Matrix<double, 2, 4>(c * held_over(plant.continuous, t - age_s).transition);
+  };
+  const Eigen::Matrix<double, 2, 4> c = reading(weights.reading_age_s);
   // An acceleration error w held over the period T moves (angle, speed) by (T^2 / 2, T) w.
-  const double t = plant.period_s;
   Eigen::Matrix4d w = Eigen::Matrix4d::Zero();
   const std::array<double, 2> sd = {weights.arm_acceleration_sd, weights.pendulum_acceleration_sd};
   for (int j = 0; j < 2; ++j) {
@@ -226,10 +236,18 @@ ObserverGain design_observer(const SampledPlant& plant, const ObserverWeights& w
   }
   ObserverGain out;
   out.m = prior * c.transpose() * (c * prior * c.transpose() + v).inverse();
-  const Eigen::Matrix4d error = (Eigen::Matrix4d::Identity() - out.m * c) * a;
-  const Eigen::Vector4cd poles = error.eigenvalues();
-  for (Eigen::Index i = 0; i < poles.size(); ++i) {
-    out.spectral_radius = std::max(out.spectral_radius, std::abs(poles(i)));
+  out.reading_age_s = weights.reading_age_s;
+  const auto radius = [&](double age_s) {
+    const Eigen::Matrix4d error = a * (Eigen::Matrix4d::Identity() - out.m * reading(age_s));
+    const Eigen::Vector4cd poles = error.eigenvalues();
+    double r = 0;
+    for (Eigen::Index i = 0; i < poles.size(); ++i) r = std::max(r, std::abs(poles(i)));
+    return r;
+  };
+  out.spectral_radius = radius(weights.reading_age_s);
+  constexpr int kAges = 32;
+  for (int i = 0; i <= kAges; ++i) {
+    out.worst_spectral_radius = std::max(out.worst_spectral_radius, radius(t * i / kAges));
   }
   return out;
 }
@@ -245,7 +263,7 @@ void set_continuous_plant(const LinearPlant& plant, BalanceControllerSpec& spec)
 
 BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant& sampled,
                                    const BalanceGain& gain, const ObserverGain& observer,
-                                   double max_duty, double duty_step) {
+                                   const DutyPath& duty_path, double max_duty, double duty_step) {
   if (sampled.delayed > kMaxDelayedDuties || gain.k.size() != 4 + sampled.delayed) {
     throw std::invalid_argument(
         "a lag of " + std::to_string(sampled.lag_s) + " s is " + std::to_string(sampled.delayed) +
@@ -255,13 +273,9 @@ BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant&
   BalanceControllerSpec spec;
   spec.period_s = sampled.period_s;
   spec.delayed = sampled.delayed;
-  const Eigen::Index n = sampled.phi.rows();
-  for (Eigen::Index i = 0; i < n; ++i) {
+  spec.duty_path = duty_path;
+  for (Eigen::Index i = 0; i < gain.k.size(); ++i) {
     spec.gain[static_cast<std::size_t>(i)] = gain.k(i);
-    spec.gamma[static_cast<std::size_t>(i)] = sampled.gamma(i);
-    for (Eigen::Index j = 0; j < n; ++j) {
-      spec.phi[static_cast<std::size_t>(i * kMaxGains + j)] = sampled.phi(i, j);
-    }
   }
   for (std::size_t i = 0; i < 4; ++i) {
     for (std::size_t j = 0; j < 2; ++j) {
@@ -269,7 +283,7 @@ BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant&
           observer.m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
     }
   }
-  set_continuous_plant(linearize_upright(plant), spec);
+  set_continuous_plant(sampled.continuous, spec);
   spec.max_duty = max_duty;
   spec.duty_step = duty_step;
   spec.parameters = plant.parameters;

@@ -499,11 +499,15 @@ void ControlLoop::cycle(std::int64_t deadline_ns, std::int64_t wake_ns, std::int
   if (balance_) {
     // Real time, whatever the loop's clock: the law's cost is the figure, also in virtual time.
     const auto law_start = std::chrono::steady_clock::now();
-    // How old each angle is: its board's newest report against this cycle's deadline.
+    // How old each angle is (its board's newest report against this cycle's deadline), and
+    // whether the board reported this cycle: an angle is used by the filter once.
+    control::ReadingTimes times;
+    times.arm_age_s = static_cast<double>(deadline_ns - arm_read_ns_) * 1e-9;
+    times.pendulum_age_s = static_cast<double>(deadline_ns - pendulum_read_ns_) * 1e-9;
+    times.arm_fresh = sample.motor.count > 0;
+    times.pendulum_fresh = sample.encoder.count > 0;
     const control::BalanceStep step =
-        balance_law_.step(sample.arm_angle_rad, sample.pendulum_angle_rad,
-                          static_cast<double>(deadline_ns - arm_read_ns_) * 1e-9,
-                          static_cast<double>(deadline_ns - pendulum_read_ns_) * 1e-9);
+        balance_law_.step(sample.arm_angle_rad, sample.pendulum_angle_rad, times);
     ControlFigures& c = sample.control;
     c.mode = static_cast<std::uint8_t>(step.mode);
     c.upright_error_rad = step.upright_error_rad;

@@ -132,6 +132,26 @@ TEST(BalanceSession, SwingsUpCatchesAndBalancesAndTheLogSaysSo) {
       << out.str() << err.str();
 }
 
+// At 8 ms, the boards' own report period, each angle the loop reads is up to a period old and a
+// board may have no new report in a cycle; designed and run with that period, the same holds.
+TEST(BalanceSession, AtTheBoardsReportPeriodItBalancesToo) {
+  TempDir dir("furuta-balance-8ms");
+  const fs::path config = configuration(dir.path(), {{"period_ms = 16", "period_ms = 8"}});
+  const fs::path controller = design(dir.path(), config);
+  EXPECT_EQ(config::load_controller_file(controller).period_ns, 8'000'000);
+  const Ran ran = run_balance(dir.path(), controller, 30, config);
+  ASSERT_EQ(ran.code, 0) << ran.out << ran.err;
+  const auto b = pipeline::summarize_balance(session_log::load_session_log(ran.log));
+  ASSERT_TRUE(b.has_value());
+  ASSERT_TRUE(b->caught_at_s.has_value());
+  EXPECT_LT(*b->caught_at_s, 10.0);
+  EXPECT_GT(b->balanced_s, 18.0);
+  EXPECT_LT(b->upright_rms_deg, 1.0);
+  EXPECT_LT(b->duty_rms, 0.05);
+  EXPECT_FALSE(b->fell);
+  EXPECT_LT(b->max_abs_arm_deg, 150.0);
+}
+
 TEST(BalanceSession, ASmallTapIsRecoveredFromAndALargeOneEndsInAFallWithTheMotorOff) {
   TempDir dir("furuta-balance-tap");
   const fs::path controller = design(dir.path());

@@ -35,6 +35,7 @@ period_ns = 16000000
 lag_s = 0.002
 ramp_lag_s = 0.0004
 ramp_step_duty = 0.05
+ramp_duty_per_s = 62.5
 supply_v = 12.0
 designed_by = "furuta 1.0"
 
@@ -70,8 +71,10 @@ arm_acceleration_sd = 20.0
 pendulum_acceleration_sd = 20.0
 arm_count_rad = 0.000236
 pendulum_count_rad = 0.00153
+reading_age_s = 0.004
 m = [0.9, 0.01, 0.02, 0.8, 12.0, 0.5, 0.3, 15.0]
 spectral_radius = 0.6
+worst_spectral_radius = 0.7
 
 [drive]
 duty_torque_nm = 0.52
@@ -86,9 +89,11 @@ max_duty = 0.5
 energy_margin = 0.2
 start_below_energy_ratio = 0.005
 start_acceleration = 20.0
+pump_arm_deg = 45.0
 
 [catch]
 catch_deg = 25.0
+entry_duty_ratio = 0.5
 release_deg = 42.0
 settle_s = 1.0
 fall_deg = 40.0
@@ -178,22 +183,25 @@ TEST(ControllerFile, AWholeFileIsTheSpecTheBalanceLawRuns) {
   EXPECT_EQ(s.swing_up.start_acceleration, 20.0);
   const double deg = std::numbers::pi / 180.0;
   EXPECT_EQ(s.region.catch_rad, 25.0 * deg);
+  EXPECT_EQ(s.region.entry_duty_ratio, 0.5);
+  EXPECT_EQ(s.swing_up.pump_arm_rad, 45.0 * deg);
   EXPECT_EQ(s.region.release_rad, 42.0 * deg);
   EXPECT_EQ(s.region.settle_s, 1.0);
   EXPECT_EQ(s.region.fall_rad, 40.0 * deg);
   const std::array<double, 8> m = {0.9, 0.01, 0.02, 0.8, 12.0, 0.5, 0.3, 15.0};
   EXPECT_EQ(s.observer_gain, m);
-  // The filter's plant is the file's model sampled as the design sampled it.
-  const control::SampledPlant sampled =
-      control::sample(control::linearize_upright(s.parameters, {s.duty_torque_nm, s.back_emf_nm_s}),
-                      s.period_s, f.lag_s + f.ramp_lag_s);
-  ASSERT_EQ(sampled.phi.rows(), 5);
-  for (int i = 0; i < 5; ++i) {
-    EXPECT_EQ(s.gamma[static_cast<std::size_t>(i)], sampled.gamma(i));
-    for (int j = 0; j < 5; ++j) {
-      EXPECT_EQ(s.phi[static_cast<std::size_t>(i * control::kMaxGains + j)], sampled.phi(i, j));
+  // The filter's model is the file's, linearised as the design linearised it, its duties taken
+  // after the data path's lag and ramped to as the board does.
+  const control::LinearPlant linear =
+      control::linearize_upright(s.parameters, {s.duty_torque_nm, s.back_emf_nm_s});
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(s.b_continuous[static_cast<std::size_t>(i)], linear.b(i));
+    for (int j = 0; j < 4; ++j) {
+      EXPECT_EQ(s.a_continuous[static_cast<std::size_t>(i * 4 + j)], linear.a(i, j));
     }
   }
+  EXPECT_EQ(s.duty_path.lag_s, 0.002);
+  EXPECT_EQ(s.duty_path.ramp_duty_per_s, 62.5);
   control::BalanceLaw law(s);
   EXPECT_EQ(law.spec().gain, gain);
   // Hanging at rest the law starts the swing with a whole number of duty steps.
@@ -255,6 +263,8 @@ TEST(ControllerFile, EveryMistakeNamesTheFileTheLineAndTheKey) {
        "parameters.source", "'guess' is not one of: output-error, lsmi, cad"},
       {"a digest that is not one", with_line("results_sha256 =", "results_sha256 = \"abc\""),
        line_of("results_sha256"), "parameters.results_sha256", "must be 64 lowercase hex digits"},
+      {"a negative ramp", with_line("ramp_duty_per_s =", "ramp_duty_per_s = -1.0"),
+       line_of("ramp_duty_per_s"), "controller.ramp_duty_per_s", "must be >= 0"},
       {"a negative lag", with_line("lag_s =", "lag_s = -0.002"), line_of("lag_s"),
        "controller.lag_s", "must be >= 0"},
       {"a lag past four periods", with_line("lag_s =", "lag_s = 0.07"), line_of("ramp_lag_s"),
@@ -272,6 +282,16 @@ TEST(ControllerFile, EveryMistakeNamesTheFileTheLineAndTheKey) {
       {"a filter that does not converge",
        with_line("spectral_radius = 0.6", "spectral_radius = 1.0"),
        line_of("spectral_radius = 0.6"), "observer.spectral_radius", "must be in [0, 1)"},
+      {"a filter that diverges at some reading age",
+       with_line("worst_spectral_radius =", "worst_spectral_radius = 1.3"),
+       line_of("worst_spectral_radius"), "observer.worst_spectral_radius", "must be in [0, 1)"},
+      {"a gain for angles older than a period",
+       with_line("reading_age_s =", "reading_age_s = 0.02"), line_of("reading_age_s"),
+       "observer.reading_age_s", "must be in [0, the period]"},
+      // A file from before the filter corrected the last sample's state: its gain means another
+      // thing, so it is refused, not run.
+      {"a filter gain without its reading age", with_line("reading_age_s =", ""),
+       line_of("[observer]"), "observer.reading_age_s", "missing"},
       {"a count of 0", with_line("pendulum_count_rad =", "pendulum_count_rad = 0.0"),
        line_of("pendulum_count_rad"), "observer.pendulum_count_rad", "must be > 0"},
       // What the balance law refuses, at the key the value came from.
@@ -288,6 +308,11 @@ TEST(ControllerFile, EveryMistakeNamesTheFileTheLineAndTheKey) {
        "catch.release_deg", "must be in (catch_rad, pi)"},
       {"catch at a right angle", with_line("catch_deg =", "catch_deg = 90.0"), line_of("catch_deg"),
        "catch.catch_deg", "must be in (0, pi/2)"},
+      {"a catch that asks for more than the limit",
+       with_line("entry_duty_ratio =", "entry_duty_ratio = 1.5"), line_of("entry_duty_ratio"),
+       "catch.entry_duty_ratio", "must be in (0, 1]"},
+      {"a pump that stops beyond a half turn", with_line("pump_arm_deg =", "pump_arm_deg = 200.0"),
+       line_of("pump_arm_deg"), "swing_up.pump_arm_deg", "must be in (0, pi)"},
       {"a fall inside the catch", with_line("fall_deg =", "fall_deg = 20.0"), line_of("fall_deg"),
        "catch.fall_deg", "must be in [catch_rad, pi)"},
       {"a negative inertia", with_line("mu1 =", "mu1 = -0.0048"), line_of("mu1"), "parameters.mu1",

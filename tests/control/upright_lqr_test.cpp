@@ -137,9 +137,10 @@ TEST(UprightLqr, TheGainBalancesTheNonlinearPendulumWithLagSaturationAndQuantisa
   EXPECT_GT(largest_duty, 0.0);
 }
 
-// The filter on the sampled plant it was designed for: its error dynamics converge, and from a
-// wrong start (velocities unknown) its estimate of the true state, fed the exact angles and the
-// duties sent, closes in on it: the velocities it gives the gain are the plant's.
+// The filter on the sampled plant it was designed for: its error dynamics converge at every
+// reading age within a period, and from a wrong start (velocities unknown) its estimate of the
+// true state, fed the exact angles at each sample and the duties sent, closes in on it: the
+// velocities it gives the gain are the plant's.
 TEST(UprightLqr, TheFilterRecoversTheVelocitiesFromTheAngles) {
   const DesignPlant plant = simulated_rig();
   const SampledPlant s = sample(linearize_upright(plant), 0.016, 0.002);
@@ -149,6 +150,8 @@ TEST(UprightLqr, TheFilterRecoversTheVelocitiesFromTheAngles) {
   const ObserverGain filter = design_observer(s, weights);
   EXPECT_GT(filter.spectral_radius, 0.0);
   EXPECT_LT(filter.spectral_radius, 1.0);
+  EXPECT_GE(filter.worst_spectral_radius, filter.spectral_radius);
+  EXPECT_LT(filter.worst_spectral_radius, 1.0);
 
   const BalanceGain gain = design_lqr(s, LqrWeights{});
   Eigen::VectorXd z = Eigen::VectorXd::Zero(5);
@@ -156,20 +159,24 @@ TEST(UprightLqr, TheFilterRecoversTheVelocitiesFromTheAngles) {
   Eigen::Vector4d estimate(z(0), z(1), 0.0, 0.0);  // the angles only
   double duty = 0;
   for (int k = 0; k < 60; ++k) {
-    // The loop: predict with the duties sent, correct with this sample's angles, decide.
-    Eigen::VectorXd previous(5);
-    previous << estimate, z(4);
+    // The loop: the angles read at this sample (age 0) correct the last sample's prediction,
+    // which the model then carries to this sample with the duties sent; then the gain decides.
     const double sent = duty;
+    Eigen::VectorXd last(5);
+    last << estimate, z(4);
     z = s.phi * z + s.gamma * sent;
-    const Eigen::VectorXd predicted = s.phi * previous + s.gamma * sent;
+    const Eigen::VectorXd predicted = s.phi * last + s.gamma * sent;
     const Eigen::Vector2d innovation(z(0) - predicted(0), z(1) - predicted(1));
-    estimate = predicted.head<4>() + filter.m * innovation;
+    last.head<4>() += filter.m * innovation;
+    estimate = (s.phi * last + s.gamma * sent).head<4>();
     Eigen::VectorXd used(5);
     used << estimate, z(4);
     duty = -(gain.k * used)(0);
   }
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(estimate(i), z(i), 1e-6) << i;
   EXPECT_THROW(design_observer(s, ObserverWeights{}), std::invalid_argument);  // no counts
+  weights.reading_age_s = 0.017;  // older than a period: not a reading of this cycle
+  EXPECT_THROW(design_observer(s, weights), std::invalid_argument);
 }
 
 TEST(UprightLqr, TheDriveConstantsAreEq4AtTheSupply) {

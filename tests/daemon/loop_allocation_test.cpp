@@ -238,9 +238,9 @@ TEST(LoopAllocation, BalanceSessionDoesNotAllocateOnTheLoopThread) {
   control::ObserverWeights filter;
   filter.arm_count_rad = bridge::resolution_rad(s.config.arm_encoder);
   filter.pendulum_count_rad = bridge::resolution_rad(s.config.pendulum_encoder);
-  request.balance_law = control::BalanceLaw(
-      control::balance_spec(plant, sampled, control::design_lqr(sampled, control::LqrWeights{}),
-                            control::design_observer(sampled, filter), 0.5, 1.0 / 255));
+  request.balance_law = control::BalanceLaw(control::balance_spec(
+      plant, sampled, control::design_lqr(sampled, control::LqrWeights{}),
+      control::design_observer(sampled, filter), control::DutyPath{0.002, 62.5}, 0.5, 1.0 / 255));
   CountedRun run(s, 50);
   ASSERT_TRUE(run.loop.request_session(request));
   run.run();

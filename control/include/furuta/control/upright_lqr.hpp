@@ -53,6 +53,7 @@ LinearPlant linearize_upright(const model::Parameters<double>& parameters,
 // a duty computed at sample k reaches the board lag_s later and is held until the next one
 // arrives. `delayed` is how many earlier duties z carries (ceil(lag / period), 0 without lag).
 struct SampledPlant {
+  LinearPlant continuous;  // what was sampled
   Eigen::MatrixXd phi;
   Eigen::VectorXd gamma;
   double period_s = 0;
@@ -104,26 +105,34 @@ struct ObserverWeights {
   double pendulum_acceleration_sd = 2.0;
   double arm_count_rad = 0;  // the encoders' resolutions at the joints
   double pendulum_count_rad = 0;
+  // The angles of a cycle were read this long before its sample, typically (within [0, period]):
+  // the gain is designed for it; the loop takes each reading's own age.
+  double reading_age_s = 0;
 };
 struct ObserverGain {
-  // x^ = x^- + m (y - C x^-), y = [q1, q2 - pi]: the correction of the predicted state by the
-  // measured angles.
+  // x^ = x^- + m (y - y^), y = [q1, q2 - pi], y^ = C e^(A (T - age)) x^- (the duties known): the
+  // correction of the last sample's predicted state by the angles read since.
   Eigen::Matrix<double, 4, 2> m = Eigen::Matrix<double, 4, 2>::Zero();
-  double spectral_radius = 0;  // of the estimation error's dynamics, (I - m C) A; < 1
+  double reading_age_s = 0;
+  // Of the estimation error's dynamics, phi (I - m H): at the design's age, and the largest over
+  // readings of any age in [0, period] (the gain fixed, the age each cycle's own); both < 1.
+  double spectral_radius = 0;
+  double worst_spectral_radius = 0;
 };
-// Throws std::invalid_argument for weights or counts that are not finite and > 0, and
-// std::runtime_error when the filter's Riccati recursion does not settle.
+// Throws std::invalid_argument for weights or counts that are not finite and > 0 or an age outside
+// [0, period], and std::runtime_error when the filter's Riccati recursion does not settle.
 ObserverGain design_observer(const SampledPlant& plant, const ObserverWeights& weights);
 
-// What the loop runs (balance_law.hpp) for a design: the gain and the sampled plant (period,
-// delayed duties, phi and gamma for the filter), the filter's gain, the plant's parameters and
-// drive, the swing-up's and catch region's defaults, the duty limit and step, the swing-up never
-// asking for more than max_duty. Throws std::invalid_argument when the plant carries more duties
-// than the law can.
 // The spec's continuous plant (a_continuous, b_continuous) from `plant`.
 void set_continuous_plant(const LinearPlant& plant, BalanceControllerSpec& spec);
+// What the loop runs (balance_law.hpp) for a design: the gain, the filter's gain and the model it
+// predicts with (the sampled plant's continuous one, the duty path as the board takes duties:
+// its lag and ramp, which the design saw as one lag), the plant's parameters and drive, the
+// swing-up's and catch region's defaults, the duty limit and step, the swing-up never asking for
+// more than max_duty. Throws std::invalid_argument when the plant carries more duties than the
+// law can.
 BalanceControllerSpec balance_spec(const DesignPlant& plant, const SampledPlant& sampled,
                                    const BalanceGain& gain, const ObserverGain& observer,
-                                   double max_duty, double duty_step);
+                                   const DutyPath& duty_path, double max_duty, double duty_step);
 
 }  // namespace furuta::control

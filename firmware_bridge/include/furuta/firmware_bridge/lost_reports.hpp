@@ -3,6 +3,8 @@
 
 #include <cstdint>
 
+#include "furuta/firmware_bridge/phidget_ids.hpp"
+
 namespace furuta::bridge {
 
 // 1065: the u8 packet counter goes up by one per report.
@@ -33,7 +35,7 @@ class PacketCounterTracker1065 {
 // lag in whole report periods, exactly as a loss does: the tracker would count false losses.
 class ReportTimingTracker1047 {
  public:
-  ReportTimingTracker1047(double tick_seconds, std::int64_t report_period_ns = 8'000'000,
+  ReportTimingTracker1047(double tick_seconds, std::int64_t report_period_ns = kReportPeriodNs,
                           int block_reports = 8);
   // Reports found lost at this observation (they happened earlier, within the last two blocks).
   int observe(std::uint32_t packet_time_ticks, std::int64_t host_time_ns);

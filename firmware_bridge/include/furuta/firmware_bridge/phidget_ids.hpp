@@ -16,6 +16,9 @@ inline constexpr std::uint16_t kProductEncoder1057 = 0x0080;
 inline constexpr std::uint16_t kProductMotorControl1064 = 0x0059;
 inline constexpr std::uint16_t kProductMotorControl1060 = 0x0058;
 
+// The 1065 and the 1047 each send an input report every 8 ms.
+inline constexpr std::int64_t kReportPeriodNs = 8'000'000;
+
 // "1065 MotorControl 1-Motor", ..., or "unknown Phidget" for other product ids.
 std::string_view phidget_product_name(std::uint16_t product_id);
 
