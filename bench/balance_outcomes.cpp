@@ -6,6 +6,7 @@
 //
 //   balance_outcomes [--results tests/data/golden/results.json] [--seeds 10] [--duration 70]
 //                    [--jitter-ns 0] [--angle-noise-rad 0] [--tap-mnm-s X --tap-at-s T]
+//                    [--period-ms 16]
 //
 // Figures, never pass/fail: docs/control.md keeps the table with this command.
 #include <toml++/toml.h>
@@ -32,11 +33,14 @@ struct RigChanges {
   double angle_noise_rad = 0;
   double tap_mnm_s = 0;
   double tap_at_s = 40;
+  std::int64_t period_ms = 0;  // 0: the shipped [daemon] period_ms
 };
 
-// The shipped configuration with the simulated rig's seed, USB jitter, encoder noise and taps.
+// The shipped configuration with the loop's period, the simulated rig's seed, USB jitter, encoder
+// noise and taps.
 fs::path configuration(const fs::path& dir, std::int64_t seed, const RigChanges& c) {
   toml::table rig = toml::parse_file(FURUTA_SOURCE_DIR "/config/rig.toml");
+  if (c.period_ms > 0) rig["daemon"].as_table()->insert_or_assign("period_ms", c.period_ms);
   toml::table& sim = *rig["simulation"].as_table();
   sim.insert_or_assign("seed", seed);
   sim.insert_or_assign("usb_latency_jitter_ns", c.jitter_ns);
@@ -67,6 +71,9 @@ int main(int argc, char** argv) {
                  "[simulation] arm_ and pendulum_angle_noise_rad (the seed draws it)");
   app.add_option("--tap-mnm-s", changes.tap_mnm_s, "A tap on the pendulum, mN m s (0: none)");
   app.add_option("--tap-at-s", changes.tap_at_s, "When the tap comes, s after the rig starts");
+  app.add_option("--period-ms", changes.period_ms,
+                 "[daemon] period_ms, for the design and the sessions (default: the shipped one)")
+      ->check(CLI::Range(1, 1000));
   CLI11_PARSE(app, argc, argv);
 
   const fs::path dir = fs::temp_directory_path() / ("balance_outcomes." + std::to_string(getpid()));
@@ -80,7 +87,7 @@ int main(int argc, char** argv) {
     app::ControllerDesignOptions design;
     design.results = results;
     design.parameters = source;
-    design.config_path = FURUTA_SOURCE_DIR "/config/rig.toml";
+    design.config_path = configuration(dir, 1, changes);
     design.output = dir / (std::string(app::to_string(source)) + ".toml");
     std::ostringstream out, err;
     if (app::run_controller_design_command(design, out, err) != 0) {
