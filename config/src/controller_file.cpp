@@ -185,6 +185,11 @@ void read_observer_table(Section& s, ControllerFile& f) {
   }
   // The gain corrects the last sample's state with the angles read since: a gain designed for
   // another reading (older files corrected this sample's) is refused by this key's absence.
+  if (!s.has("reading_age_s")) {
+    s.fail("reading_age_s", nullptr,
+           "missing: the filter's gain of a file without it corrects another state than the loop's "
+           "filter does; design the controller again (furuta controller design)");
+  }
   const double period_s = f.spec.period_s;
   s.required_number(
       "reading_age_s", "the reading age the filter's gain is designed for",

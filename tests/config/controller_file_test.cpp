@@ -291,7 +291,9 @@ TEST(ControllerFile, EveryMistakeNamesTheFileTheLineAndTheKey) {
       // A file from before the filter corrected the last sample's state: its gain means another
       // thing, so it is refused, not run.
       {"a filter gain without its reading age", with_line("reading_age_s =", ""),
-       line_of("[observer]"), "observer.reading_age_s", "missing"},
+       line_of("[observer]"), "observer.reading_age_s",
+       "missing: the filter's gain of a file without it corrects another state than the loop's "
+       "filter does; design the controller again (furuta controller design)"},
       {"a count of 0", with_line("pendulum_count_rad =", "pendulum_count_rad = 0.0"),
        line_of("pendulum_count_rad"), "observer.pendulum_count_rad", "must be > 0"},
       // What the balance law refuses, at the key the value came from.
