@@ -101,8 +101,10 @@ BalanceGain design_lqr(const SampledPlant& plant, const LqrWeights& weights);
 // deviations (rad/s^2, held over each period), and each angle is read to within a count (a
 // uniform error of one count, variance count^2 / 12).
 struct ObserverWeights {
-  double arm_acceleration_sd = 10.0;
-  double pendulum_acceleration_sd = 2.0;
+  // Large enough that the model's own errors (parameters 10 % off, the linearisation while
+  // catching) sit inside them: a filter that trusts its model more holds no CAD-designed loop.
+  double arm_acceleration_sd = 30.0;
+  double pendulum_acceleration_sd = 10.0;
   double arm_count_rad = 0;  // the encoders' resolutions at the joints
   double pendulum_count_rad = 0;
   // The angles of a cycle were read this long before its sample, typically (within [0, period]):
