@@ -11,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -392,6 +393,37 @@ int run_chromium(const std::string& chromium, const fs::path& profile, const std
   return std::system(command.c_str());
 }
 
+// The page `html` measured in headless Chromium at 1280 x `height`: a copy with kCheckScript
+// (the report itself carries no script), its DOM dumped, the script's JSON read back. Nothing, and
+// `why`, when Chromium fails or the script did not run.
+std::optional<nlohmann::json> measured_in_browser(const std::string& chromium,
+                                                  const std::string& html, const fs::path& dir,
+                                                  int height, std::string& why) {
+  const fs::path checked = dir / "checked.html";
+  std::string with_script = html;
+  with_script.insert(with_script.rfind("</body>"), kCheckScript);
+  write_text(checked, with_script);
+  const fs::path dom = dir / "dom.html";
+  const int rc = run_chromium(chromium, dir / "profile",
+                              "--window-size=1280," + std::to_string(height) +
+                                  " --dump-dom 'file://" + checked.string() + "'",
+                              dom, dir / "chromium.log");
+  if (rc != 0) {
+    why = "chromium --dump-dom failed: " + read_text(dir / "chromium.log");
+    return std::nullopt;
+  }
+  const std::string dumped = read_text(dom);
+  const std::string open = "<pre id=\"report-check\">";
+  const std::size_t at = dumped.find(open);
+  if (at == std::string::npos) {
+    why = "the check script did not run: " + dumped.substr(0, 500);
+    return std::nullopt;
+  }
+  const std::size_t end = dumped.find("</pre>", at);
+  return nlohmann::json::parse(
+      unescape_text(dumped.substr(at + open.size(), end - at - open.size())));
+}
+
 TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
   const std::string chromium = chromium_command();
   ASSERT_FALSE(chromium.empty())
@@ -441,25 +473,12 @@ TEST(ReportInBrowser, ARealIdentificationRendersEveryFigureAndTable) {
   EXPECT_NE(printed.find("output error"), std::string::npos) << printed;
   EXPECT_NE(printed.find("held-out free run on"), std::string::npos) << printed;
 
-  // A copy with the measuring script: the report itself carries no script.
-  const fs::path checked = dir.path() / "checked.html";
-  std::string with_script = html;
-  with_script.insert(with_script.rfind("</body>"), kCheckScript);
-  write_text(checked, with_script);
-  const fs::path dom = dir.path() / "dom.html";
   // Measured at the width of a common laptop screen.
-  const int rc =
-      run_chromium(chromium, dir.path() / "profile",
-                   "--window-size=1280,4000 --dump-dom 'file://" + checked.string() + "'", dom,
-                   dir.path() / "chromium.log");
-  ASSERT_EQ(rc, 0) << "chromium --dump-dom failed: " << read_text(dir.path() / "chromium.log");
-  const std::string dumped = read_text(dom);
-  const std::string open = "<pre id=\"report-check\">";
-  const std::size_t at = dumped.find(open);
-  ASSERT_NE(at, std::string::npos) << "the check script did not run: " << dumped.substr(0, 500);
-  const std::size_t end = dumped.find("</pre>", at);
-  const nlohmann::json check =
-      nlohmann::json::parse(unescape_text(dumped.substr(at + open.size(), end - at - open.size())));
+  std::string why;
+  const std::optional<nlohmann::json> measured =
+      measured_in_browser(chromium, html, dir.path(), 4000, why);
+  ASSERT_TRUE(measured.has_value()) << why;
+  const nlohmann::json& check = *measured;
 
   // Every figure drawn, with geometry.
   std::size_t signals = 0, fig6 = 0;
@@ -593,23 +612,11 @@ TEST(ReportInBrowser, ABalanceReportRendersItsFigureAndTable) {
   const std::string html = read_text(report);
   expect_self_contained(html);
 
-  const fs::path checked = dir.path() / "checked.html";
-  std::string with_script = html;
-  with_script.insert(with_script.rfind("</body>"), kCheckScript);
-  write_text(checked, with_script);
-  const fs::path dom = dir.path() / "dom.html";
-  const int rc =
-      run_chromium(chromium, dir.path() / "profile",
-                   "--window-size=1280,2000 --dump-dom 'file://" + checked.string() + "'", dom,
-                   dir.path() / "chromium.log");
-  ASSERT_EQ(rc, 0) << read_text(dir.path() / "chromium.log");
-  const std::string dumped = read_text(dom);
-  const std::string open = "<pre id=\"report-check\">";
-  const std::size_t at = dumped.find(open);
-  ASSERT_NE(at, std::string::npos) << "the check script did not run: " << dumped.substr(0, 500);
-  const std::size_t end = dumped.find("</pre>", at);
-  const nlohmann::json check =
-      nlohmann::json::parse(unescape_text(dumped.substr(at + open.size(), end - at - open.size())));
+  std::string why;
+  const std::optional<nlohmann::json> measured =
+      measured_in_browser(chromium, html, dir.path(), 2000, why);
+  ASSERT_TRUE(measured.has_value()) << why;
+  const nlohmann::json& check = *measured;
   ASSERT_EQ(check["figures"].size(), 1u);
   const auto& f = check["figures"][0];
   EXPECT_EQ(f["id"], "fig-balance-1");
