@@ -85,4 +85,52 @@ std::optional<IMatrix> frame_inverse(const Matrix& b) {
   return inverse_enclosure(b, approx, 0.5);
 }
 
+IMatrix exp_enclosure(const Matrix& a, Interval t) {
+  const auto n = static_cast<std::size_t>(a.rows());
+  IMatrix m(n);
+  if (!t.is_bounded()) {
+    for (Interval& e : m.v) e = Interval::empty();
+    return m;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      m(i, j) = Interval(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j))) * t;
+    }
+  }
+  // An upper bound of the infinity norm of every matrix in m.
+  const auto norm = [n](const IMatrix& x) {
+    double largest = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      Interval row(0.0);
+      for (std::size_t j = 0; j < n; ++j) row += abs(x(i, j));
+      largest = std::max(largest, row.hi());
+    }
+    return largest;
+  };
+  // Halving is exact (a power of two), so the scaled matrices are the exact a t / 2^s.
+  int squarings = 0;
+  for (double size = norm(m); size > 0.5; size = norm(m)) {
+    for (Interval& e : m.v) e = e * Interval(0.5);
+    ++squarings;
+  }
+  constexpr int kOrder = 20;
+  IMatrix sum(n);
+  IMatrix term(n);
+  for (std::size_t i = 0; i < n; ++i) sum(i, i) = term(i, i) = Interval(1.0);
+  for (int k = 1; k <= kOrder; ++k) {
+    term = term * m;
+    for (Interval& e : term.v) e = e / Interval(static_cast<double>(k));
+    for (std::size_t e = 0; e < n * n; ++e) sum.v[e] += term.v[e];
+  }
+  // |sum over k > N of M^k / k!| <= ||M||^(N+1) / (N+1)! / (1 - ||M|| / (N+2)) entrywise.
+  const Interval size(0.0, norm(m));
+  Interval tail = pow(size, kOrder + 1);
+  for (int k = 2; k <= kOrder + 1; ++k) tail = tail / Interval(static_cast<double>(k));
+  tail = tail / (Interval(1.0) - size / Interval(static_cast<double>(kOrder + 2)));
+  const Interval rest(-tail.hi(), tail.hi());
+  for (Interval& e : sum.v) e += rest;
+  for (int s = 0; s < squarings; ++s) sum = sum * sum;
+  return sum;
+}
+
 }  // namespace furuta::validated::detail

@@ -39,4 +39,10 @@ std::optional<IMatrix> inverse_enclosure(const Matrix& q, const Matrix& x, doubl
 // An interval enclosure of b^-1 (b invertible in practice: a QR or parallelepiped frame).
 std::optional<IMatrix> frame_inverse(const Matrix& b);
 
+// An interval matrix containing e^(a t) for every t in `t` (bounded, non-empty): the Taylor series
+// of a t / 2^s (scaled so that its infinity norm is at most 1/2) to order 20, the rest of the
+// series bounded by the norm's geometric tail on every entry, then squared s times, all in
+// outward-rounded interval arithmetic. Empty entries for an unbounded or empty t.
+IMatrix exp_enclosure(const Matrix& a, Interval t);
+
 }  // namespace furuta::validated::detail
