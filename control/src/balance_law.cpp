@@ -139,6 +139,30 @@ void BalanceLaw::reset() noexcept {
   applied_ = 0;
 }
 
+BalanceStep BalanceLaw::start_catch(const std::array<double, 4>& estimate) noexcept {
+  reset();
+  const double t = spec_.period_s;
+  arm_.add(estimate[0], 0.0);
+  arm_.rate = estimate[2];
+  pendulum_.add(estimate[1] + std::numbers::pi, 0.0);
+  pendulum_.rate = estimate[3];
+  clock_s_ = t;
+  mode_ = BalanceMode::catching;
+  estimating_ = true;
+  estimate_ = estimate;
+  BalanceStep out;
+  out.mode = mode_;
+  out.upright_error_rad = estimate[1];
+  out.arm_rate_rad_s = estimate[2];
+  out.pendulum_rate_rad_s = estimate[3];
+  const model::Parameters<double>& p = spec_.parameters;
+  out.energy_ratio =
+      (0.5 * p.mu4 * estimate[3] * estimate[3] + p.mug * (1 + std::cos(estimate[1]))) / (2 * p.mug);
+  out.duty = limit(gain_duty(estimate_));
+  sent_.back() = out.duty;
+  return out;
+}
+
 BalanceLaw::Carried BalanceLaw::propagate(const std::array<double, 4>* x, double applied,
                                           double after_s) const noexcept {
   // The duty sent n samples before the last reaches the board at lag - n T from the last sample

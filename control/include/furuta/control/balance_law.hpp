@@ -143,6 +143,11 @@ class BalanceLaw {
   // instant, both fresh); returns the duty to send now. Once fallen it returns 0.
   BalanceStep step(double arm_angle_rad, double pendulum_angle_rad,
                    const ReadingTimes& times = {}) noexcept;
+  // Takes over at this sample as if it had just caught the pendulum: catching, its filter's
+  // estimate of the state here `estimate` = [q1, q2 - pi, dq1, dq2], no duty on its way and the
+  // board applying none; returns the duty to send now (the gain on the estimate). The loop's
+  // verification starts the law so, and so does its sampled check.
+  BalanceStep start_catch(const std::array<double, 4>& estimate) noexcept;
   // Back to the first call's state (no velocities yet, no duties on their way, swinging up).
   void reset() noexcept;
 

@@ -1,0 +1,154 @@
+#include "affine_form.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+namespace furuta::verification::detail {
+
+namespace {
+
+// Sums of non-negative doubles, rounded to nearest, fall short of the exact sum by at most
+// n 2^-53 of it: every bound below is raised by this factor (n up to 2^20 terms) and by a
+// quantity above any total of underflows.
+constexpr double kRaise = 1.0 + 1e-9;
+constexpr double kUnderflow = 1e-290;
+constexpr double kUnit = std::numeric_limits<double>::epsilon() / 2;  // 2^-53
+
+double l1(const Eigen::VectorXd& v) {
+  return v.size() == 0 ? 0.0 : v.cwiseAbs().sum();
+}
+
+}  // namespace
+
+Interval range(const AffineForm& a) {
+  const double spread = (l1(a.coef) + a.err) * kRaise + kUnderflow;
+  return Interval(a.centre) + Interval(-spread, spread);
+}
+
+AffineForm Symbols::noise(const Interval& v) {
+  if (!v.is_bounded()) throw std::invalid_argument("noise symbol: the interval must be bounded");
+  AffineForm out;
+  out.centre = v.mid();
+  const double radius = v.rad();
+  if (radius > 0) {
+    out.coef = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(count_ + 1));
+    out.coef(static_cast<Eigen::Index>(count_)) = radius;
+    ++count_;
+  }
+  return out;
+}
+
+AffineForm Symbols::constant(double v) {
+  AffineForm out;
+  out.centre = v;
+  return out;
+}
+
+LinearCombination& LinearCombination::add(const Interval& k, const AffineForm& a) {
+  const double km = k.mid();
+  const double kr = k.rad();
+  const double size = (std::fabs(a.centre) + l1(a.coef)) * kRaise;
+  centre_ += km * a.centre;
+  if (a.coef.size() > coef_.size()) {
+    const Eigen::Index old = coef_.size();
+    coef_.conservativeResize(a.coef.size());
+    coef_.tail(a.coef.size() - old).setZero();
+  }
+  if (km != 0 && a.coef.size() > 0) coef_.head(a.coef.size()) += km * a.coef;
+  // |k| <= |km| + kr multiplies a's own error; kr multiplies all of a.
+  err_ += (std::fabs(km) + kr) * a.err * kRaise + kr * (size + a.err) * kRaise;
+  rounded_ += std::fabs(km) * size * kRaise;
+  ++terms_;
+  return *this;
+}
+
+AffineForm LinearCombination::result() const {
+  AffineForm out;
+  out.centre = centre_;
+  out.coef = coef_;
+  // Each coefficient and the centre are sums of terms_ products, each rounded once and summed
+  // with terms_ roundings: at most 2 terms_ 2^-53 (1 + ...) of the sum of |products|.
+  const double gamma = 2.2 * terms_ * kUnit;
+  out.err = (err_ + gamma * rounded_) * kRaise + kUnderflow;
+  return out;
+}
+
+void reduce(std::vector<AffineForm>& forms, Symbols& symbols, std::size_t max_symbols,
+            const CoordinateMap& to, const CoordinateMap& from) {
+  const std::size_t n = forms.size();
+  if (max_symbols < 3 * n)
+    throw std::invalid_argument("reduce: max_symbols below thrice the forms");
+  const std::size_t m = symbols.count();
+  const auto column = [&](std::size_t j) {
+    std::vector<Interval> g(n, Interval(0.0));
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::VectorXd& c = forms[i].coef;
+      if (static_cast<Eigen::Index>(j) < c.size()) g[i] = Interval(c(static_cast<Eigen::Index>(j)));
+    }
+    return g;
+  };
+  // Room for the n merged columns and the n error columns.
+  const std::size_t keep = std::min(m, max_symbols - 2 * n);
+  std::vector<std::size_t> order(m);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::vector<double> merged(n, 0.0);
+  const bool merging = m > keep;
+  if (merging) {
+    std::vector<std::vector<Interval>> y(m);
+    std::vector<double> score(m);
+    for (std::size_t j = 0; j < m; ++j) {
+      y[j] = to(column(j));
+      double sum = 0;
+      double largest = 0;
+      for (const Interval& v : y[j]) {
+        sum += v.mag();
+        largest = std::max(largest, v.mag());
+      }
+      score[j] = sum - largest;
+    }
+    std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
+                     [&](std::size_t a, std::size_t b) { return score[a] > score[b]; });
+    std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
+    std::vector<Interval> box(n, Interval(0.0));
+    for (std::size_t k = keep; k < m; ++k) {
+      for (std::size_t i = 0; i < n; ++i) box[i] += Interval(y[order[k]][i].mag());
+    }
+    for (std::size_t i = 0; i < n; ++i) merged[i] = box[i].hi();
+  }
+  // The merged box's columns in the forms' coordinates: their midpoints as generators, their
+  // radii into each form's error.
+  std::vector<std::vector<double>> back(n, std::vector<double>(n, 0.0));
+  std::vector<double> extra(n, 0.0);
+  for (std::size_t i = 0; i < n && merging; ++i) {
+    if (!(merged[i] > 0)) continue;
+    std::vector<Interval> unit(n, Interval(0.0));
+    unit[i] = Interval(merged[i]);
+    const std::vector<Interval> w = from(unit);
+    for (std::size_t r = 0; r < n; ++r) {
+      back[i][r] = w[r].mid();
+      extra[r] += w[r].rad() * kRaise;
+    }
+  }
+  const std::size_t total = keep + (merging ? n : 0) + n;
+  for (std::size_t r = 0; r < n; ++r) {
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(total));
+    const Eigen::VectorXd& old = forms[r].coef;
+    for (std::size_t k = 0; k < keep; ++k) {
+      const auto j = static_cast<Eigen::Index>(order[k]);
+      if (j < old.size()) c(static_cast<Eigen::Index>(k)) = old(j);
+    }
+    if (merging) {
+      for (std::size_t i = 0; i < n; ++i) c(static_cast<Eigen::Index>(keep + i)) = back[i][r];
+    }
+    c(static_cast<Eigen::Index>(keep + (merging ? n : 0) + r)) =
+        (forms[r].err + extra[r]) * kRaise + (forms[r].err + extra[r] > 0 ? kUnderflow : 0.0);
+    forms[r].coef = std::move(c);
+    forms[r].err = 0;
+  }
+  symbols.reset(total);
+}
+
+}  // namespace furuta::verification::detail

@@ -1,0 +1,261 @@
+#include "loop_maps.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include "furuta/validated/matrix_exponential.hpp"
+
+namespace furuta::verification::detail {
+
+namespace {
+
+// The top-right block (rows 0..3, columns 4..4+cols) of the exponential of [[a, b], [0, 0]] s:
+// int_0^s e^(a r) dr b.
+std::vector<Interval> integral_block(const Eigen::Matrix4d& a, const Eigen::MatrixXd& b,
+                                     const Interval& s) {
+  const auto cols = b.cols();
+  Eigen::MatrixXd big = Eigen::MatrixXd::Zero(4 + cols, 4 + cols);
+  big.topLeftCorner(4, 4) = a;
+  big.topRightCorner(4, cols) = b;
+  const std::vector<Interval> e = validated::exp_enclosure(big, s);
+  std::vector<Interval> out;
+  const auto n = static_cast<std::size_t>(4 + cols);
+  for (std::size_t i = 0; i < 4; ++i) {
+    for (std::size_t j = 0; j < static_cast<std::size_t>(cols); ++j)
+      out.push_back(e[i * n + 4 + j]);
+  }
+  return out;
+}
+
+IMatrix4 to_matrix(const std::vector<Interval>& v) {
+  IMatrix4 out;
+  std::copy_n(v.begin(), 16, out.begin());
+  return out;
+}
+
+IVector4 to_vector(const std::vector<Interval>& v) {
+  IVector4 out;
+  std::copy_n(v.begin(), 4, out.begin());
+  return out;
+}
+
+}  // namespace
+
+IVector4 StretchMaps::input_effect(double from, double to) const {
+  if (b_pieces.empty() || !(length_s > 0)) return over_b;
+  const double n = static_cast<double>(b_pieces.size());
+  // One piece more on each side than the fractions say: the pieces' own ends were rounded.
+  const double first = std::clamp(std::floor(from / length_s * n) - 1, 0.0, n - 1);
+  const double last = std::clamp(std::ceil(to / length_s * n), first, n - 1);
+  IVector4 out;
+  out.fill(Interval::empty());
+  for (auto k = static_cast<std::size_t>(first); k <= static_cast<std::size_t>(last); ++k) {
+    for (std::size_t i = 0; i < 4; ++i) out[i] = hull(out[i], b_pieces[k][i]);
+  }
+  return out;
+}
+
+IVector4 StretchMaps::effect_at(double from, double to) const {
+  const auto key = std::make_pair(from, to);
+  const auto found = effect_cache.find(key);
+  if (found != effect_cache.end()) return found->second;
+  IVector4 bi;
+  for (std::size_t i = 0; i < 4; ++i) bi[i] = Interval(b_vector(static_cast<Eigen::Index>(i)));
+  const IVector4 out =
+      multiply(to_matrix(validated::exp_enclosure(a_matrix, Interval(from, to))), bi);
+  effect_cache.emplace(key, out);
+  return out;
+}
+
+IVector4 StretchMaps::slope_at(double from, double to) const {
+  IVector4 bi;
+  for (std::size_t i = 0; i < 4; ++i) bi[i] = Interval(b_vector(static_cast<Eigen::Index>(i)));
+  const Eigen::Matrix4d ab = a_matrix;
+  IMatrix4 ai;
+  for (std::size_t e = 0; e < 16; ++e) {
+    ai[e] = Interval(ab(static_cast<Eigen::Index>(e / 4), static_cast<Eigen::Index>(e % 4)));
+  }
+  return multiply(ai,
+                  multiply(to_matrix(validated::exp_enclosure(a_matrix, Interval(from, to))), bi));
+}
+
+IVector4 multiply(const IMatrix4& m, const IVector4& x) {
+  IVector4 out;
+  for (std::size_t i = 0; i < 4; ++i) {
+    Interval sum(0.0);
+    for (std::size_t j = 0; j < 4; ++j) sum += m[i * 4 + j] * x[j];
+    out[i] = sum;
+  }
+  return out;
+}
+
+StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, double switch_s,
+                         double s) {
+  StretchMaps out;
+  out.length_s = s;
+  out.a_matrix = a;
+  out.b_vector = b;
+  out.phi = to_matrix(validated::exp_enclosure(a, Interval(s)));
+  const IVector4 whole = to_vector(integral_block(a, b, Interval(s)));
+  // The new duty acts over [switch, s]: e^(a (s - r)) b integrated there is the integral over
+  // r' in [0, s - switch]; the old one over the rest.
+  const double after = std::max(0.0, s - switch_s);
+  const IVector4 late = after > 0
+                            ? to_vector(integral_block(a, b, Interval(after)))
+                            : IVector4{Interval(0.0), Interval(0.0), Interval(0.0), Interval(0.0)};
+  for (std::size_t i = 0; i < 4; ++i) {
+    out.gamma_new[i] = late[i];
+    out.gamma_old[i] = whole[i] - late[i];
+  }
+  out.psi = to_matrix(integral_block(a, Eigen::Matrix4d::Identity(), Interval(s)));
+  IVector4 bi;
+  for (std::size_t i = 0; i < 4; ++i) bi[i] = Interval(b(static_cast<Eigen::Index>(i)));
+  out.psi_over = to_matrix(integral_block(a, Eigen::Matrix4d::Identity(), Interval(0.0, s)));
+  // The integral of |e^(a r)| as a sum over pieces of [0, s], each the piece's length times the
+  // largest |entry| over it.
+  std::array<Interval, 16> sum;
+  sum.fill(Interval(0.0));
+  std::array<Interval, 4> sum_b;
+  sum_b.fill(Interval(0.0));
+  // e^(a r) over [0, s] as the hull of its pieces': one interval exponential over all of [0, s]
+  // squares intervals of time and spreads far wider.
+  out.over = to_matrix(validated::exp_enclosure(a, Interval(0.0)));
+  for (int k = 0; k < kPieces && s > 0; ++k) {
+    const double from = s * k / kPieces;
+    const double to = k + 1 == kPieces ? s : s * (k + 1) / kPieces;
+    const std::vector<Interval> piece = validated::exp_enclosure(a, Interval(from, to));
+    const Interval length = Interval(to) - Interval(from);
+    for (std::size_t e = 0; e < 16; ++e) {
+      sum[e] += length * Interval(piece[e].mag());
+      out.over[e] = hull(out.over[e], piece[e]);
+    }
+    const IVector4 piece_b = multiply(to_matrix(piece), bi);
+    for (std::size_t i = 0; i < 4; ++i) sum_b[i] += length * Interval(piece_b[i].mag());
+  }
+  for (std::size_t e = 0; e < 16; ++e) out.abs_integral[e] = sum[e].hi();
+  for (std::size_t i = 0; i < 4; ++i) out.abs_integral_b[i] = sum_b[i].hi();
+  std::fill(out.over_b.begin(), out.over_b.end(), Interval::empty());
+  for (int k = 0; k < kPieces && s > 0; ++k) {
+    const double from = s * k / kPieces;
+    const double to = k + 1 == kPieces ? s : s * (k + 1) / kPieces;
+    const IVector4 piece_b =
+        multiply(to_matrix(validated::exp_enclosure(a, Interval(from, to))), bi);
+    for (std::size_t i = 0; i < 4; ++i) out.over_b[i] = hull(out.over_b[i], piece_b[i]);
+    out.b_pieces.push_back(piece_b);
+    StretchMaps::Piece maps;
+    maps.phi = to_matrix(validated::exp_enclosure(a, Interval(from, to)));
+    const Interval whole_r = Interval(from, to);
+    const IVector4 upto = to_vector(integral_block(a, b, whole_r));
+    const double late_from = std::max(0.0, from - switch_s);
+    const double late_to = std::max(0.0, to - switch_s);
+    const IVector4 late_r =
+        late_to > 0 ? to_vector(integral_block(a, b, Interval(late_from, late_to)))
+                    : IVector4{Interval(0.0), Interval(0.0), Interval(0.0), Interval(0.0)};
+    for (std::size_t i = 0; i < 4; ++i) {
+      maps.gamma_new[i] = late_r[i];
+      maps.gamma_old[i] = upto[i] - late_r[i];
+    }
+    out.pieces.push_back(maps);
+  }
+  if (!(s > 0)) out.over_b = bi;
+
+  out.psi_b_over = to_vector(integral_block(a, b, Interval(0.0, s)));
+  return out;
+}
+
+MomentumPlant momentum_plant(const model::Parameters<double>& centre, double kd, double kw) {
+  MomentumPlant out;
+  out.centre = centre;
+  out.kd = kd;
+  out.kw = kw;
+  // At q2 = pi: sin = 0, cos = -1.
+  out.mass << centre.mu1, -centre.mu3, -centre.mu3, centre.mu4;
+  out.inverse = out.mass.inverse();
+  const Eigen::Matrix2d& v = out.inverse;
+  out.a.block<2, 2>(0, 2) = v;
+  out.a.block<1, 2>(2, 2) = -(kw + centre.fv1) * v.row(0);
+  out.a(3, 1) = centre.mug;  // -mug sin(pi + e) = mug sin e
+  out.a.block<1, 2>(3, 2) = -centre.fv2 * v.row(1);
+  out.b(2) = kd;
+  return out;
+}
+
+namespace {
+
+struct MassOver {
+  Interval m11, m12, m22, det;
+};
+
+MassOver mass_over(const model::Parameters<Interval>& p, const Interval& error) {
+  const Interval q2 = Interval::pi() + error;
+  const Interval s = interval::sin(q2);
+  const Interval c = interval::cos(q2);
+  MassOver m;
+  m.m11 = p.mu1 + p.mu2 * interval::sqr(s);
+  m.m12 = p.mu3 * c;
+  m.m22 = p.mu4;
+  m.det = m.m11 * m.m22 - interval::sqr(m.m12);
+  return m;
+}
+
+}  // namespace
+
+std::array<Interval, 4> inverse_excess(const MomentumPlant& plant,
+                                       const model::Parameters<Interval>& p,
+                                       const Interval& error) {
+  const MassOver m = mass_over(p, error);
+  const Eigen::Matrix2d& v = plant.inverse;
+  return {m.m22 / m.det - v(0, 0), -(m.m12 / m.det) - v(0, 1), -(m.m12 / m.det) - v(1, 0),
+          m.m11 / m.det - v(1, 1)};
+}
+
+std::array<Interval, 4> mass_excess(const MomentumPlant& plant,
+                                    const model::Parameters<Interval>& p, const Interval& error) {
+  const MassOver m = mass_over(p, error);
+  const Eigen::Matrix2d& w = plant.mass;
+  return {m.m11 - w(0, 0), m.m12 - w(0, 1), m.m12 - w(1, 0), m.m22 - w(1, 1)};
+}
+
+std::array<Interval, 2> rate_excess(const MomentumPlant& plant,
+                                    const model::Parameters<Interval>& p, const Interval& error,
+                                    const std::array<Interval, 2>& rates) {
+  const MassOver m = mass_over(p, error);
+  const std::array<Interval, 4> dm = mass_excess(plant, p, error);
+  // (M - mass) rates, then -M^-1 = -[m22, -m12; -m12, m11] / det times it.
+  const Interval w1 = dm[0] * rates[0] + dm[1] * rates[1];
+  const Interval w2 = dm[2] * rates[0] + dm[3] * rates[1];
+  return {-((m.m22 * w1 - m.m12 * w2) / m.det), -((m.m11 * w2 - m.m12 * w1) / m.det)};
+}
+
+IVector4 momentum_remainder(const MomentumPlant& plant, const model::Parameters<Interval>& p,
+                            const Interval& kd, const Interval& kw, const IVector4& z,
+                            const std::array<Interval, 2>& rates, const Interval& u) {
+  const std::array<Interval, 2> excess = rate_excess(plant, p, z[1], rates);
+  const Interval extra1 = excess[0];
+  const Interval extra2 = excess[1];
+  const Interval linear1 = rates[0];
+  const Interval linear2 = rates[1];
+  const Interval dq1 = linear1 + extra1;
+  const Interval dq2 = linear2 + extra2;
+  const model::Parameters<double>& c = plant.centre;
+  const Interval damping = kw + p.fv1;
+  const Interval damping_centre = Interval(plant.kw) + Interval(c.fv1);
+  IVector4 d;
+  d[0] = extra1;
+  d[1] = extra2;
+  d[2] = (kd - Interval(plant.kd)) * u - damping * extra1 - (damping - damping_centre) * linear1;
+  // dq' (dM/dq2) dq / 2 = mu2 s c dq1^2 - mu3 s dq1 dq2; -mug sin(pi + e) = mug sin e, and
+  // |sin e - e| <= |e|^3 / 6.
+  const Interval q2 = Interval::pi() + z[1];
+  const Interval s = interval::sin(q2);
+  const Interval co = interval::cos(q2);
+  const double e = z[1].mag();
+  const Interval cubic =
+      Interval(-1.0, 1.0) * (Interval(e) * Interval(e) * Interval(e) / Interval(6.0));
+  d[3] = p.mu2 * s * co * interval::sqr(dq1) - p.mu3 * s * dq1 * dq2 + p.mug * cubic +
+         (p.mug - Interval(c.mug)) * z[1] - p.fv2 * extra2 - (p.fv2 - Interval(c.fv2)) * linear2;
+  return d;
+}
+
+}  // namespace furuta::verification::detail

@@ -1,0 +1,679 @@
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "affine_form.hpp"
+#include "furuta/control/upright_lqr.hpp"
+#include "furuta/verification/balance_certificate.hpp"
+#include "loop_maps.hpp"
+
+namespace furuta::verification {
+
+namespace {
+
+using detail::AffineForm;
+using detail::IMatrix4;
+using detail::IVector4;
+using detail::LinearCombination;
+using detail::StretchMaps;
+using detail::Symbols;
+using Forms4 = std::array<AffineForm, 4>;
+
+// The law's own arithmetic (its filter's series, products and sums in double) is taken to be
+// within this fraction of the magnitudes it works on: far above its rounding (some hundred
+// operations of 2^-53 each), so the law's results lie in the exact ones' enclosure widened by it.
+constexpr double kLawRelativeError = 1e-10;
+constexpr double kLawAbsoluteError = 1e-15;
+
+// An enclosure that stops growing inwards is inflated by this fraction of its width per try.
+constexpr double kInflation = 0.1;
+constexpr int kEnclosureTries = 30;
+
+Interval symmetric(double radius) {
+  return Interval(-radius, radius);
+}
+
+AffineForm difference(const AffineForm& a, const AffineForm& b) {
+  return LinearCombination().add(a).add(Interval(-1.0), b).result();
+}
+
+StateBox ranges(const Forms4& x) {
+  StateBox out;
+  for (std::size_t i = 0; i < 4; ++i) out[i] = detail::range(x[i]);
+  return out;
+}
+
+bool bounded(const StateBox& x) {
+  return std::all_of(x.begin(), x.end(), [](const Interval& v) { return v.is_bounded(); });
+}
+
+// An error of the duty against the one switching from `old` to `new` at the nominal switch: its
+// L1 norm and the instants it can fall in, [from_s, to_s] after the sample.
+struct InputErrorPart {
+  double l1 = 0;
+  double from_s = 0;
+  double to_s = 0;
+  bool fixed = false;  // the same instants every period (the lag's interval): computed exactly
+};
+
+// The ramp from `old` to `new` against the step: rho = int (ramp - step) = -g |g| / (2 rate),
+// g = new - old, as an affine form in g (its best linear approximation over g's range and the
+// rest in a symbol of its own), so that the plant's ramp and the law's model of it are the same
+// quantity and their difference cancels.
+struct SharedRamp {
+  AffineForm rho;
+  double bound = 0;  // |rho| at most
+  // |g|^3 / (6 rate^2) at most: the ramp's first moment about its start, int s |ramp - step| ds,
+  // which bounds what the change of e^(a r) b over the ramp adds.
+  double moment = 0;
+};
+SharedRamp shared_ramp(const AffineForm& gap, double rate, Symbols& symbols) {
+  const Interval g = detail::range(gap);
+  const double a = g.lo();
+  const double b = g.hi();
+  // g |g| in alpha g + beta + [-err, err] over [a, b].
+  Interval alpha(0.0);
+  Interval beta(0.0);
+  Interval err(0.0);
+  if (a >= 0 || b <= 0) {
+    // g^2 over [a, b] lies between its secant, (a + b) g - a b, and the tangent parallel to it,
+    // (a + b) g - (a + b)^2 / 4; for b <= 0, g |g| = -g^2.
+    const Interval sum = Interval(a) + Interval(b);
+    const Interval upper = -(Interval(a) * Interval(b));
+    const Interval lower = -(interval::sqr(sum) / Interval(4.0));
+    const Interval centre = (upper + lower) / Interval(2.0);
+    const Interval radius = (upper - lower) / Interval(2.0);
+    const double sign = a >= 0 ? 1.0 : -1.0;
+    alpha = Interval(sign) * sum;
+    beta = Interval(sign) * centre;
+    err = Interval(radius.mag());
+  } else {
+    // Odd over [-G, G]: alpha = 2 (sqrt 2 - 1) G leaves at most (3 - 2 sqrt 2) G^2.
+    const double big = std::max(-a, b);
+    alpha = Interval(0.8284271247461900) * Interval(big);
+    err = Interval(0.1716) * interval::sqr(Interval(big));
+  }
+  const Interval scale = Interval(-1.0) / (Interval(2.0) * Interval(rate));
+  const Interval rest = scale * (beta + Interval(-err.hi(), err.hi()));
+  SharedRamp out;
+  out.rho = LinearCombination().add(scale * alpha, gap).add(symbols.noise(rest)).result();
+  out.bound = (interval::sqr(Interval(g.mag())) / (Interval(2.0) * Interval(rate))).hi();
+  out.moment =
+      (interval::pow(Interval(g.mag()), 3) / (Interval(6.0) * interval::sqr(Interval(rate)))).hi();
+  return out;
+}
+
+// The board (or the law's model of it) applying `applied` at the sample: it ramps towards `old`
+// until the switch (an error of at most gap^2 / 2 rate over [0, gap / rate]), then towards `new`
+// from wherever it was (gap^2 / 2 rate again, from the switch on), the switch itself anywhere in
+// [switch_lo, switch_hi] (the largest gap over the half-width of that interval). When the duty
+// applied at the sample is `old` itself, the ramp to `new` is `ramp` (shared), over `window`.
+struct InputError {
+  std::vector<InputErrorPart> parts;
+  const SharedRamp* ramp = nullptr;
+  Interval switch_s;  // when the ramp starts
+  double ramp_from_s = 0;
+  double ramp_to_s = 0;
+  double settle_gap = 0;  // how far from `new` the applied duty can be when it starts ramping to it
+};
+InputError input_error(const AffineForm& applied, const AffineForm& old_duty,
+                       const AffineForm& new_duty, double rate, const Interval& switch_s,
+                       const SharedRamp* ramp) {
+  const double to_old = detail::range(difference(applied, old_duty)).mag();
+  const double to_new = std::max(detail::range(difference(applied, new_duty)).mag(),
+                                 detail::range(difference(old_duty, new_duty)).mag());
+  const double largest = std::max(to_old, to_new);
+  const auto ramp_l1 = [&](double gap) {
+    if (!(rate > 0)) return Interval(0.0);
+    return interval::sqr(Interval(gap)) / (Interval(2.0) * Interval(rate));
+  };
+  const auto ramp_s = [&](double gap) {
+    return rate > 0 ? (Interval(gap) / Interval(rate)).hi() : 0.0;
+  };
+  InputError out;
+  out.settle_gap = to_new;
+  out.parts.push_back({ramp_l1(to_old).hi(), 0.0, std::min(ramp_s(to_old), switch_s.hi())});
+  const double ramp_end = (Interval(switch_s.hi()) + Interval(ramp_s(to_new))).hi();
+  const Interval jitter = Interval(switch_s.rad()) * Interval(largest);
+  // Settled at the sample (the applied duty is `old`, to rounding): the ramp to `new` starts
+  // from `old`, the shared ramp.
+  if (ramp != nullptr && rate > 0 && to_old <= 1e-12 * std::max(to_new, 1e-300)) {
+    out.parts.push_back({jitter.hi(), switch_s.lo(), switch_s.hi(), true});
+    out.ramp = ramp;
+    out.switch_s = switch_s;
+    out.ramp_from_s = switch_s.lo();
+    out.ramp_to_s = ramp_end;
+  } else {
+    out.parts.push_back({(jitter + ramp_l1(to_new)).hi(), switch_s.lo(), ramp_end});
+  }
+  return out;
+}
+
+// What a disturbance d (in `d` at every instant) and the input's errors add to the state over
+// [0, s]: psi mid(d) + int |e^(a r)| dr |d - mid(d)| [-1, 1] + the errors through e^(a r) b.
+IVector4 disturbance(const StretchMaps& m, const IVector4& d, const InputError& input) {
+  IVector4 out;
+  const double s = m.length_s;
+  for (std::size_t i = 0; i < 4; ++i) {
+    Interval sum(0.0);
+    for (std::size_t j = 0; j < 4; ++j) {
+      const double mid = d[j].mid();
+      sum += m.psi[i * 4 + j] * Interval(mid) +
+             symmetric((Interval(m.abs_integral[i * 4 + j]) * Interval((d[j] - mid).mag())).hi());
+    }
+    out[i] = sum;
+  }
+  // A shared ramp not over by s reaches the state only in part: its bound as an error.
+  std::vector<InputErrorPart> parts = input.parts;
+  if (input.ramp != nullptr && input.ramp_to_s > s) {
+    parts.push_back({input.ramp->bound, input.ramp_from_s, input.ramp_to_s});
+  }
+  for (const InputErrorPart& part : parts) {
+    if (!(part.l1 > 0) || part.from_s >= s) continue;
+    // An error at instant tau reaches the state at s through e^(a (s - tau)) b.
+    const IVector4 effect = part.fixed && part.to_s <= s
+                                ? m.effect_at(s - part.to_s, s - part.from_s)
+                                : m.input_effect(std::max(0.0, s - part.to_s), s - part.from_s);
+    for (std::size_t i = 0; i < 4; ++i) out[i] += effect[i] * symmetric(part.l1);
+  }
+  return out;
+}
+
+// The state at s from the sample, the duty `old` held before the switch and `new` after it:
+// the exact linear maps, plus what the model adds beyond them (`added`, an interval vector
+// carried by fresh symbols).
+Forms4 carried(const StretchMaps& m, const Forms4& x, const AffineForm& old_duty,
+               const AffineForm& new_duty, IVector4 added, const InputError& input,
+               Symbols& symbols) {
+  // The shared ramp, when over by s: it reaches the state at s through e^(a (s - tau)) b, tau
+  // over the ramp; that is e^(a (s - switch)) b rho, plus at most |a e^(a r) b| times the ramp's
+  // first moment (the change of e^(a r) b over the ramp, by the mean value theorem). Its
+  // midpoint carries the ramp's form, the rest is an error.
+  const bool ramp = input.ramp != nullptr && input.ramp_to_s <= m.length_s;
+  IVector4 effect{Interval(0.0), Interval(0.0), Interval(0.0), Interval(0.0)};
+  if (ramp) {
+    const double s = m.length_s;
+    effect = m.effect_at(s - input.switch_s.hi(), s - input.switch_s.lo());
+    const IVector4 slope = m.slope_at(std::max(0.0, s - input.ramp_to_s), s - input.switch_s.lo());
+    for (std::size_t i = 0; i < 4; ++i) {
+      added[i] += (effect[i] - effect[i].mid()) * symmetric(input.ramp->bound) +
+                  Interval(slope[i].mag()) * symmetric(input.ramp->moment);
+    }
+  }
+  Forms4 out;
+  for (std::size_t i = 0; i < 4; ++i) {
+    LinearCombination row;
+    for (std::size_t j = 0; j < 4; ++j) row.add(m.phi[i * 4 + j], x[j]);
+    row.add(m.gamma_old[i], old_duty).add(m.gamma_new[i], new_duty);
+    if (ramp) row.add(Interval(effect[i].mid()), input.ramp->rho);
+    if (!(added[i].lo() == 0 && added[i].hi() == 0)) row.add(symbols.noise(added[i]));
+    out[i] = row.result();
+  }
+  return out;
+}
+
+// Whether the duty applied at the period's end is `new` for certain: the ramp to it starts by
+// switch_s from a gap of at most `gap`.
+bool settled(double switch_s, double gap, double rate, double period_s) {
+  if (!(rate > 0)) return true;
+  return (Interval(switch_s) + Interval(gap) / Interval(rate)).hi() <= period_s;
+}
+
+std::optional<Failure> outside(FailureKind kind, double t_s, const Interval& value, double limit) {
+  if (!value.is_bounded() || !(value.mag() < limit)) return Failure{kind, t_s, value, limit};
+  return std::nullopt;
+}
+
+void check_arguments(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                     const LoopStart& start, const VerifyOptions& options) {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("verify_balance: " + what);
+  };
+  const double t = law.period_s;
+  if (law.delayed > 1) fail("the law carries more than one duty on its way (lag beyond a period)");
+  if (!(law.duty_path.lag_s <= t)) fail("the law's lag exceeds its period");
+  if (!loop.lag_s.is_bounded() || loop.lag_s.lo() < 0 || loop.lag_s.hi() > t) {
+    fail("the board's lag must be an interval within [0, period]");
+  }
+  if (!(loop.reading_age_s >= 0 && loop.reading_age_s <= t)) {
+    fail("the reading age must be within [0, period]");
+  }
+  if (!(loop.arm_count_rad > 0) || !(loop.pendulum_count_rad > 0)) {
+    fail("the encoders' counts must be > 0");
+  }
+  if (!(loop.ramp_duty_per_s >= 0) || !std::isfinite(loop.ramp_duty_per_s)) {
+    fail("the board's ramp must be a finite rate >= 0");
+  }
+  for (const Interval& v : {loop.duty_torque_nm, loop.back_emf_nm_s}) {
+    if (!v.is_bounded()) fail("the drive's constants must be bounded intervals");
+  }
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    const Interval& v = loop.parameters[k];
+    if (!v.is_bounded() || v.lo() < 0 || (k < 5 && !(v.lo() > 0))) {
+      fail(std::string("parameter ") + model::kParameterNames[k] +
+           " must be a bounded interval > 0 (>= 0 for a friction)");
+    }
+  }
+  for (const StateBox* box : {&start.state, &start.estimate_error}) {
+    if (!bounded(*box)) fail("the start boxes must be bounded");
+  }
+  if (!(options.horizon_s > 0) || !std::isfinite(options.horizon_s)) {
+    fail("the horizon must be a finite number > 0 s");
+  }
+}
+
+}  // namespace
+
+BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                                  const LoopStart& start, const LoopLimits& limits,
+                                  const VerifyOptions& options) {
+  check_arguments(law, loop, start, options);
+  const auto began = std::chrono::steady_clock::now();
+  const double period = law.period_s;
+  const double reading_s = period - loop.reading_age_s;
+
+  // The plant in momentum coordinates, linearised at the boxes' midpoints; the remainder covers
+  // the rest.
+  const model::Parameters<double> centre =
+      loop.parameters.map([](const Interval& v) { return v.mid(); });
+  const detail::MomentumPlant plant =
+      detail::momentum_plant(centre, loop.duty_torque_nm.mid(), loop.back_emf_nm_s.mid());
+  const double board_switch = loop.lag_s.mid();
+  const StretchMaps plant_period = detail::stretch_maps(plant.a, plant.b, board_switch, period);
+  const StretchMaps plant_reading = detail::stretch_maps(plant.a, plant.b, board_switch, reading_s);
+
+  // The law's model, as it carries its estimate.
+  Eigen::Matrix4d law_a;
+  Eigen::Vector4d law_b;
+  for (Eigen::Index i = 0; i < 4; ++i) {
+    law_b(i) = law.b_continuous[static_cast<std::size_t>(i)];
+    for (Eigen::Index j = 0; j < 4; ++j)
+      law_a(i, j) = law.a_continuous[static_cast<std::size_t>(i * 4 + j)];
+  }
+  const double law_switch = law.duty_path.lag_s;
+  const double law_rate = law.duty_path.ramp_duty_per_s;
+  const StretchMaps law_period = detail::stretch_maps(law_a, law_b, law_switch, period);
+  const StretchMaps law_reading = detail::stretch_maps(law_a, law_b, law_switch, reading_s);
+
+  const double max_steps = std::floor(law.max_duty / law.duty_step + 1e-9);
+  const double duty_bound = max_steps * law.duty_step;
+  const double law_limit = std::min(law.region.fall_rad, law.region.release_rad);
+
+  BalanceCertificate out;
+  out.horizon_s = options.horizon_s;
+  Symbols symbols;
+  Forms4 x;  // the plant's [q1, q2 - pi, p1, p2]
+  Forms4 h;
+  Forms4 start_state;
+  for (std::size_t i = 0; i < 4; ++i) start_state[i] = symbols.noise(start.state[i]);
+  for (std::size_t i = 0; i < 4; ++i) {
+    h[i] = LinearCombination()
+               .add(start_state[i])
+               .add(symbols.noise(start.estimate_error[i]))
+               .result();
+  }
+  {
+    // p = M(q2) dq: the upright M exactly, its change over the start's angles as an interval.
+    const std::array<Interval, 4> excess =
+        detail::mass_excess(plant, loop.parameters, start.state[1]);
+    x[0] = start_state[0];
+    x[1] = start_state[1];
+    for (std::size_t i = 0; i < 2; ++i) {
+      const Interval extra = excess[i * 2] * start.state[2] + excess[i * 2 + 1] * start.state[3];
+      x[2 + i] = LinearCombination()
+                     .add(Interval(plant.mass(static_cast<Eigen::Index>(i), 0)), start_state[2])
+                     .add(Interval(plant.mass(static_cast<Eigen::Index>(i), 1)), start_state[3])
+                     .add(symbols.noise(extra))
+                     .result();
+    }
+  }
+  // The rates from momentum coordinates: dq = M^-1 p, the upright inverse on the forms (exact),
+  // what the pendulum's angle and the parameters change in it on their ranges.
+  const auto linear_rates = [&](const Forms4& z) {
+    std::array<Interval, 2> out;
+    for (std::size_t i = 0; i < 2; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      out[i] = detail::range(LinearCombination()
+                                 .add(Interval(plant.inverse(r, 0)), z[2])
+                                 .add(Interval(plant.inverse(r, 1)), z[3])
+                                 .result());
+    }
+    return out;
+  };
+  const auto with_rates = [&](StateBox box, const std::array<Interval, 2>& linear) {
+    const std::array<Interval, 2> excess =
+        detail::rate_excess(plant, loop.parameters, box[1], linear);
+    box[2] = linear[0] + excess[0];
+    box[3] = linear[1] + excess[1];
+    return box;
+  };
+  // The reduction's coordinates: the plant's state, the filter's error against it (its angles,
+  // and its rates against the plant's upright M^-1 p), the duty sent before, the rounding in the
+  // duty sent now, and each applied duty against the one sent before: directions the loop
+  // contracts on their own.
+  const auto law_duty_of = [&](const std::vector<Interval>& z, std::size_t estimate,
+                               std::size_t on_way) {
+    Interval sum(0.0);
+    for (std::size_t i = 0; i < 4; ++i) sum -= Interval(law.gain[i]) * z[estimate + i];
+    if (law.delayed == 1) sum -= Interval(law.gain[4]) * z[on_way];
+    return sum;
+  };
+  const auto plant_as_estimate = [&](const std::vector<Interval>& z, std::size_t i) {
+    if (i < 2) return z[i];
+    const auto row = static_cast<Eigen::Index>(i - 2);
+    return Interval(plant.inverse(row, 0)) * z[2] + Interval(plant.inverse(row, 1)) * z[3];
+  };
+  const detail::CoordinateMap to_error_coordinates = [&](const std::vector<Interval>& z) {
+    std::vector<Interval> y = z;
+    for (std::size_t i = 0; i < 4; ++i) y[4 + i] = z[4 + i] - plant_as_estimate(z, i);
+    y[9] = z[9] - law_duty_of(z, 4, 8);
+    y[10] = z[10] - z[8];
+    y[11] = z[11] - z[8];
+    return y;
+  };
+  const detail::CoordinateMap from_error_coordinates = [&](const std::vector<Interval>& y) {
+    std::vector<Interval> z = y;
+    for (std::size_t i = 0; i < 4; ++i) z[4 + i] = y[4 + i] + plant_as_estimate(y, i);
+    z[9] = y[9] + law_duty_of(z, 4, 8);
+    z[10] = y[10] + y[8];
+    z[11] = y[11] + y[8];
+    return z;
+  };
+  const AffineForm zero = Symbols::constant(0.0);
+  // The law's duty for the estimate `estimate` with `on_way` on its way; nothing when it may reach
+  // the limit.
+  const auto law_duty = [&](const Forms4& estimate, const AffineForm& on_way,
+                            double t_s) -> std::optional<AffineForm> {
+    LinearCombination raw;
+    double size = 0;
+    for (std::size_t i = 0; i < 4; ++i) {
+      raw.add(Interval(-law.gain[i]), estimate[i]);
+      size = std::max(size, detail::range(estimate[i]).mag());
+    }
+    if (law.delayed == 1) raw.add(Interval(-law.gain[4]), on_way);
+    const AffineForm duty = raw.result();
+    const Interval duty_range = detail::range(duty);
+    if (auto failure = outside(FailureKind::duty_limit, t_s, duty_range, duty_bound)) {
+      out.failure = failure;
+      return std::nullopt;
+    }
+    // Rounded to a whole number of steps, and the law's own rounding.
+    const double slack = kLawRelativeError * std::max(size, duty_range.mag()) + kLawAbsoluteError;
+    return LinearCombination()
+        .add(duty)
+        .add(symbols.noise(symmetric(0.5 * law.duty_step + slack)))
+        .result();
+  };
+
+  AffineForm old_duty = zero;  // sent at the last sample but one: the board's target until the lag
+  AffineForm board = zero;     // the duty the board applies at the sample
+  AffineForm law_applied = zero;
+  std::optional<AffineForm> first = law_duty(h, zero, 0.0);
+  if (!first) {
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    return out;
+  }
+  AffineForm new_duty = *first;  // sent at the sample, on its way
+
+  const auto periods = static_cast<std::size_t>(std::ceil(options.horizon_s / period - 1e-9));
+  const Interval zero_interval(0.0);
+  for (std::size_t k = 0; k < periods; ++k) {
+    const double t0 = static_cast<double>(k) * period;
+    const double t1 = static_cast<double>(k + 1) * period;
+    const Interval duty_range =
+        hull(hull(detail::range(board), detail::range(old_duty)), detail::range(new_duty));
+    // The ramp to the new duty, one quantity for the board and for the law's model of it when
+    // both ramp at the same rate.
+    const AffineForm gap = difference(new_duty, old_duty);
+    std::optional<SharedRamp> board_ramp;
+    std::optional<SharedRamp> law_ramp;
+    if (loop.ramp_duty_per_s > 0) board_ramp = shared_ramp(gap, loop.ramp_duty_per_s, symbols);
+    if (law_rate > 0) {
+      law_ramp =
+          law_rate == loop.ramp_duty_per_s ? board_ramp : shared_ramp(gap, law_rate, symbols);
+    }
+    const InputError board_error = input_error(board, old_duty, new_duty, loop.ramp_duty_per_s,
+                                               loop.lag_s, board_ramp ? &*board_ramp : nullptr);
+    const InputError law_error = input_error(law_applied, old_duty, new_duty, law_rate,
+                                             Interval(law_switch), law_ramp ? &*law_ramp : nullptr);
+
+    // The plant over the period: the linear model's reach from the affine forms (the hull of
+    // its maps to each piece of the period), plus what the field's distance from it and the
+    // input's errors add, an enclosure E such that, while the state is in E, that distance keeps
+    // it inside E's interior (then it never leaves E).
+    StateBox reach;
+    reach.fill(Interval::empty());
+    std::array<Interval, 2> reach_rates{Interval::empty(), Interval::empty()};
+    for (const StretchMaps::Piece& piece : plant_period.pieces) {
+      Forms4 at;
+      for (std::size_t i = 0; i < 4; ++i) {
+        LinearCombination row;
+        for (std::size_t j = 0; j < 4; ++j) row.add(piece.phi[i * 4 + j], x[j]);
+        row.add(piece.gamma_old[i], old_duty).add(piece.gamma_new[i], new_duty);
+        at[i] = row.result();
+        reach[i] = hull(reach[i], detail::range(at[i]));
+      }
+      // The rates inverse p, from the forms (p1 and p2 move together).
+      for (std::size_t i = 0; i < 2; ++i) {
+        const auto r = static_cast<Eigen::Index>(i);
+        const AffineForm rate = LinearCombination()
+                                    .add(Interval(plant.inverse(r, 0)), at[2])
+                                    .add(Interval(plant.inverse(r, 1)), at[3])
+                                    .result();
+        reach_rates[i] = hull(reach_rates[i], detail::range(rate));
+      }
+    }
+    // The rates over the enclosure `box`: the reach's, plus what its excess over the reach adds.
+    // (box contains the reach: the interval that, added to the reach, gives the box).
+    const auto rates_in = [&](const StateBox& box) {
+      std::array<Interval, 2> excess;
+      for (std::size_t j = 0; j < 2; ++j) {
+        const Interval& b = box[2 + j];
+        const Interval& a = reach[2 + j];
+        excess[j] = Interval((Interval(b.lo()) - Interval(a.lo())).lo(),
+                             (Interval(b.hi()) - Interval(a.hi())).hi());
+      }
+      std::array<Interval, 2> out;
+      for (std::size_t i = 0; i < 2; ++i) {
+        const auto r = static_cast<Eigen::Index>(i);
+        out[i] = reach_rates[i] + Interval(plant.inverse(r, 0)) * excess[0] +
+                 Interval(plant.inverse(r, 1)) * excess[1];
+      }
+      return out;
+    };
+    IVector4 input_spread{zero_interval, zero_interval, zero_interval, zero_interval};
+    for (const InputErrorPart& part : board_error.parts) {
+      for (std::size_t i = 0; i < 4; ++i)
+        input_spread[i] += plant_period.over_b[i] * symmetric(part.l1);
+    }
+    if (board_error.ramp != nullptr) {
+      for (std::size_t i = 0; i < 4; ++i) {
+        input_spread[i] += plant_period.over_b[i] * symmetric(board_error.ramp->bound);
+      }
+    }
+    StateBox over = reach;
+    IVector4 remainder{zero_interval, zero_interval, zero_interval, zero_interval};
+    bool enclosed = false;
+    for (int attempt = 0; attempt < kEnclosureTries && !enclosed; ++attempt) {
+      remainder = detail::momentum_remainder(plant, loop.parameters, loop.duty_torque_nm,
+                                             loop.back_emf_nm_s, over, rates_in(over), duty_range);
+      StateBox next;
+      bool inside = true;
+      for (std::size_t i = 0; i < 4; ++i) {
+        Interval added = input_spread[i];
+        for (std::size_t j = 0; j < 4; ++j) {
+          const double mid = remainder[j].mid();
+          added += plant_period.psi_over[i * 4 + j] * Interval(mid) +
+                   symmetric((Interval(plant_period.abs_integral[i * 4 + j]) *
+                              Interval((remainder[j] - mid).mag()))
+                                 .hi());
+        }
+        next[i] = reach[i] + added;
+        inside = inside && next[i].is_bounded() && next[i].is_interior_subset(over[i]);
+      }
+      if (inside) {
+        over = next;
+        enclosed = true;
+      } else {
+        // Epsilon-inflation: try the image, widened, next (a fixed point of the map if any).
+        for (std::size_t i = 0; i < 4; ++i) {
+          if (!next[i].is_bounded()) break;
+          const double grow = kInflation * next[i].width() + 1e-12;
+          over[i] = hull(reach[i], next[i] + symmetric(grow));
+        }
+      }
+    }
+    if (!enclosed || !bounded(over)) {
+      out.failure = Failure{FailureKind::no_enclosure, t0, over[1], limits.upright_rad};
+      break;
+    }
+    remainder = detail::momentum_remainder(plant, loop.parameters, loop.duty_torque_nm,
+                                           loop.back_emf_nm_s, over, rates_in(over), duty_range);
+    if (auto f = outside(FailureKind::pendulum_limit, t0, over[1], limits.upright_rad)) {
+      out.failure = f;
+      break;
+    }
+    if (auto f = outside(FailureKind::arm_limit, t0, over[0], limits.arm_rad)) {
+      out.failure = f;
+      break;
+    }
+
+    // The plant at the readings' instant and at the next sample.
+    const Forms4 x_read =
+        carried(plant_reading, x, old_duty, new_duty,
+                disturbance(plant_reading, remainder, board_error), board_error, symbols);
+    const Forms4 x_next =
+        carried(plant_period, x, old_duty, new_duty,
+                disturbance(plant_period, remainder, board_error), board_error, symbols);
+    // The readings, within half a count.
+    const AffineForm arm_reading = LinearCombination()
+                                       .add(x_read[0])
+                                       .add(symbols.noise(symmetric(0.5 * loop.arm_count_rad)))
+                                       .result();
+    const AffineForm pendulum_reading =
+        LinearCombination()
+            .add(x_read[1])
+            .add(symbols.noise(symmetric(0.5 * loop.pendulum_count_rad)))
+            .result();
+    if (auto f = outside(FailureKind::law_mode, t1, detail::range(pendulum_reading), law_limit)) {
+      out.failure = f;
+      break;
+    }
+
+    // The law: its estimate carried to the readings' instant, corrected by them, carried to the
+    // sample; its ramp as an input error of its own.
+    const IVector4 no_disturbance{zero_interval, zero_interval, zero_interval, zero_interval};
+    const Forms4 predicted =
+        carried(law_reading, h, old_duty, new_duty,
+                disturbance(law_reading, no_disturbance, law_error), law_error, symbols);
+    const AffineForm arm_innovation = difference(arm_reading, predicted[0]);
+    const AffineForm pendulum_innovation = difference(pendulum_reading, predicted[1]);
+    Forms4 corrected;
+    for (std::size_t i = 0; i < 4; ++i) {
+      corrected[i] = LinearCombination()
+                         .add(h[i])
+                         .add(Interval(law.observer_gain[i * 2]), arm_innovation)
+                         .add(Interval(law.observer_gain[i * 2 + 1]), pendulum_innovation)
+                         .result();
+    }
+    Forms4 h_next = carried(law_period, corrected, old_duty, new_duty,
+                            disturbance(law_period, no_disturbance, law_error), law_error, symbols);
+    for (std::size_t i = 0; i < 4; ++i) {
+      const double size =
+          std::max(detail::range(corrected[i]).mag(), detail::range(h_next[i]).mag());
+      h_next[i] = LinearCombination()
+                      .add(h_next[i])
+                      .add(symbols.noise(symmetric(kLawRelativeError * size + kLawAbsoluteError)))
+                      .result();
+    }
+    std::optional<AffineForm> next_duty = law_duty(h_next, new_duty, t1);
+    if (!next_duty) break;
+
+    // The duty applied at the next sample: the new one, unless its ramp may still be on.
+    const auto applied_next = [&](double switch_s, const InputError& error, double rate) {
+      if (settled(switch_s, error.settle_gap, rate, period)) return new_duty;
+      return LinearCombination()
+          .add(new_duty)
+          .add(symbols.noise(symmetric(error.settle_gap)))
+          .result();
+    };
+    AffineForm board_next = applied_next(loop.lag_s.hi(), board_error, loop.ramp_duty_per_s);
+    AffineForm law_next = applied_next(law_switch, law_error, law_rate);
+
+    LoopStepBox step;
+    step.t0_s = t0;
+    step.t1_s = t1;
+    step.over = with_rates(over, rates_in(over));
+    step.at_end = with_rates(ranges(x_next), linear_rates(x_next));
+    step.estimate = ranges(h_next);
+    step.duty = detail::range(*next_duty);
+    out.steps.push_back(step);
+
+    std::vector<AffineForm> state{x_next[0], x_next[1],  x_next[2],  x_next[3],
+                                  h_next[0], h_next[1],  h_next[2],  h_next[3],
+                                  new_duty,  *next_duty, board_next, law_next};
+    out.largest_symbol_count = std::max(out.largest_symbol_count, symbols.count());
+    detail::reduce(state, symbols, options.max_symbols, to_error_coordinates,
+                   from_error_coordinates);
+    for (std::size_t i = 0; i < 4; ++i) {
+      x[i] = state[i];
+      h[i] = state[4 + i];
+    }
+    old_duty = state[8];
+    new_duty = state[9];
+    board = state[10];
+    law_applied = state[11];
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+  return out;
+}
+
+StartRegion largest_start(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                          const LoopStart& start, const LoopLimits& limits,
+                          const VerifyOptions& options, const SplitOptions& split, double max_scale,
+                          int steps) {
+  const auto scaled = [&](double scale) {
+    LoopStart s = start;
+    for (StateBox* box : {&s.state, &s.estimate_error}) {
+      for (Interval& v : *box) {
+        const double mid = v.mid();
+        v = Interval(mid) + Interval(scale) * (v - mid);
+      }
+    }
+    return s;
+  };
+  StartRegion out;
+  double lo = 0;
+  double hi = max_scale;
+  BalanceCertificate last;
+  const auto attempt = [&](double scale) {
+    ++out.verifications;
+    last = verify_balance_split(law, loop, scaled(scale), limits, options, split);
+    if (last.certified()) {
+      out.scale = scale;
+      out.start = scaled(scale);
+      out.certificate = last;
+    }
+    return last.certified();
+  };
+  if (attempt(hi)) return out;
+  for (int i = 0; i < steps; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (attempt(mid)) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  if (out.scale == 0) {
+    out.start = scaled(0);
+    out.certificate = last;
+  }
+  return out;
+}
+
+}  // namespace furuta::verification
