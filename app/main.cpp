@@ -290,6 +290,74 @@ int main(int argc, char** argv) {
       ->required()
       ->check(not_empty_path());
 
+  furuta::app::ControllerVerifyOptions verify;
+  verify.config_path = furuta::config::default_rig_config_path();
+  CLI::App* verify_cmd = controller_cmd->add_subcommand(
+      "verify",
+      "Prove the balancing loop of a controller file keeps the pendulum upright for every "
+      "parameter in a box and every start near upright (validated tubes of the sampled-data "
+      "loop; docs/control.md); a sampled check and a report. Exit 0 certified, 1 not (the "
+      "report says where and why)");
+  verify_cmd->add_option("CONTROLLER", verify.controller, "A controller file (furuta controller design)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  verify_cmd
+      ->add_option("--parameters", verify.parameters,
+                   "A results.json (its output-error estimate +- --sd standard deviations) or a "
+                   "box file (.toml: [parameters] mu1 = [lo, hi] ... fv2)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  verify_cmd->add_option("--sd", verify.sd, "Standard deviations each side of the estimate (default 3)")
+      ->check(furuta::app::finite_in(0.0, 1000.0));
+  verify_cmd
+      ->add_option("-c,--config", verify.config_path,
+                   "Rig configuration: the encoders' counts, the board's duty ramp, [safety] "
+                   "arm_limit_deg")
+      ->check(CLI::ExistingFile);
+  verify_cmd
+      ->add_option("--start-deg", verify.start_deg,
+                   "The pendulum within +- this of upright at the start (default 2)")
+      ->check(furuta::app::finite_in(0.0, 45.0));
+  verify_cmd
+      ->add_option("--start-deg-s", verify.start_deg_s,
+                   "... and its rate within +- this [deg/s] (default 10); the arm at its centre")
+      ->check(furuta::app::finite_in(0.0, 1000.0));
+  verify_cmd
+      ->add_option("--estimate-error-deg-s", verify.estimate_error_deg_s,
+                   "The filter's rates off by at most this at the start [deg/s] (default 1; its "
+                   "angles within a count)")
+      ->check(furuta::app::finite_in(0.0, 1000.0));
+  verify_cmd
+      ->add_option("--lag-ms", verify.lag_ms,
+                   "LO HI: the board takes each duty this long after its sample, anywhere in the "
+                   "interval, each period (default: the controller's lag)")
+      ->expected(2);
+  verify_cmd->add_option("--reading-age-ms", verify.reading_age_ms,
+                         "The angles were read this long before each sample (default: the "
+                         "controller's reading_age_s)");
+  verify_cmd->add_option("--upright-deg", verify.upright_deg,
+                         "The angle from upright proven never reached (default: the controller's "
+                         "fall_deg)")
+      ->check(furuta::app::finite_in(0.1, 90.0));
+  verify_cmd->add_option("--horizon", verify.horizon_s, "Seconds to prove (default 10)")
+      ->check(furuta::app::finite_in(0.016, 3600.0));
+  verify_cmd->add_flag("--start-region", verify.start_region,
+                       "Also find the largest start (the given one scaled) that is certified");
+  verify_cmd
+      ->add_option("--max-pieces", verify.max_pieces,
+                   "Pieces of the parameter box at most (default 32)")
+      ->check(CLI::Range(1, 4096));
+  verify_cmd
+      ->add_option("--sampled", verify.sampled,
+                   "Trajectories of the sampled check (default 40: 32 corners, then random)")
+      ->check(CLI::Range(0, 100000));
+  verify_cmd
+      ->add_option("-o,--output", verify.output_dir,
+                   "Directory for report.html, verification.json and verification.svg (default "
+                   "verification), replaced whole")
+      ->check(not_empty_path());
+  verify.output_dir = "verification";
+
   furuta::app::ReportCommandOptions report;
   CLI::App* report_cmd = app.add_subcommand(
       "report",
@@ -377,6 +445,7 @@ int main(int argc, char** argv) {
                                                       : ControllerParameters::output_error;
       return furuta::app::run_controller_design_command(design, std::cout, std::cerr);
     }
+    if (*verify_cmd) return furuta::app::run_controller_verify_command(verify, std::cout, std::cerr);
     if (*simulate_cmd) {
       if (scenario_choice != "all") {
         std::size_t used = 0;

@@ -21,9 +21,10 @@ set(FURUTA_MODULE_DEPENDENCIES
   "identification:model,interval,config,session_log,validated"
   "validated:model,interval,common"
   "validated_research:validated,model,interval,common"
+  "verification:control,validated,model,interval"
   "pipeline:identification,validated,session_log,config,model,interval"
-  "report:pipeline,identification,validated,session_log,config,model,interval,common"
-  "app:control,firmware_bridge,simulator,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
+  "report:pipeline,identification,validated,verification,control,session_log,config,model,interval,common"
+  "app:control,firmware_bridge,simulator,config,daemon,command_auth,session_log,identification,validated,verification,pipeline,report,model,interval,common,lcmtypes"
 )
 
 function(furuta_check_module_dependencies)

@@ -191,7 +191,7 @@ void read_observer_table(Section& s, ControllerFile& f) {
            "filter does; design the controller again (furuta controller design)");
   }
   const double period_s = f.spec.period_s;
-  s.required_number(
+  f.reading_age_s = s.required_number(
       "reading_age_s", "the reading age the filter's gain is designed for",
       [period_s](double v) { return v >= 0 && v <= period_s; }, "in [0, the period]");
   const std::vector<double> m = s.required_numbers("m", "the filter's gain (4 x 2)", 8, 8);

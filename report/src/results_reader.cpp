@@ -87,6 +87,9 @@ ResultsFile read_results(const std::filesystem::path& path) {
   if (refined != j.end() && refined->is_object() && refined->value("converged", false)) {
     if (!refined->contains("estimate")) throw ResultsFileError("output_error.estimate: missing");
     r.output_error = parameters_from((*refined)["estimate"], "output_error.estimate");
+    if (refined->contains("std_dev")) {
+      r.output_error_sd = parameters_from((*refined)["std_dev"], "output_error.std_dev");
+    }
   }
   if (!r.lsmi && !r.output_error) {
     throw ResultsFileError(

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <numbers>
@@ -195,6 +196,29 @@ TEST(BalanceLaw, HoldsWhenTheEncoderBoardReportsEveryOtherSample) {
 // max_duty: a pendulum coming up at the pace the gain expects is caught; the same angle at rest,
 // or passed at speed, would drive the duty to its limit and the arm to its own, and the swing goes
 // on.
+// start_catch: the law takes over as if it had just caught, its filter at the estimate given: the
+// gain on it (rounded to a duty step) is the first duty, then each cycle filters the angles read.
+TEST(BalanceLaw, StartCatchSendsTheGainOnTheEstimateThenFilters) {
+  const Rig rig = simulated_rig();
+  const BalanceControllerSpec spec = spec_for(rig, rig.truth);
+  BalanceLaw law(spec);
+  const std::array<double, 4> estimate{0.01, 2 * kDeg, -0.1, 0.2};
+  const BalanceStep first = law.start_catch(estimate);
+  double gain_duty = 0;
+  for (std::size_t i = 0; i < 4; ++i) gain_duty -= spec.gain[i] * estimate[i];
+  EXPECT_EQ(first.mode, BalanceMode::catching);
+  EXPECT_NEAR(first.duty, std::round(gain_duty / spec.duty_step) * spec.duty_step, 1e-15);
+  EXPECT_DOUBLE_EQ(first.pendulum_rate_rad_s, 0.2);
+  // The next cycle corrects the estimate with the angles (here the estimate's own, carried): it
+  // stays in the catch, its rates the filter's, not a difference of the angles over the period.
+  const BalanceStep next = law.step(estimate[0], kPi + estimate[1]);
+  EXPECT_EQ(next.mode, BalanceMode::catching);
+  EXPECT_NE(next.pendulum_rate_rad_s, 0.0);
+  EXPECT_LT(std::fabs(next.duty), spec.max_duty);
+  // Reset and started again, the same first duty: start_catch starts from nothing of before.
+  EXPECT_EQ(law.start_catch(estimate).duty, first.duty);
+}
+
 TEST(BalanceLaw, CatchesOnlyWhereTheGainAsksForPartOfTheDuty) {
   const Rig rig = simulated_rig();
   BalanceControllerSpec spec = spec_for(rig, rig.truth);

@@ -10,7 +10,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <stdexcept>
 
 #include "furuta/config/rig_config.hpp"
@@ -116,52 +115,21 @@ TEST(BalanceCertificate, CertifiesTheDesignedLoopFromAStartNearUpright) {
   }
 }
 
-// Corners of the parameters that move the plant most (mu1, mu3, mu4), the others at random inside,
-// corners of the start and the filter's error, the counts' boundaries anywhere.
+// The sampled check (sampled_loop.hpp): corners of the parameters that move the plant most (mu1,
+// mu3, mu4) and of the start's angle and rate, the rest at random inside, then random points.
 TEST(BalanceCertificate, SampledTrajectoriesStayInsideEveryBox) {
   const Rig rig = simulated_rig();
   const control::BalanceControllerSpec law = designed(rig);
   const LoopModel loop = loop_around(rig, law, 1e-4);
   const LoopStart start = start_within(rig, 0.5 * kDeg, 2.5 * kDeg);
-  constexpr double kHorizon = 4.0;
-  const BalanceCertificate c =
-      verify_balance(law, loop, start, limits_of(law), for_seconds(kHorizon));
+  const BalanceCertificate c = verify_balance(law, loop, start, limits_of(law), for_seconds(4));
   ASSERT_TRUE(c.certified());
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const auto pick = [&](const Interval& v, int corner) {
-    if (corner < 0) return v.lo() + unit(rng) * (v.hi() - v.lo());
-    return corner ? v.hi() : v.lo();
-  };
-  std::size_t trajectories = 0;
-  TubeCheck total;
-  for (int n = 0; n < 40; ++n) {
-    const bool corner = n < 32;
-    LoopPoint point;
-    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
-      const int bit = k == 0 ? (n & 1) : k == 2 ? ((n >> 1) & 1) : k == 3 ? ((n >> 2) & 1) : -1;
-      point.parameters[k] = pick(loop.parameters[k], corner ? bit : -1);
-    }
-    point.duty_torque_nm = loop.duty_torque_nm.mid();
-    point.back_emf_nm_s = loop.back_emf_nm_s.mid();
-    point.lag_s = loop.lag_s.mid();
-    point.arm_count_offset = unit(rng) - 0.5;
-    point.pendulum_count_offset = unit(rng) - 0.5;
-    for (std::size_t i = 0; i < 4; ++i) {
-      const int bit = i == 1 ? ((n >> 3) & 1) : i == 3 ? ((n >> 4) & 1) : -1;
-      point.state[i] = pick(start.state[i], corner ? bit : -1);
-      point.estimate[i] = point.state[i] + pick(start.estimate_error[i],
-                                                corner ? (n + static_cast<int>(i)) & 1 : -1);
-    }
-    const TubeCheck check = check_inside(c, simulate_loop(law, loop, point, kHorizon, 64));
-    ++trajectories;
-    total.checks += check.checks;
-    total.outside += check.outside;
-    EXPECT_EQ(check.outside, 0u) << "trajectory " << n << " left its box at "
-                                 << check.first_outside_s << " s";
-  }
-  EXPECT_EQ(trajectories, 40u);
-  EXPECT_GT(total.checks, 40u * 250u * 4u);
+  const SampledCheck check = sampled_check(law, loop, start, c, 40, 2, 7);
+  EXPECT_EQ(check.trajectories, 40u);
+  EXPECT_EQ(check.drawn.size(), 2u);
+  // Every sample's state, duty and two rates, every Runge-Kutta step's state, of 250 periods.
+  EXPECT_GT(check.check.checks, 40u * 250u * 7u);
+  EXPECT_EQ(check.check.outside, 0u) << "first outside at " << check.check.first_outside_s << " s";
 }
 
 TEST(BalanceCertificate, SaysWhenTheDutyWouldReachItsLimit) {

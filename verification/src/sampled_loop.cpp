@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "furuta/model/dynamics.hpp"
 
@@ -134,6 +135,55 @@ TubeCheck check_inside(const BalanceCertificate& certificate, const LoopTrajecto
     if (k == 0 || k > steps.size()) continue;
     const LoopStepBox& box = steps[k - 1];
     for (std::size_t i = 0; i < 4; ++i) note(box.over[i].contains(trajectory.inner_state[j][i]), t);
+  }
+  return out;
+}
+
+SampledCheck sampled_check(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                           const LoopStart& start, const BalanceCertificate& certificate,
+                           std::size_t count, std::size_t draw, unsigned seed,
+                           int steps_per_period) {
+  SampledCheck out;
+  if (certificate.steps.empty()) return out;
+  const double horizon = certificate.steps.back().t1_s;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // A corner (bit 0 or 1) or, with bit -1, a point inside at random.
+  const auto pick = [&](const Interval& v, int bit) {
+    if (bit < 0) return v.lo() + unit(rng) * (v.hi() - v.lo());
+    return bit ? v.hi() : v.lo();
+  };
+  constexpr std::size_t kCorners = 32;
+  for (std::size_t n = 0; n < count; ++n) {
+    const bool corner = n < kCorners;
+    const auto bit = [&](int k) { return corner ? static_cast<int>((n >> k) & 1u) : -1; };
+    const auto coin = [&] { return corner ? static_cast<int>(unit(rng) < 0.5) : -1; };
+    LoopPoint point;
+    for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+      const int b = k == 0 ? bit(0) : k == 2 ? bit(1) : k == 3 ? bit(2) : coin();
+      point.parameters[k] = pick(loop.parameters[k], b);
+    }
+    point.duty_torque_nm = pick(loop.duty_torque_nm, coin());
+    point.back_emf_nm_s = pick(loop.back_emf_nm_s, coin());
+    point.lag_s = pick(loop.lag_s, coin());
+    point.arm_count_offset = unit(rng) - 0.5;
+    point.pendulum_count_offset = unit(rng) - 0.5;
+    for (std::size_t i = 0; i < 4; ++i) {
+      const int b = i == 1 ? bit(3) : i == 3 ? bit(4) : coin();
+      point.state[i] = pick(start.state[i], b);
+      point.estimate[i] = point.state[i] + pick(start.estimate_error[i], coin());
+    }
+    LoopTrajectory trajectory = simulate_loop(law, loop, point, horizon, steps_per_period);
+    const TubeCheck check = check_inside(certificate, trajectory);
+    ++out.trajectories;
+    out.check.checks += check.checks;
+    out.check.outside += check.outside;
+    if (!std::isnan(check.first_outside_s) &&
+        (std::isnan(out.check.first_outside_s) ||
+         check.first_outside_s < out.check.first_outside_s)) {
+      out.check.first_outside_s = check.first_outside_s;
+    }
+    if (out.drawn.size() < draw) out.drawn.push_back(std::move(trajectory));
   }
   return out;
 }

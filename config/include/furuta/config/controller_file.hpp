@@ -34,6 +34,8 @@ struct ControllerFile {
   // design sampled the plant with their sum.
   double lag_s = 0, ramp_lag_s = 0, ramp_step_duty = 0;
   double supply_v = 0;
+  // [observer] reading_age_s: how old the angles are that the filter's gain was designed for.
+  double reading_age_s = 0;
   control::BalanceControllerSpec spec;  // ready for control::BalanceLaw
 };
 

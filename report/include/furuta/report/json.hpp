@@ -95,6 +95,7 @@ Json results_json(const pipeline::Run& run, const std::string& software_version)
 struct ResultsFile {
   std::optional<model::Parameters<double>> lsmi;
   std::optional<model::Parameters<double>> output_error;  // only when the refinement converged
+  std::optional<model::Parameters<double>> output_error_sd;  // its standard deviations, if given
   std::optional<model::Parameters<double>> nominal;       // CAD ([nominal]), when it was given
   std::optional<model::Parameters<double>> truth;
   std::optional<model::Parameters<interval::Interval>> sivia;

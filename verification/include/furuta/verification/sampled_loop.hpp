@@ -60,4 +60,18 @@ struct TubeCheck {
 };
 TubeCheck check_inside(const BalanceCertificate& certificate, const LoopTrajectory& trajectory);
 
+// The check over many trajectories: `count` of them, the first from the corners of the parameters
+// that move the plant most (mu1, mu3, mu4) and of the start's pendulum angle and rate (32
+// corners), the filter's error, the lag and the counts' boundaries at random corners or inside;
+// then points inside every box at random (`seed`). The first `draw` trajectories are kept.
+struct SampledCheck {
+  std::size_t trajectories = 0;
+  TubeCheck check;  // summed over the trajectories
+  std::vector<LoopTrajectory> drawn;
+};
+SampledCheck sampled_check(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                           const LoopStart& start, const BalanceCertificate& certificate,
+                           std::size_t count, std::size_t draw, unsigned seed,
+                           int steps_per_period = 64);
+
 }  // namespace furuta::verification
