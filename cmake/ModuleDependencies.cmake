@@ -22,7 +22,7 @@ set(FURUTA_MODULE_DEPENDENCIES
   "validated:model,interval,common"
   "validated_research:validated,model,interval,common"
   "pipeline:identification,validated,session_log,config,model,interval"
-  "report:pipeline,identification,validated,session_log,config,model,interval,common"
+  "report:pipeline,identification,validated,verification,session_log,config,model,interval,common"
   "app:control,firmware_bridge,simulator,config,daemon,command_auth,session_log,identification,validated,pipeline,report,model,interval,common,lcmtypes"
 )
 
