@@ -85,6 +85,20 @@ inline std::string interval_text(double lo, double hi, int significant = 6) {
   return "[" + bound(lo, false) + ", " + bound(hi, true) + "]";
 }
 
+// The units as a reader writes them, not as a terminal must.
+inline std::string pretty_unit(const std::string& unit) {
+  std::string out = unit;
+  const auto replace = [&out](const std::string& from, const std::string& to) {
+    for (std::size_t at = out.find(from); at != std::string::npos; at = out.find(from, at)) {
+      out.replace(at, from.size(), to);
+      at += to.size();
+    }
+  };
+  replace("^-2", "\u207b\u00b2");
+  replace("^2", "\u00b2");
+  return out;
+}
+
 // "12.3 %" of a rate in [0, 1].
 inline std::string percent(double rate) {
   return fixed(100.0 * rate, 1) + " %";

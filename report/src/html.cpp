@@ -14,20 +14,6 @@ namespace furuta::report {
 
 namespace {
 
-// The units as a reader writes them, not as a terminal must.
-std::string pretty_unit(const std::string& unit) {
-  std::string out = unit;
-  const auto replace = [&out](const std::string& from, const std::string& to) {
-    for (std::size_t at = out.find(from); at != std::string::npos; at = out.find(from, at)) {
-      out.replace(at, from.size(), to);
-      at += to.size();
-    }
-  };
-  replace("^-2", "\u207b\u00b2");
-  replace("^2", "\u00b2");
-  return out;
-}
-
 // "1.0845e-03 ± 2.0e-05", which a narrow column breaks before the "±" only.
 std::string plus_minus(const std::string& value, const std::string& sd) {
   return value + " \u00b1\u00a0" + sd;

@@ -38,6 +38,9 @@ figcaption { font-size: 0.9em; color: #444; }
 .physical { border: 3px solid #b00020; background: #fff0f0; padding: 0.2em 1em; margin: 1em 0; }
 .physical h2 { color: #b00020; border: none; margin-top: 0.5em; }
 .balance-log h3 { margin-top: 1.5em; }
+.certified { color: #2a6e2a; font-weight: bold; }
+.not-certified { border: 3px solid #b00020; background: #fff0f0; padding: 0.2em 1em; margin: 1em 0; }
+.sampled-outside { color: #b00020; font-weight: bold; }
 )";
 
 class Html {
