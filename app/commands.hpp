@@ -1,10 +1,10 @@
 #pragma once
 // The `furuta` command's subcommands, each a function over plain options so tests can call them.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
-#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -221,7 +221,8 @@ struct ControllerDesignOptions {
 int run_controller_design_command(const ControllerDesignOptions& options, std::ostream& out,
                                   std::ostream& err);
 
-// `furuta controller verify`: the balancing loop proven to hold over a parameter box (verification/).
+// `furuta controller verify`: the balancing loop proven to hold over a parameter box
+// (verification/).
 struct ControllerVerifyOptions {
   std::filesystem::path controller;  // a controller file of `furuta controller design`
   // A results.json (its output-error estimate +- sd standard deviations) or a box file (.toml,
@@ -230,7 +231,7 @@ struct ControllerVerifyOptions {
   double sd = 3.0;
   // The rig: the encoders' counts, the board's duty ramp, the arm's limit.
   std::filesystem::path config_path;
-  double start_deg = 2.0;    // the pendulum within +- this of upright at the start ...
+  double start_deg = 2.0;     // the pendulum within +- this of upright at the start ...
   double start_deg_s = 10.0;  // ... and its rate within +- this; the arm at its centre at rest
   double estimate_error_deg_s = 1.0;  // the filter's rates off by at most this (angles: a count)
   std::optional<std::array<double, 2>> lag_ms;  // default: the controller's lag
@@ -240,7 +241,7 @@ struct ControllerVerifyOptions {
   bool start_region = false;  // also bisect the largest certified start
   std::size_t max_pieces = 32;
   std::size_t max_symbols = 1500;
-  std::size_t sampled = 40;  // trajectories of the sampled check
+  std::size_t sampled = 40;          // trajectories of the sampled check
   std::filesystem::path output_dir;  // report.html, verification.json, verification.svg
 };
 // 0 certified; 1 not certified (the report says where and why); 2 bad input (named).

@@ -298,7 +298,8 @@ int main(int argc, char** argv) {
       "parameter in a box and every start near upright (validated tubes of the sampled-data "
       "loop; docs/control.md); a sampled check and a report. Exit 0 certified, 1 not (the "
       "report says where and why)");
-  verify_cmd->add_option("CONTROLLER", verify.controller, "A controller file (furuta controller design)")
+  verify_cmd
+      ->add_option("CONTROLLER", verify.controller, "A controller file (furuta controller design)")
       ->required()
       ->check(CLI::ExistingFile);
   verify_cmd
@@ -307,7 +308,8 @@ int main(int argc, char** argv) {
                    "box file (.toml: [parameters] mu1 = [lo, hi] ... fv2)")
       ->required()
       ->check(CLI::ExistingFile);
-  verify_cmd->add_option("--sd", verify.sd, "Standard deviations each side of the estimate (default 3)")
+  verify_cmd
+      ->add_option("--sd", verify.sd, "Standard deviations each side of the estimate (default 3)")
       ->check(furuta::app::finite_in(0.0, 1000.0));
   verify_cmd
       ->add_option("-c,--config", verify.config_path,
@@ -335,9 +337,10 @@ int main(int argc, char** argv) {
   verify_cmd->add_option("--reading-age-ms", verify.reading_age_ms,
                          "The angles were read this long before each sample (default: the "
                          "controller's reading_age_s)");
-  verify_cmd->add_option("--upright-deg", verify.upright_deg,
-                         "The angle from upright proven never reached (default: the controller's "
-                         "fall_deg)")
+  verify_cmd
+      ->add_option("--upright-deg", verify.upright_deg,
+                   "The angle from upright proven never reached (default: the controller's "
+                   "fall_deg)")
       ->check(furuta::app::finite_in(0.1, 90.0));
   verify_cmd->add_option("--horizon", verify.horizon_s, "Seconds to prove (default 10)")
       ->check(furuta::app::finite_in(0.016, 3600.0));
@@ -445,7 +448,8 @@ int main(int argc, char** argv) {
                                                       : ControllerParameters::output_error;
       return furuta::app::run_controller_design_command(design, std::cout, std::cerr);
     }
-    if (*verify_cmd) return furuta::app::run_controller_verify_command(verify, std::cout, std::cerr);
+    if (*verify_cmd)
+      return furuta::app::run_controller_verify_command(verify, std::cout, std::cerr);
     if (*simulate_cmd) {
       if (scenario_choice != "all") {
         std::size_t used = 0;

@@ -22,6 +22,9 @@ namespace furuta::report {
 
 namespace {
 
+// A bound further out than this many times the data's extent is named, not drawn.
+constexpr double kBoundScale = 4.0;
+
 // The drawn trajectories' colours, by index: a trajectory has the same colour in every panel.
 constexpr std::array<const char*, 5> kTrajectoryColours = {"#222222", "#7d3c98", "#d35400",
                                                            "#117a65", "#5d6d7e"};
@@ -109,7 +112,11 @@ std::string tube_panel(const PlotArea& area, const Ticks& time, const TubePanel&
   for (const TubeTrace& trace : panel.traces) {
     for (const double v : trace.value) take(v);
   }
-  if (panel.bound) {
+  // The bound is drawn where it does not squeeze the tube into a line: within a few times the
+  // data's extent; beyond that its label says so.
+  const double extent = std::max(std::fabs(lo), std::fabs(hi));
+  const bool bound_drawn = panel.bound && !(*panel.bound > kBoundScale * extent);
+  if (bound_drawn) {
     take(*panel.bound);
     take(-*panel.bound);
   }
@@ -155,7 +162,12 @@ std::string tube_panel(const PlotArea& area, const Ticks& time, const TubePanel&
     s << "\"/>\n";
   }
 
-  if (panel.bound) {
+  if (panel.bound && !bound_drawn) {
+    s << "<text x=\"" << area.x + area.width - 4 << "\" y=\"" << area.y + 12
+      << "\" font-size=\"10\" text-anchor=\"end\" fill=\"#b00020\">"
+      << text::xml_escape(panel.bound_label + ", beyond this scale") << "</text>\n";
+  }
+  if (bound_drawn) {
     for (const double v : {*panel.bound, -*panel.bound}) {
       s << "<line class=\"bound\" x1=\"" << area.x << "\" y1=\"" << Y(v) << "\" x2=\""
         << area.x + area.width << "\" y2=\"" << Y(v)
@@ -196,7 +208,11 @@ std::string tube_panel(const PlotArea& area, const Ticks& time, const TubePanel&
 }  // namespace
 
 std::string svg_verification(const VerificationReportInput& input) {
-  const verification::BalanceCertificate& c = input.certificate;
+  // The tube the sampled check ran against: the start region's when the start box was not
+  // certified and a region was.
+  const verification::BalanceCertificate& c = input.sampled.on_start_region && input.start_region
+                                                  ? input.start_region->certificate
+                                                  : input.certificate;
   const std::vector<verification::LoopStepBox>& steps = c.steps;
   const std::vector<verification::LoopTrajectory>& drawn = input.sampled.drawn;
 

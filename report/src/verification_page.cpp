@@ -277,6 +277,11 @@ void section_sampled(Html& h, const VerificationReportInput& in) {
       "(Runge-Kutta 4, the real law, the readings rounded to whole counts), every sample's "
       "state, duty and filter rates and every state between samples compared with its "
       "period's box.");
+  if (s.on_start_region) {
+    h.paragraph(
+        "The start box was not certified: the check, and the figure below, are for the "
+        "largest certified start's tube.");
+  }
   std::string counts = std::to_string(s.trajectories) + " trajectories, " +
                        std::to_string(s.checks) + " checks, " + std::to_string(s.outside) +
                        " outside";
@@ -358,7 +363,8 @@ Json verification_json(const VerificationReportInput& input) {
       Json{{"trajectories", s.trajectories},
            {"checks", s.checks},
            {"outside", s.outside},
-           {"first_outside_s", s.first_outside_s ? Json(*s.first_outside_s) : Json(nullptr)}};
+           {"first_outside_s", s.first_outside_s ? Json(*s.first_outside_s) : Json(nullptr)},
+           {"on_start_region", s.on_start_region}};
   return doc;
 }
 

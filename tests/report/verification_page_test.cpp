@@ -222,7 +222,8 @@ TEST(VerificationJson, HoldsEveryGivenNumberAndAStepALine) {
   EXPECT_EQ(j["sampled"], json({{"trajectories", 20},
                                 {"checks", 123456},
                                 {"outside", 0},
-                                {"first_outside_s", nullptr}}));
+                                {"first_outside_s", nullptr},
+                                {"on_start_region", false}}));
 
   // One step a line: a program can stream the steps, a person diff them.
   const std::string text = read_text(dir.path() / "verification.json");
@@ -478,6 +479,32 @@ TEST(VerificationFiles, TheThreeFilesOrAnError) {
   // A directory where a file is: nothing can be written there.
   std::ofstream(dir.path() / "file") << "x";
   EXPECT_THROW(write_verification_report(dir.path() / "file" / "sub", in), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace furuta::report::verification_page_test
+
+namespace furuta::report::verification_page_test {
+namespace {
+
+// The start box not certified, the sampled check run against the largest certified start's tube:
+// the figure draws that tube (to its horizon, no failure marked) and the page says so.
+TEST(VerificationFigure, DrawsTheStartRegionsTubeWhenTheCheckRanAgainstIt) {
+  VerificationReportInput in = report_input(false);
+  const VerificationReportInput region = report_input(true);
+  verification::StartRegion r;
+  r.scale = 0.5;
+  r.start = region.start;
+  r.certificate = region.certificate;
+  r.verifications = 7;
+  in.start_region = r;
+  in.sampled.on_start_region = true;
+  const std::string svg = svg_verification(in);
+  EXPECT_EQ(count(svg, "class=\"failure\""), 0u);
+  EXPECT_NE(svg.find("certified to 0.8 s"), std::string::npos);
+  EXPECT_NE(
+      render_verification_html(in).find("the figure below, are for the largest certified start"),
+      std::string::npos);
 }
 
 }  // namespace

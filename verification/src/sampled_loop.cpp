@@ -178,9 +178,8 @@ SampledCheck sampled_check(const control::BalanceControllerSpec& law, const Loop
     ++out.trajectories;
     out.check.checks += check.checks;
     out.check.outside += check.outside;
-    if (!std::isnan(check.first_outside_s) &&
-        (std::isnan(out.check.first_outside_s) ||
-         check.first_outside_s < out.check.first_outside_s)) {
+    if (!std::isnan(check.first_outside_s) && (std::isnan(out.check.first_outside_s) ||
+                                               check.first_outside_s < out.check.first_outside_s)) {
       out.check.first_outside_s = check.first_outside_s;
     }
     if (out.drawn.size() < draw) out.drawn.push_back(std::move(trajectory));

@@ -638,11 +638,10 @@ StartRegion largest_start(const control::BalanceControllerSpec& law, const LoopM
                           int steps) {
   const auto scaled = [&](double scale) {
     LoopStart s = start;
-    for (StateBox* box : {&s.state, &s.estimate_error}) {
-      for (Interval& v : *box) {
-        const double mid = v.mid();
-        v = Interval(mid) + Interval(scale) * (v - mid);
-      }
+    // The plant's start only: the filter's error is the filter's, whatever the start.
+    for (Interval& v : s.state) {
+      const double mid = v.mid();
+      v = Interval(mid) + Interval(scale) * (v - mid);
     }
     return s;
   };

@@ -94,9 +94,9 @@ Json results_json(const pipeline::Run& run, const std::string& software_version)
 // SIVIA's outer hull by parameter (the carried mu's as their prior), or why there is none.
 struct ResultsFile {
   std::optional<model::Parameters<double>> lsmi;
-  std::optional<model::Parameters<double>> output_error;  // only when the refinement converged
+  std::optional<model::Parameters<double>> output_error;     // only when the refinement converged
   std::optional<model::Parameters<double>> output_error_sd;  // its standard deviations, if given
-  std::optional<model::Parameters<double>> nominal;       // CAD ([nominal]), when it was given
+  std::optional<model::Parameters<double>> nominal;          // CAD ([nominal]), when it was given
   std::optional<model::Parameters<double>> truth;
   std::optional<model::Parameters<interval::Interval>> sivia;
   std::string note;  // why there is no SIVIA set, when there is none

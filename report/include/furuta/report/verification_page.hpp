@@ -28,6 +28,9 @@ struct VerificationSampled {  // the independent sampled check
   std::size_t outside = 0;
   std::optional<double> first_outside_s;
   std::vector<verification::LoopTrajectory> drawn;  // a few, drawn inside the tube
+  // Against the largest certified start's tube (the start box not certified, a region found):
+  // the figure then draws that tube.
+  bool on_start_region = false;
 };
 
 struct VerificationReportInput {

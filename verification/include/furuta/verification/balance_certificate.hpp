@@ -125,7 +125,8 @@ BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& la
                                         const LoopLimits& limits, const VerifyOptions& options,
                                         const SplitOptions& split);
 
-// The largest start certified (by verify_balance_split) among `start` scaled about its centre:
+// The largest start certified (by verify_balance_split) among `start`'s plant box scaled about its
+// centre (the filter's error as given):
 // bisection on the scale in (0, max_scale] to `steps` halvings. scale 0 when even the smallest
 // tried is not certified.
 struct StartRegion {
