@@ -101,6 +101,17 @@ TEST(CliArguments, FurutaRejectsMalformedArgumentsBeforeDoingAnything) {
       {std::string(FURUTA_CLI) + " simulate --pieces -1", "--pieces: -1 is not in [1, 64]"},
       {std::string(FURUTA_CLI) + " simulate --scenario-seconds nan",
        "--scenario-seconds: nan is not a finite number"},
+      {std::string(FURUTA_CLI) + " controller verify " FURUTA_SOURCE_DIR
+                                 "/README.md --parameters " FURUTA_SOURCE_DIR
+                                 "/README.md --lag-ms 1",
+       "--lag-ms"},
+      {std::string(FURUTA_CLI) + " controller verify " FURUTA_SOURCE_DIR
+                                 "/README.md --parameters " FURUTA_SOURCE_DIR "/README.md --sd nan",
+       "--sd: nan is not a finite number"},
+      {std::string(FURUTA_CLI) + " controller verify " FURUTA_SOURCE_DIR
+                                 "/README.md --parameters " FURUTA_SOURCE_DIR
+                                 "/README.md --max-pieces 0",
+       "--max-pieces"},
   };
   for (const auto& [line, mention] : cases) {
     const Outcome o = run(line);
