@@ -76,19 +76,12 @@ std::vector<std::vector<std::string>> figures_rows(const pipeline::SessionSummar
 // A page of its own: the head, the style, what the page is.
 void balance_page_head(Html& h, const BalanceReportInput& in) {
   const std::string title = "Balance report";
-  h.raw("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
-  h.raw("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
-  h.element("title", title);
-  h.raw("\n<style>");
-  h.raw(kPageStyle);
-  h.raw("</style>\n</head>\n<body>\n<header>\n");
-  h.element("h1", title);
-  h.paragraph(in.software_version +
-                  ": balance sessions of a rotary inverted (Furuta) pendulum, from their logs: "
-                  "when the controller caught the pendulum, how well it held it upright, the "
-                  "duty and arm travel it took, and the controller file it ran. The numbers are "
-                  "also in balance.json.",
-              "meta");
+  h.document_start(
+      title, in.software_version +
+                 ": balance sessions of a rotary inverted (Furuta) pendulum, from their logs: "
+                 "when the controller caught the pendulum, how well it held it upright, the "
+                 "duty and arm travel it took, and the controller file it ran. The numbers are "
+                 "also in balance.json.");
   h.raw("</header>\n<nav>\n<ol>\n");
   for (std::size_t i = 0; i < in.logs.size(); ++i) {
     h.raw("<li><a href=\"#balance-log-" + std::to_string(i + 1) + "\">");

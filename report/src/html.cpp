@@ -30,18 +30,11 @@ std::string figure_id(const std::string& prefix, std::size_t n) {
 
 // The document's head, its title and what it is.
 void page_head(Html& h, const ReportInput& in) {
-  h.raw("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
-  h.raw("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
-  h.element("title", in.title);
-  h.raw("\n<style>");
-  h.raw(kPageStyle);
-  h.raw("</style>\n</head>\n<body>\n<header>\n");
-  h.element("h1", in.title);
-  h.paragraph(in.software_version +
-                  ": identification of a rotary inverted (Furuta) pendulum, least squares (LSMI) "
-                  "and guaranteed (SIVIA, validated simulation). The numbers are also in "
-                  "results.json.",
-              "meta");
+  h.document_start(
+      in.title, in.software_version +
+                    ": identification of a rotary inverted (Furuta) pendulum, least squares (LSMI) "
+                    "and guaranteed (SIVIA, validated simulation). The numbers are also in "
+                    "results.json.");
   h.raw("</header>\n");
 }
 

@@ -79,6 +79,19 @@ class Html {
     }
     out_ += "</tbody>\n</table></div>\n";
   }
+  // The document up to its header's first paragraph: the doctype, the head with `title` and the
+  // shared style, the body's header with the title and `about` (class "meta"). The header is left
+  // open for the page's own lines.
+  void document_start(const std::string& title, const std::string& about) {
+    raw("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+    raw("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+    element("title", title);
+    raw("\n<style>");
+    raw(kPageStyle);
+    raw("</style>\n</head>\n<body>\n<header>\n");
+    element("h1", title);
+    paragraph(about, "meta");
+  }
   void figure(const std::string& id, const std::string& svg, const std::string& caption) {
     out_ += "<figure id=\"" + escape_html(id) + "\">\n" + inline_svg(svg, id);
     element("figcaption", caption);

@@ -116,19 +116,12 @@ std::string count_text(double count_rad) {
 
 void verification_page_head(Html& h, const VerificationReportInput& in) {
   const std::string title = "Balance verification";
-  h.raw("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
-  h.raw("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
-  h.element("title", title);
-  h.raw("\n<style>");
-  h.raw(kPageStyle);
-  h.raw("</style>\n</head>\n<body>\n<header>\n");
-  h.element("h1", title);
-  h.paragraph(in.software_version +
-                  ": a validated simulation of the balancing loop of a rotary inverted (Furuta) "
-                  "pendulum, for every start, parameter, lag and reading in the boxes below: "
-                  "whether the controller keeps the pendulum upright. The numbers are also in "
-                  "verification.json.",
-              "meta");
+  h.document_start(
+      title, in.software_version +
+                 ": a validated simulation of the balancing loop of a rotary inverted (Furuta) "
+                 "pendulum, for every start, parameter, lag and reading in the boxes below: "
+                 "whether the controller keeps the pendulum upright. The numbers are also in "
+                 "verification.json.");
   h.raw("<p class=\"meta\">Controller ");
   h.element("code", in.controller);
   h.raw(", parameters from ");

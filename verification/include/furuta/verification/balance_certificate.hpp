@@ -112,9 +112,9 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
                                   const VerifyOptions& options);
 
 // verify_balance over pieces of the parameter box: a piece that is not certified is halved along
-// the parameter that moves the plant most for its width (the mass matrix's, whose inverse at
-// upright changes by det(M)/ det(M) = mu1 mu4 / det per relative change of mu1 or mu4 and
-// 2 mu3^2 / det of mu3; the arm's damping by fv1 / (kw + fv1)), until every piece is certified or
+// the parameter that moves the plant most for its width (the mass matrix's: its inverse at
+// upright changes by mu1 mu4 / det(M) per relative change of mu1 or mu4 and by 2 mu3^2 / det(M)
+// of mu3; the arm's damping by fv1 / (kw + fv1) of fv1), until every piece is certified or
 // max_pieces would be passed. The pieces run in parallel. Certified: every piece is, and the
 // boxes are the pieces' hulls; else the failure of the piece that failed first.
 struct SplitOptions {
