@@ -29,8 +29,13 @@ Interval range(const AffineForm& a) {
 }
 
 AffineForm Symbols::noise(const Interval& v) {
-  if (!v.is_bounded()) throw std::invalid_argument("noise symbol: the interval must be bounded");
   AffineForm out;
+  // An unbounded or empty quantity gives a form whose range is the whole line: the checks that
+  // read it then fail, as they must, rather than the run stopping on an exception.
+  if (!v.is_bounded()) {
+    out.err = std::numeric_limits<double>::infinity();
+    return out;
+  }
   out.centre = v.mid();
   const double radius = v.rad();
   if (radius > 0) {

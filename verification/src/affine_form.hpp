@@ -29,7 +29,7 @@ Interval range(const AffineForm& a);
 class Symbols {
  public:
   std::size_t count() const { return count_; }
-  // A new symbol carrying `v` (bounded, non-empty): mid + rad e.
+  // A new symbol carrying `v`: mid + rad e (an unbounded or empty v: a form over the whole line).
   AffineForm noise(const Interval& v);
   // A point (no symbol).
   static AffineForm constant(double v);
