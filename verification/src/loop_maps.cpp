@@ -56,28 +56,40 @@ IVector4 StretchMaps::input_effect(double from, double to) const {
   return out;
 }
 
+namespace {
+
+IVector4 interval_vector(const Eigen::Vector4d& v) {
+  IVector4 out;
+  for (std::size_t i = 0; i < 4; ++i) out[i] = Interval(v(static_cast<Eigen::Index>(i)));
+  return out;
+}
+
+IMatrix4 interval_matrix(const Eigen::Matrix4d& m) {
+  IMatrix4 out;
+  for (std::size_t e = 0; e < 16; ++e) {
+    out[e] = Interval(m(static_cast<Eigen::Index>(e / 4), static_cast<Eigen::Index>(e % 4)));
+  }
+  return out;
+}
+
+// e^(a r) b for every r in [from, to].
+IVector4 effect_over(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, double from, double to) {
+  return multiply(to_matrix(validated::exp_enclosure(a, Interval(from, to))), interval_vector(b));
+}
+
+}  // namespace
+
 IVector4 StretchMaps::effect_at(double from, double to) const {
   const auto key = std::make_pair(from, to);
   const auto found = effect_cache.find(key);
   if (found != effect_cache.end()) return found->second;
-  IVector4 bi;
-  for (std::size_t i = 0; i < 4; ++i) bi[i] = Interval(b_vector(static_cast<Eigen::Index>(i)));
-  const IVector4 out =
-      multiply(to_matrix(validated::exp_enclosure(a_matrix, Interval(from, to))), bi);
+  const IVector4 out = effect_over(a_matrix, b_vector, from, to);
   effect_cache.emplace(key, out);
   return out;
 }
 
 IVector4 StretchMaps::slope_at(double from, double to) const {
-  IVector4 bi;
-  for (std::size_t i = 0; i < 4; ++i) bi[i] = Interval(b_vector(static_cast<Eigen::Index>(i)));
-  const Eigen::Matrix4d ab = a_matrix;
-  IMatrix4 ai;
-  for (std::size_t e = 0; e < 16; ++e) {
-    ai[e] = Interval(ab(static_cast<Eigen::Index>(e / 4), static_cast<Eigen::Index>(e % 4)));
-  }
-  return multiply(ai,
-                  multiply(to_matrix(validated::exp_enclosure(a_matrix, Interval(from, to))), bi));
+  return multiply(interval_matrix(a_matrix), effect_over(a_matrix, b_vector, from, to));
 }
 
 IVector4 multiply(const IMatrix4& m, const IVector4& x) {
@@ -109,43 +121,36 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
     out.gamma_old[i] = whole[i] - late[i];
   }
   out.psi = to_matrix(integral_block(a, Eigen::Matrix4d::Identity(), Interval(s)));
-  IVector4 bi;
-  for (std::size_t i = 0; i < 4; ++i) bi[i] = Interval(b(static_cast<Eigen::Index>(i)));
+  const IVector4 bi = interval_vector(b);
   out.psi_over = to_matrix(integral_block(a, Eigen::Matrix4d::Identity(), Interval(0.0, s)));
-  // The integral of |e^(a r)| as a sum over pieces of [0, s], each the piece's length times the
-  // largest |entry| over it.
+  // Per piece of [0, s], one interval exponential over the piece: its hull makes e^(a r) over
+  // [0, s] (one exponential over all of [0, s] squares intervals of time and spreads far wider),
+  // its length times its largest |entry| sums to the integral of |e^(a r)|, and it gives the
+  // piece's maps.
   std::array<Interval, 16> sum;
   sum.fill(Interval(0.0));
   std::array<Interval, 4> sum_b;
   sum_b.fill(Interval(0.0));
-  // e^(a r) over [0, s] as the hull of its pieces': one interval exponential over all of [0, s]
-  // squares intervals of time and spreads far wider.
   out.over = to_matrix(validated::exp_enclosure(a, Interval(0.0)));
+  std::fill(out.over_b.begin(), out.over_b.end(), Interval::empty());
   for (int k = 0; k < kPieces && s > 0; ++k) {
     const double from = s * k / kPieces;
     const double to = k + 1 == kPieces ? s : s * (k + 1) / kPieces;
-    const std::vector<Interval> piece = validated::exp_enclosure(a, Interval(from, to));
+    const Interval whole_r = Interval(from, to);
+    const IMatrix4 piece = to_matrix(validated::exp_enclosure(a, whole_r));
     const Interval length = Interval(to) - Interval(from);
     for (std::size_t e = 0; e < 16; ++e) {
       sum[e] += length * Interval(piece[e].mag());
       out.over[e] = hull(out.over[e], piece[e]);
     }
-    const IVector4 piece_b = multiply(to_matrix(piece), bi);
-    for (std::size_t i = 0; i < 4; ++i) sum_b[i] += length * Interval(piece_b[i].mag());
-  }
-  for (std::size_t e = 0; e < 16; ++e) out.abs_integral[e] = sum[e].hi();
-  for (std::size_t i = 0; i < 4; ++i) out.abs_integral_b[i] = sum_b[i].hi();
-  std::fill(out.over_b.begin(), out.over_b.end(), Interval::empty());
-  for (int k = 0; k < kPieces && s > 0; ++k) {
-    const double from = s * k / kPieces;
-    const double to = k + 1 == kPieces ? s : s * (k + 1) / kPieces;
-    const IVector4 piece_b =
-        multiply(to_matrix(validated::exp_enclosure(a, Interval(from, to))), bi);
-    for (std::size_t i = 0; i < 4; ++i) out.over_b[i] = hull(out.over_b[i], piece_b[i]);
+    const IVector4 piece_b = multiply(piece, bi);
+    for (std::size_t i = 0; i < 4; ++i) {
+      sum_b[i] += length * Interval(piece_b[i].mag());
+      out.over_b[i] = hull(out.over_b[i], piece_b[i]);
+    }
     out.b_pieces.push_back(piece_b);
     StretchMaps::Piece maps;
-    maps.phi = to_matrix(validated::exp_enclosure(a, Interval(from, to)));
-    const Interval whole_r = Interval(from, to);
+    maps.phi = piece;
     const IVector4 upto = to_vector(integral_block(a, b, whole_r));
     const double late_from = std::max(0.0, from - switch_s);
     const double late_to = std::max(0.0, to - switch_s);
@@ -158,6 +163,8 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
     }
     out.pieces.push_back(maps);
   }
+  for (std::size_t e = 0; e < 16; ++e) out.abs_integral[e] = sum[e].hi();
+  for (std::size_t i = 0; i < 4; ++i) out.abs_integral_b[i] = sum_b[i].hi();
   if (!(s > 0)) out.over_b = bi;
 
   out.psi_b_over = to_vector(integral_block(a, b, Interval(0.0, s)));
