@@ -16,10 +16,10 @@
 #include <utility>
 #include <vector>
 
-#include "furuta/config/rig_config.hpp"
 #include "furuta/control/upright_lqr.hpp"
 #include "furuta/model/duty_ramp.hpp"
 #include "furuta/model/model.hpp"
+#include "simulated_rig.hpp"
 
 namespace furuta::control::balance_law_test {
 namespace {
@@ -27,16 +27,8 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
 
-struct Rig {
-  model::Parameters<double> truth;
-  model::MotorData motor;
-  double supply_v = 12;
-};
-
-Rig simulated_rig() {
-  const config::RigConfig rig = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
-  return {rig.simulation.parameters, rig.simulation.motor, rig.simulation.supply_voltage_v};
-}
+using Rig = testing::SimulatedRig;
+using testing::simulated_rig;
 
 // The law for `design` parameters with a 2 ms lag, as `furuta controller design` makes it: at
 // 16 ms unless told, the filter's gain for angles read half a board report (4 ms) before a sample.
@@ -168,8 +160,8 @@ TEST(BalanceLaw, HoldsTheTruePendulumWithAnglesReadBeforeTheSample) {
   for (const double period_s : {0.016, 0.008}) {
     const BalanceControllerSpec spec = spec_for(rig, rig.truth, period_s);
     for (const double age_s : {0.0, 0.004, 0.008}) {
-      SCOPED_TRACE(testing::Message() << "period " << period_s << " s, angles read " << age_s
-                                      << " s (arm) and " << age_s / 2 << " s (pendulum) before");
+      SCOPED_TRACE(::testing::Message() << "period " << period_s << " s, angles read " << age_s
+                                        << " s (arm) and " << age_s / 2 << " s (pendulum) before");
       const Outcome o = run(rig, spec, 20, -1, 0, {age_s, age_s / 2});
       ASSERT_TRUE(o.balanced_at_s.has_value());
       EXPECT_FALSE(o.fell_at_s.has_value());

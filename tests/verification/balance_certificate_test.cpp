@@ -12,9 +12,9 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "furuta/config/rig_config.hpp"
 #include "furuta/control/upright_lqr.hpp"
 #include "furuta/verification/sampled_loop.hpp"
+#include "simulated_rig.hpp"
 
 namespace furuta::verification::balance_certificate_test {
 namespace {
@@ -22,19 +22,8 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
 
-struct Rig {
-  model::Parameters<double> truth;
-  model::MotorData motor;
-  double supply_v = 12;
-  double arm_count_rad = 0;
-  double pendulum_count_rad = 0;
-};
-
-Rig simulated_rig() {
-  const config::RigConfig rig = config::load_rig_config(FURUTA_SOURCE_DIR "/config/rig.toml");
-  return {rig.simulation.parameters, rig.simulation.motor, rig.simulation.supply_voltage_v,
-          2 * kPi / (1024.0 * rig.simulation.motor.total_ratio()), 2 * kPi / 4096.0};
-}
+using Rig = testing::SimulatedRig;
+using testing::simulated_rig;
 
 // The law as `furuta controller design` makes it for the rig: 16 ms, a 2 ms lag, the board's ramp.
 control::BalanceControllerSpec designed(const Rig& rig) {
