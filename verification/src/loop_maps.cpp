@@ -136,7 +136,10 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
   for (int k = 0; k < kPieces && s > 0; ++k) {
     const double from = s * k / kPieces;
     const double to = k + 1 == kPieces ? s : s * (k + 1) / kPieces;
-    const Interval whole_r = Interval(from, to);
+    // A piece's maps hold slightly beyond its ends: the instants piece_integrals attributes to it
+    // (through s - r in double) may lie a rounding outside.
+    const double slack = 1e-12 * s;
+    const Interval whole_r = Interval(from - slack, to + slack);
     const IMatrix4 piece = to_matrix(validated::exp_enclosure(a, whole_r));
     const Interval length = Interval(to) - Interval(from);
     for (std::size_t e = 0; e < 16; ++e) {
@@ -168,6 +171,36 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
   if (!(s > 0)) out.over_b = bi;
 
   out.psi_b_over = to_vector(integral_block(a, b, Interval(0.0, s)));
+  return out;
+}
+
+PieceIntegrals piece_integrals(const Eigen::Matrix4d& a, double period_s, double s) {
+  PieceIntegrals out;
+  const auto integral_to = [&](double t) {
+    return to_matrix(integral_block(a, Eigen::Matrix4d::Identity(), Interval(t)));
+  };
+  IMatrix4 zero;
+  zero.fill(Interval(0.0));
+  for (int k = 0; k < kPieces; ++k) {
+    const double from = period_s * k / kPieces;
+    const double to = std::min(s, k + 1 == kPieces ? period_s : period_s * (k + 1) / kPieces);
+    std::array<double, 16> abs{};
+    if (!(from < to)) {
+      out.psi.push_back(zero);
+      out.abs.push_back(abs);
+      continue;
+    }
+    // int_from^to e^(a (s - r)) dr = int_(s - to)^(s - from) e^(a u) du.
+    const IMatrix4 upper = integral_to(s - from);
+    const IMatrix4 lower = integral_to(s - to);
+    IMatrix4 psi;
+    for (std::size_t e = 0; e < 16; ++e) psi[e] = upper[e] - lower[e];
+    out.psi.push_back(psi);
+    const IMatrix4 over = to_matrix(validated::exp_enclosure(a, Interval(s - to, s - from)));
+    const Interval length = Interval(to) - Interval(from);
+    for (std::size_t e = 0; e < 16; ++e) abs[e] = (length * Interval(over[e].mag())).hi();
+    out.abs.push_back(abs);
+  }
   return out;
 }
 

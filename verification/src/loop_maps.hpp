@@ -64,6 +64,16 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
 
 IVector4 multiply(const IMatrix4& m, const IVector4& x);
 
+// For an instant s in (0, period] and each piece [k, k + 1] period / kPieces of the period (as
+// stretch_maps makes them): what a disturbance over the piece's part before s adds to the state at
+// s, int over the piece and [0, s] of e^(a (s - r)) dr (zero for a piece after s), and an upper
+// bound of the same integral of |e^(a (s - r))| entrywise (for a disturbance that varies).
+struct PieceIntegrals {
+  std::vector<IMatrix4> psi;
+  std::vector<std::array<double, 16>> abs;
+};
+PieceIntegrals piece_integrals(const Eigen::Matrix4d& a, double period_s, double s);
+
 // The plant in momentum coordinates, z = [q1, q2 - pi, p1, p2] with p = M(q2) dq (docs/control.md):
 // dq = M^-1 p, dp1/dt = kd u - (kw + fv1) dq1, dp2/dt = dq' (dM/dq2) dq / 2 - mug sin q2 - fv2 dq2.
 // The duty enters with the constant kd and the arm's fast transient stays out of the nonlinear

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "furuta/verification/balance_certificate.hpp"
@@ -50,6 +52,43 @@ std::pair<model::Parameters<Interval>, model::Parameters<Interval>> halves(
   return {a, b};
 }
 
+// The halves of the start's plant box along the pendulum's angle or rate, whichever is the
+// wider for its width in `whole` (nothing when both are points).
+std::optional<std::pair<LoopStart, LoopStart>> start_halves(const LoopStart& start,
+                                                            const LoopStart& whole) {
+  std::optional<std::size_t> widest;
+  double largest = 0;
+  for (const std::size_t k : {std::size_t{1}, std::size_t{3}}) {
+    const double full = whole.state[k].width();
+    if (!(full > 0)) continue;
+    const double size = start.state[k].width() / full;
+    if (size > largest) {
+      largest = size;
+      widest = k;
+    }
+  }
+  if (!widest) return std::nullopt;
+  const auto [lo, hi] = start.state[*widest].bisect();
+  LoopStart a = start;
+  LoopStart b = start;
+  a.state[*widest] = lo;
+  b.state[*widest] = hi;
+  return std::make_pair(a, b);
+}
+
+bool is_point(const model::Parameters<Interval>& p) {
+  for (std::size_t k = 0; k < model::kParameterCount; ++k) {
+    if (p[k].width() > 0) return false;
+  }
+  return true;
+}
+
+struct Piece {
+  model::Parameters<Interval> parameters;
+  LoopStart start;
+  int splits = 0;
+};
+
 }  // namespace
 
 BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& law,
@@ -58,7 +97,7 @@ BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& la
                                         const SplitOptions& split) {
   const auto began = std::chrono::steady_clock::now();
   const std::array<double, model::kParameterCount> weights = influence(loop);
-  std::vector<model::Parameters<Interval>> pending{loop.parameters};
+  std::vector<Piece> pending{Piece{loop.parameters, start, 0}};
   std::vector<BalanceCertificate> certified;
   std::optional<BalanceCertificate> failed;
   std::size_t pieces = 1;
@@ -66,21 +105,33 @@ BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& la
     std::vector<BalanceCertificate> results(pending.size());
     tbb::parallel_for(std::size_t{0}, pending.size(), [&](std::size_t i) {
       LoopModel piece = loop;
-      piece.parameters = pending[i];
-      results[i] = verify_balance(law, piece, start, limits, options);
+      piece.parameters = pending[i].parameters;
+      results[i] = verify_balance(law, piece, pending[i].start, limits, options);
     });
-    std::vector<model::Parameters<Interval>> next;
+    std::vector<Piece> next;
     for (std::size_t i = 0; i < pending.size(); ++i) {
       if (results[i].certified()) {
         certified.push_back(std::move(results[i]));
         continue;
       }
       if (pieces + 1 <= split.max_pieces && !failed) {
-        const auto [a, b] = halves(pending[i], weights);
-        next.push_back(a);
-        next.push_back(b);
-        ++pieces;
-        continue;
+        // The start and the parameters in turn, the start first: its transient binds first.
+        const Piece& p = pending[i];
+        const auto by_start = start_halves(p.start, start);
+        const bool parameters_split = !is_point(p.parameters);
+        if (by_start && (p.splits % 2 == 0 || !parameters_split)) {
+          next.push_back(Piece{p.parameters, by_start->first, p.splits + 1});
+          next.push_back(Piece{p.parameters, by_start->second, p.splits + 1});
+          ++pieces;
+          continue;
+        }
+        if (parameters_split) {
+          const auto [a, b] = halves(p.parameters, weights);
+          next.push_back(Piece{a, p.start, p.splits + 1});
+          next.push_back(Piece{b, p.start, p.splits + 1});
+          ++pieces;
+          continue;
+        }
       }
       if (!failed || results[i].failure->t_s < failed->failure->t_s) failed = std::move(results[i]);
     }

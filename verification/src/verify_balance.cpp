@@ -10,6 +10,7 @@
 #include "furuta/control/upright_lqr.hpp"
 #include "furuta/verification/balance_certificate.hpp"
 #include "loop_maps.hpp"
+#include "remainder_jet.hpp"
 
 namespace furuta::verification {
 
@@ -183,12 +184,33 @@ IVector4 disturbance(const StretchMaps& m, const IVector4& d, const InputError& 
   return out;
 }
 
+// What the plant's distance from its linearisation adds to the state at an instant s of the
+// period, to first order in the period's start: x_part x + old_part old + new_part new + constant,
+// and beyond it anything in `fresh`.
+struct FirstOrder {
+  IMatrix4 x_part;
+  IVector4 old_part;
+  IVector4 new_part;
+  IVector4 constant;
+  IVector4 fresh;
+};
+
+FirstOrder no_first_order() {
+  FirstOrder out;
+  out.x_part.fill(Interval(0.0));
+  for (IVector4* v : {&out.old_part, &out.new_part, &out.constant, &out.fresh}) {
+    v->fill(Interval(0.0));
+  }
+  return out;
+}
+
 // The state at s from the sample, the duty `old` held before the switch and `new` after it:
-// the exact linear maps, plus what the model adds beyond them (`added`, an interval vector
-// carried by fresh symbols).
+// the exact linear maps, plus the remainder's first-order part, plus what the model adds beyond
+// them (`added`, an interval vector carried by fresh symbols).
 Forms4 carried(const StretchMaps& m, const Forms4& x, const AffineForm& old_duty,
-               const AffineForm& new_duty, IVector4 added, const InputError& input,
-               Symbols& symbols) {
+               const AffineForm& new_duty, const FirstOrder& first, IVector4 added,
+               const InputError& input, Symbols& symbols) {
+  for (std::size_t i = 0; i < 4; ++i) added[i] += first.fresh[i];
   // The shared ramp, when over by s: it reaches the state at s through e^(a (s - tau)) b, tau
   // over the ramp; that is e^(a (s - switch)) b rho, plus at most |a e^(a r) b| times the ramp's
   // first moment (the change of e^(a r) b over the ramp, by the mean value theorem). Its
@@ -207,8 +229,10 @@ Forms4 carried(const StretchMaps& m, const Forms4& x, const AffineForm& old_duty
   Forms4 out;
   for (std::size_t i = 0; i < 4; ++i) {
     LinearCombination row;
-    for (std::size_t j = 0; j < 4; ++j) row.add(m.phi[i * 4 + j], x[j]);
-    row.add(m.gamma_old[i], old_duty).add(m.gamma_new[i], new_duty);
+    for (std::size_t j = 0; j < 4; ++j) row.add(m.phi[i * 4 + j] + first.x_part[i * 4 + j], x[j]);
+    row.add(m.gamma_old[i] + first.old_part[i], old_duty)
+        .add(m.gamma_new[i] + first.new_part[i], new_duty)
+        .add(first.constant[i], Symbols::constant(1.0));
     if (ramp) row.add(Interval(effect[i].mid()), input.ramp->rho);
     if (!(added[i].lo() == 0 && added[i].hi() == 0)) row.add(symbols.noise(added[i]));
     out[i] = row.result();
@@ -285,6 +309,9 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
   const double board_switch = loop.lag_s.mid();
   const StretchMaps plant_period = detail::stretch_maps(plant.a, plant.b, board_switch, period);
   const StretchMaps plant_reading = detail::stretch_maps(plant.a, plant.b, board_switch, reading_s);
+  const detail::PieceIntegrals period_pieces = detail::piece_integrals(plant.a, period, period);
+  const detail::PieceIntegrals reading_pieces = detail::piece_integrals(plant.a, period, reading_s);
+  const FirstOrder no_first = no_first_order();
 
   // The law's model, as it carries its estimate.
   Eigen::Matrix4d law_a;
@@ -448,14 +475,30 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
     StateBox reach;
     reach.fill(Interval::empty());
     std::array<Interval, 2> reach_rates{Interval::empty(), Interval::empty()};
+    struct PieceReach {
+      std::array<double, 4> centre;
+      StateBox range;
+      std::array<double, 2> rate_centre;
+      std::array<Interval, 2> rates;
+      // |lambda y_k +- y_l / lambda| over the symbols for the pairs (e, w1), (e, w2), (w1, w2),
+      // lambda balancing their sizes: the products' ranges by polarisation (correlation kept).
+      std::array<std::array<double, 2>, 3> pair_sizes;
+      std::array<double, 3> pair_lambda;
+    };
+    std::vector<PieceReach> piece_reach;
+    piece_reach.reserve(plant_period.pieces.size());
     for (const StretchMaps::Piece& piece : plant_period.pieces) {
       Forms4 at;
+      PieceReach here;
+      std::array<AffineForm, 2> rate_forms;
       for (std::size_t i = 0; i < 4; ++i) {
         LinearCombination row;
         for (std::size_t j = 0; j < 4; ++j) row.add(piece.phi[i * 4 + j], x[j]);
         row.add(piece.gamma_old[i], old_duty).add(piece.gamma_new[i], new_duty);
         at[i] = row.result();
-        reach[i] = hull(reach[i], detail::range(at[i]));
+        here.centre[i] = at[i].centre;
+        here.range[i] = detail::range(at[i]);
+        reach[i] = hull(reach[i], here.range[i]);
       }
       // The rates inverse p, from the forms (p1 and p2 move together).
       for (std::size_t i = 0; i < 2; ++i) {
@@ -464,8 +507,29 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
                                     .add(Interval(plant.inverse(r, 0)), at[2])
                                     .add(Interval(plant.inverse(r, 1)), at[3])
                                     .result();
-        reach_rates[i] = hull(reach_rates[i], detail::range(rate));
+        here.rate_centre[i] = rate.centre;
+        here.rates[i] = detail::range(rate);
+        reach_rates[i] = hull(reach_rates[i], here.rates[i]);
+        rate_forms[i] = rate;
       }
+      const std::array<const AffineForm*, 3> y_forms{&at[1], &rate_forms[0], &rate_forms[1]};
+      constexpr std::array<std::array<std::size_t, 2>, 3> kPairsOfY{{{0, 1}, {0, 2}, {1, 2}}};
+      for (std::size_t q = 0; q < 3; ++q) {
+        const AffineForm& a = *y_forms[kPairsOfY[q][0]];
+        const AffineForm& b = *y_forms[kPairsOfY[q][1]];
+        const double ra = detail::range(a).rad();
+        const double rb = detail::range(b).rad();
+        const double lambda = ra > 0 && rb > 0 ? std::sqrt(rb / ra) : 1.0;
+        here.pair_lambda[q] = lambda;
+        for (std::size_t sign = 0; sign < 2; ++sign) {
+          const double t = sign == 0 ? 1.0 / lambda : -1.0 / lambda;
+          here.pair_sizes[q][sign] =
+              detail::range(
+                  LinearCombination().add(Interval(lambda), a).add(Interval(t), b).result())
+                  .rad();
+        }
+      }
+      piece_reach.push_back(here);
     }
     // The rates over the enclosure `box`: the reach's, plus what its excess over the reach adds.
     // (box contains the reach: the interval that, added to the reach, gives the box).
@@ -531,8 +595,6 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
       out.failure = Failure{FailureKind::no_enclosure, t0, over[1], limits.upright_rad};
       break;
     }
-    remainder = detail::momentum_remainder(plant, loop.parameters, loop.duty_torque_nm,
-                                           loop.back_emf_nm_s, over, rates_in(over), duty_range);
     if (auto f = outside(FailureKind::pendulum_limit, t0, over[1], limits.upright_rad)) {
       out.failure = f;
       break;
@@ -542,13 +604,182 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
       break;
     }
 
+    // The remainder over each piece j of the period, in y = (e, w = inverse p): with y_c the
+    // piece's reach's centre, n(y) = n(y_c) + g (y - y_c) + (J(xi) - g) (y - y_c), g the gradient
+    // at y_c and xi in the piece's box Y (the mean value form). y - y_c is the reach's form less
+    // its centre plus what lies beyond the reach (`beyond`); g times the form is carried in the
+    // symbols, the rest is fresh. Integrated over the pieces towards an instant s.
+    StateBox beyond;
+    for (std::size_t i = 0; i < 4; ++i) {
+      beyond[i] = Interval((Interval(over[i].lo()) - Interval(reach[i].lo())).lo(),
+                           (Interval(over[i].hi()) - Interval(reach[i].hi())).hi());
+    }
+    const auto v = [&](Eigen::Index i, Eigen::Index j) { return Interval(plant.inverse(i, j)); };
+    const std::array<Interval, 3> beyond_y{beyond[1], v(0, 0) * beyond[2] + v(0, 1) * beyond[3],
+                                           v(1, 0) * beyond[2] + v(1, 1) * beyond[3]};
+    const Interval drive_spread = (loop.duty_torque_nm - Interval(plant.kd)) * duty_range;
+    struct PieceRemainder {
+      IMatrix4 gradient_z;  // g in the state's coordinates
+      IVector4 constant;    // n(y_c) - g y_c, the midpoints
+      IVector4 fresh;       // the rest, at every instant of the piece
+    };
+    constexpr std::array<std::array<std::size_t, 2>, 6> kPairOfY{
+        {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}}};
+    constexpr std::array<std::array<std::size_t, 3>, 10> kTripleOfY{{{0, 0, 0},
+                                                                     {0, 0, 1},
+                                                                     {0, 0, 2},
+                                                                     {0, 1, 1},
+                                                                     {0, 1, 2},
+                                                                     {0, 2, 2},
+                                                                     {1, 1, 1},
+                                                                     {1, 1, 2},
+                                                                     {1, 2, 2},
+                                                                     {2, 2, 2}}};
+    std::vector<PieceRemainder> piece_remainders;
+    piece_remainders.reserve(piece_reach.size());
+    for (const PieceReach& piece : piece_reach) {
+      const std::array<double, 3> yc{piece.centre[1], piece.rate_centre[0], piece.rate_centre[1]};
+      const std::array<Interval, 3> ybox{piece.range[1] + beyond_y[0], piece.rates[0] + beyond_y[1],
+                                         piece.rates[1] + beyond_y[2]};
+      const detail::RemainderJet at_centre =
+          detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s,
+                                {Interval(yc[0]), Interval(yc[1]), Interval(yc[2])});
+      const detail::RemainderJet over_box =
+          detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s, ybox);
+      // How far y strays from y_c over the piece: the reach's form and what lies beyond it.
+      std::array<double, 3> reach_size;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const Interval& v = k == 0 ? piece.range[1] : piece.rates[k - 1];
+        reach_size[k] =
+            (Interval(std::max(v.hi() - yc[k], yc[k] - v.lo())) * Interval(1.0 + 1e-15) +
+             Interval(beyond_y[k].mag()))
+                .hi();
+      }
+      // The deviations' products: y_k^2 in [0, size^2]; y_k y_l = ((l y_k + y_l / l)^2 -
+      // (l y_k - y_l / l)^2) / 4, each deviation the form's plus what lies beyond it, which keeps
+      // the forms' correlation.
+      std::array<Interval, 6> products;
+      for (std::size_t pair = 0; pair < 6; ++pair) {
+        const std::size_t a = kPairOfY[pair][0];
+        const std::size_t b = kPairOfY[pair][1];
+        const Interval box_product = Interval(reach_size[a]) * Interval(reach_size[b]);
+        if (a == b) {
+          products[pair] = Interval(0.0, box_product.hi());
+          continue;
+        }
+        const std::size_t q = a == 0 ? b - 1 : 2;
+        const double l = piece.pair_lambda[q];
+        const Interval extra =
+            Interval(l) * Interval(beyond_y[a].mag()) + Interval(beyond_y[b].mag()) / Interval(l);
+        const Interval plus = Interval(piece.pair_sizes[q][0]) + extra;
+        const Interval minus = Interval(piece.pair_sizes[q][1]) + extra;
+        products[pair] = interval::intersect(Interval(-(interval::sqr(minus) / Interval(4.0)).hi(),
+                                                      (interval::sqr(plus) / Interval(4.0)).hi()),
+                                             symmetric(box_product.hi()));
+      }
+      // y_k y_l y_m / 6 times the number of its orderings: 1/6 for k = l = m, 1/2 for two alike,
+      // 1 for three distinct.
+      std::array<Interval, 10> triple_bounds;
+      for (std::size_t triple = 0; triple < 10; ++triple) {
+        const auto& t = kTripleOfY[triple];
+        const Interval size =
+            Interval(reach_size[t[0]]) * Interval(reach_size[t[1]]) * Interval(reach_size[t[2]]);
+        const double weight = t[0] == t[2] ? 1.0 / 6.0 : (t[0] == t[1] || t[1] == t[2] ? 0.5 : 1.0);
+        triple_bounds[triple] = Interval(weight) * symmetric(size.hi());
+      }
+      PieceRemainder r;
+      for (std::size_t i = 0; i < 4; ++i) {
+        std::array<double, 3> g;
+        for (std::size_t k = 0; k < 3; ++k) g[k] = at_centre.gradient[i][k].mid();
+        r.gradient_z[i * 4 + 0] = Interval(0.0);
+        r.gradient_z[i * 4 + 1] = Interval(g[0]);
+        r.gradient_z[i * 4 + 2] = Interval(g[1]) * v(0, 0) + Interval(g[2]) * v(1, 0);
+        r.gradient_z[i * 4 + 3] = Interval(g[1]) * v(0, 1) + Interval(g[2]) * v(1, 1);
+        const double mid = at_centre.value[i].mid();
+        Interval constant(mid);
+        // Two enclosures of the rest, intersected: the mean value form, and n over the box less
+        // the carried part over the reach (tighter where g is small, as about upright).
+        Interval mean_value = at_centre.value[i] - mid;
+        Interval direct = over_box.value[i] - mid;
+        const std::array<Interval, 3> reach_y{piece.range[1], piece.rates[0], piece.rates[1]};
+        for (std::size_t k = 0; k < 3; ++k) {
+          constant -= Interval(g[k]) * Interval(yc[k]);
+          mean_value += Interval(g[k]) * beyond_y[k] +
+                        (over_box.gradient[i][k] - Interval(g[k])) * (ybox[k] - Interval(yc[k]));
+          direct -= Interval(g[k]) * (reach_y[k] - Interval(yc[k]));
+        }
+        // Taylor forms: (grad n(y_c) - g) (y - y_c) + g beyond, then to the second order with the
+        // Hessian over the box, or to the third with the Hessian at y_c and the third
+        // derivatives over the box.
+        Interval first = at_centre.value[i] - mid;
+        for (std::size_t k = 0; k < 3; ++k) {
+          first += (at_centre.gradient[i][k] - Interval(g[k])) * symmetric(reach_size[k]) +
+                   Interval(g[k]) * beyond_y[k];
+        }
+        Interval second = first;
+        Interval third = first;
+        for (std::size_t pair = 0; pair < 6; ++pair) {
+          const Interval half =
+              kPairOfY[pair][0] == kPairOfY[pair][1] ? Interval(0.5) : Interval(1.0);
+          second += half * over_box.hessian[i][pair] * products[pair];
+          third += half * at_centre.hessian[i][pair] * products[pair];
+        }
+        for (std::size_t triple = 0; triple < 10; ++triple) {
+          third += over_box.third[i][triple] * triple_bounds[triple];
+        }
+        Interval fresh = interval::intersect(interval::intersect(mean_value, direct),
+                                             interval::intersect(second, third));
+        // Its midpoint is a constant over the piece.
+        const double fresh_mid = fresh.mid();
+        constant += Interval(fresh_mid);
+        fresh = fresh - Interval(fresh_mid);
+        if (i == 2) fresh += drive_spread;
+        r.constant[i] = constant;
+        r.fresh[i] = fresh;
+      }
+      piece_remainders.push_back(r);
+    }
+    const auto first_order = [&](const detail::PieceIntegrals& integrals) {
+      FirstOrder out = no_first_order();
+      for (std::size_t j = 0; j < piece_remainders.size(); ++j) {
+        const IMatrix4& psi = integrals.psi[j];
+        const PieceRemainder& r = piece_remainders[j];
+        const StretchMaps::Piece& maps = plant_period.pieces[j];
+        IMatrix4 psi_g;  // psi g
+        for (std::size_t i = 0; i < 4; ++i) {
+          for (std::size_t k = 0; k < 4; ++k) {
+            Interval sum(0.0);
+            for (std::size_t l = 0; l < 4; ++l) sum += psi[i * 4 + l] * r.gradient_z[l * 4 + k];
+            psi_g[i * 4 + k] = sum;
+          }
+        }
+        for (std::size_t i = 0; i < 4; ++i) {
+          for (std::size_t k = 0; k < 4; ++k) {
+            Interval sum(0.0);
+            for (std::size_t l = 0; l < 4; ++l) sum += psi_g[i * 4 + l] * maps.phi[l * 4 + k];
+            out.x_part[i * 4 + k] += sum;
+          }
+          Interval fresh(0.0);
+          for (std::size_t l = 0; l < 4; ++l) {
+            out.old_part[i] += psi_g[i * 4 + l] * maps.gamma_old[l];
+            out.new_part[i] += psi_g[i * 4 + l] * maps.gamma_new[l];
+            out.constant[i] += psi[i * 4 + l] * r.constant[l];
+            fresh += Interval(integrals.abs[j][i * 4 + l]) * Interval(r.fresh[l].mag());
+          }
+          out.fresh[i] += symmetric(fresh.hi());
+        }
+      }
+      return out;
+    };
+
     // The plant at the readings' instant and at the next sample.
+    const IVector4 no_disturbance{zero_interval, zero_interval, zero_interval, zero_interval};
     const Forms4 x_read =
-        carried(plant_reading, x, old_duty, new_duty,
-                disturbance(plant_reading, remainder, board_error), board_error, symbols);
+        carried(plant_reading, x, old_duty, new_duty, first_order(reading_pieces),
+                disturbance(plant_reading, no_disturbance, board_error), board_error, symbols);
     const Forms4 x_next =
-        carried(plant_period, x, old_duty, new_duty,
-                disturbance(plant_period, remainder, board_error), board_error, symbols);
+        carried(plant_period, x, old_duty, new_duty, first_order(period_pieces),
+                disturbance(plant_period, no_disturbance, board_error), board_error, symbols);
     // The readings, within half a count.
     const AffineForm arm_reading = LinearCombination()
                                        .add(x_read[0])
@@ -566,9 +797,8 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
 
     // The law: its estimate carried to the readings' instant, corrected by them, carried to the
     // sample; its ramp as an input error of its own.
-    const IVector4 no_disturbance{zero_interval, zero_interval, zero_interval, zero_interval};
     const Forms4 predicted =
-        carried(law_reading, h, old_duty, new_duty,
+        carried(law_reading, h, old_duty, new_duty, no_first,
                 disturbance(law_reading, no_disturbance, law_error), law_error, symbols);
     const AffineForm arm_innovation = difference(arm_reading, predicted[0]);
     const AffineForm pendulum_innovation = difference(pendulum_reading, predicted[1]);
@@ -580,7 +810,7 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
                          .add(Interval(law.observer_gain[i * 2 + 1]), pendulum_innovation)
                          .result();
     }
-    Forms4 h_next = carried(law_period, corrected, old_duty, new_duty,
+    Forms4 h_next = carried(law_period, corrected, old_duty, new_duty, no_first,
                             disturbance(law_period, no_disturbance, law_error), law_error, symbols);
     for (std::size_t i = 0; i < 4; ++i) {
       const double size =
