@@ -150,7 +150,7 @@ int run_controller_verify_command(const ControllerVerifyOptions& options, std::o
   verification::VerifyOptions verify;
   verify.horizon_s = options.horizon_s;
   verify.max_symbols = options.max_symbols;
-  const verification::SplitOptions split{options.max_pieces};
+  const verification::SplitOptions split{options.max_pieces, options.handover_s};
 
   report::VerificationReportInput input;
   input.software_version = daemon::kSoftwareVersion;
@@ -201,7 +201,9 @@ int run_controller_verify_command(const ControllerVerifyOptions& options, std::o
     out << "certified for " << c.horizon_s << " s: the pendulum within "
         << limits.upright_rad / kDeg << " deg of upright, the arm within " << limits.arm_rad / kDeg
         << " deg, the duty within its limit, for every parameter and start in the boxes ("
-        << c.pieces << " piece" << (c.pieces == 1 ? "" : "s") << ", " << c.seconds << " s)\n";
+        << c.pieces << " piece" << (c.pieces == 1 ? "" : "s");
+    if (c.handover_s > 0) out << " to " << c.handover_s << " s, then one run from their states";
+    out << ", " << c.seconds << " s)\n";
   } else {
     out << "not certified: " << failure_text(*c.failure) << " (" << c.pieces << " piece"
         << (c.pieces == 1 ? "" : "s") << ", " << c.seconds << " s)\n";

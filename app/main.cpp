@@ -347,8 +347,13 @@ int main(int argc, char** argv) {
                        "Also find the largest start (the given one scaled) that is certified");
   verify_cmd
       ->add_option("--max-pieces", verify.max_pieces,
-                   "Pieces of the parameter box at most (default 32)")
+                   "Pieces of the start and parameter boxes at most (default 32)")
       ->check(CLI::Range(1, 4096));
+  verify_cmd
+      ->add_option("--handover", verify.handover_s,
+                   "Seconds the pieces run before one run from their states takes over (default "
+                   "1; 0: the pieces run to the horizon)")
+      ->check(furuta::app::finite_in(0.0, 3600.0));
   verify_cmd
       ->add_option("--sampled", verify.sampled,
                    "Trajectories of the sampled check (default 40: 32 corners, then random)")

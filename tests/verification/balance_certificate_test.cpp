@@ -21,6 +21,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
+// A start (deg, and five times it in deg/s) one run does not certify and its pieces do.
+constexpr double kStartDeg = 1.6;
 
 using Rig = testing::SimulatedRig;
 using testing::simulated_rig;
@@ -117,6 +119,50 @@ TEST(BalanceCertificate, SampledTrajectoriesStayInsideEveryBox) {
   EXPECT_EQ(check.trajectories, 40u);
   EXPECT_EQ(check.drawn.size(), 2u);
   // Every sample's state, duty and two rates, every Runge-Kutta step's state, of 250 periods.
+  EXPECT_GT(check.check.checks, 40u * 250u * 7u);
+  EXPECT_EQ(check.check.outside, 0u) << "first outside at " << check.check.first_outside_s << " s";
+}
+
+// Halving the start box where its run fails: the pieces where the pendulum starts away from
+// upright and moving further away carry the remainder's first order along their own transients.
+TEST(BalanceCertificate, StartPiecesCertifyWhatOneRunCannot) {
+  const Rig rig = simulated_rig();
+  const control::BalanceControllerSpec law = designed(rig);
+  const LoopModel loop = loop_around(rig, law, 1e-6);
+  const LoopStart start = start_within(rig, kStartDeg * kDeg, 5 * kStartDeg * kDeg);
+  const BalanceCertificate whole = verify_balance(law, loop, start, limits_of(law), for_seconds(3));
+  ASSERT_FALSE(whole.certified());
+  SplitOptions split;
+  split.max_pieces = 16;
+  split.handover_s = 0;
+  const BalanceCertificate pieces =
+      verify_balance_split(law, loop, start, limits_of(law), for_seconds(3), split);
+  ASSERT_TRUE(pieces.certified()) << "failed at " << pieces.failure->t_s << " s";
+  EXPECT_GT(pieces.pieces, 1u);
+  EXPECT_EQ(pieces.handover_s, 0.0);
+  ASSERT_EQ(pieces.steps.size(), 188u);
+  const SampledCheck check = sampled_check(law, loop, start, pieces, 40, 0, 3);
+  EXPECT_EQ(check.check.outside, 0u) << "first outside at " << check.check.first_outside_s << " s";
+}
+
+// The pieces hand over to one run from the hull of their states (the loop's whole state as a
+// box): the same horizon proven, each period's boxes holding the sampled trajectories.
+TEST(BalanceCertificate, HandoverTubeHoldsTheSampledTrajectories) {
+  const Rig rig = simulated_rig();
+  const control::BalanceControllerSpec law = designed(rig);
+  const LoopModel loop = loop_around(rig, law, 0.0);
+  const LoopStart start = start_within(rig, 0.5 * kDeg, 2.5 * kDeg);
+  SplitOptions split;
+  split.handover_s = 1.0;
+  const BalanceCertificate c =
+      verify_balance_split(law, loop, start, limits_of(law), for_seconds(4), split);
+  ASSERT_TRUE(c.certified());
+  EXPECT_GT(c.handover_s, 0.0);
+  ASSERT_EQ(c.steps.size(), 250u);
+  for (std::size_t k = 0; k < c.steps.size(); ++k) {
+    EXPECT_NEAR(c.steps[k].t1_s, 0.016 * static_cast<double>(k + 1), 1e-9);
+  }
+  const SampledCheck check = sampled_check(law, loop, start, c, 40, 0, 11);
   EXPECT_GT(check.check.checks, 40u * 250u * 7u);
   EXPECT_EQ(check.check.outside, 0u) << "first outside at " << check.check.first_outside_s << " s";
 }

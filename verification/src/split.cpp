@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "furuta/verification/balance_certificate.hpp"
+#include "loop_run.hpp"
 
 namespace furuta::verification {
 
@@ -83,34 +84,41 @@ bool is_point(const model::Parameters<Interval>& p) {
   return true;
 }
 
+// Handovers tried: at 1, 2 and 3 times SplitOptions::handover_s.
+constexpr std::size_t kHandoverTries = 3;
+
 struct Piece {
   model::Parameters<Interval> parameters;
   LoopStart start;
   int splits = 0;
 };
 
-}  // namespace
+// The pieces of the start and parameter boxes, each run to options' horizon, halved where they
+// fail (SplitOptions) until certified or max_pieces: the certificate over their hull, and the hull
+// of their states at the horizon.
+struct PiecesRun {
+  BalanceCertificate certificate;
+  std::vector<detail::LoopStateBox> at_checkpoints;  // hulls over the pieces
+};
 
-BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& law,
-                                        const LoopModel& loop, const LoopStart& start,
-                                        const LoopLimits& limits, const VerifyOptions& options,
-                                        const SplitOptions& split) {
-  const auto began = std::chrono::steady_clock::now();
+PiecesRun run_pieces(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                     const LoopStart& start, const LoopLimits& limits, const VerifyOptions& options,
+                     const SplitOptions& split, const std::vector<std::size_t>& checkpoints) {
   const std::array<double, model::kParameterCount> weights = influence(loop);
   std::vector<Piece> pending{Piece{loop.parameters, start, 0}};
-  std::vector<BalanceCertificate> certified;
+  std::vector<detail::LoopRun> certified;
   std::optional<BalanceCertificate> failed;
   std::size_t pieces = 1;
   while (!pending.empty()) {
-    std::vector<BalanceCertificate> results(pending.size());
+    std::vector<detail::LoopRun> results(pending.size());
     tbb::parallel_for(std::size_t{0}, pending.size(), [&](std::size_t i) {
       LoopModel piece = loop;
       piece.parameters = pending[i].parameters;
-      results[i] = verify_balance(law, piece, pending[i].start, limits, options);
+      results[i] = detail::run_loop(law, piece, pending[i].start, limits, options, checkpoints);
     });
     std::vector<Piece> next;
     for (std::size_t i = 0; i < pending.size(); ++i) {
-      if (results[i].certified()) {
+      if (results[i].certificate.certified()) {
         certified.push_back(std::move(results[i]));
         continue;
       }
@@ -133,38 +141,103 @@ BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& la
           continue;
         }
       }
-      if (!failed || results[i].failure->t_s < failed->failure->t_s) failed = std::move(results[i]);
+      const BalanceCertificate& c = results[i].certificate;
+      if (!failed || c.failure->t_s < failed->failure->t_s) failed = c;
     }
     if (failed) break;
     pending = std::move(next);
   }
-  BalanceCertificate out;
+  PiecesRun run;
+  BalanceCertificate& out = run.certificate;
   out.horizon_s = options.horizon_s;
   out.pieces = pieces;
-  for (const BalanceCertificate& c : certified) {
-    out.largest_symbol_count = std::max(out.largest_symbol_count, c.largest_symbol_count);
+  for (const detail::LoopRun& c : certified) {
+    out.largest_symbol_count =
+        std::max(out.largest_symbol_count, c.certificate.largest_symbol_count);
   }
   if (failed) {
     out.failure = failed->failure;
     out.steps = std::move(failed->steps);
     out.largest_symbol_count = std::max(out.largest_symbol_count, failed->largest_symbol_count);
-  } else {
-    out.steps = certified.front().steps;
-    for (std::size_t c = 1; c < certified.size(); ++c) {
-      for (std::size_t k = 0; k < out.steps.size(); ++k) {
-        LoopStepBox& s = out.steps[k];
-        const LoopStepBox& t = certified[c].steps[k];
-        for (std::size_t i = 0; i < 4; ++i) {
-          s.over[i] = hull(s.over[i], t.over[i]);
-          s.at_end[i] = hull(s.at_end[i], t.at_end[i]);
-          s.estimate[i] = hull(s.estimate[i], t.estimate[i]);
-        }
-        s.duty = hull(s.duty, t.duty);
+    return run;
+  }
+  out.steps = certified.front().certificate.steps;
+  run.at_checkpoints = certified.front().at_checkpoints;
+  for (std::size_t c = 1; c < certified.size(); ++c) {
+    for (std::size_t k = 0; k < out.steps.size(); ++k) {
+      LoopStepBox& s = out.steps[k];
+      const LoopStepBox& t = certified[c].certificate.steps[k];
+      for (std::size_t i = 0; i < 4; ++i) {
+        s.over[i] = hull(s.over[i], t.over[i]);
+        s.at_end[i] = hull(s.at_end[i], t.at_end[i]);
+        s.estimate[i] = hull(s.estimate[i], t.estimate[i]);
+      }
+      s.duty = hull(s.duty, t.duty);
+    }
+    for (std::size_t j = 0; j < run.at_checkpoints.size(); ++j) {
+      for (std::size_t i = 0; i < run.at_checkpoints[j].size(); ++i) {
+        run.at_checkpoints[j][i] =
+            hull(run.at_checkpoints[j][i], certified[c].at_checkpoints[j][i]);
       }
     }
   }
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-  return out;
+  return run;
+}
+
+}  // namespace
+
+BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& law,
+                                        const LoopModel& loop, const LoopStart& start,
+                                        const LoopLimits& limits, const VerifyOptions& options,
+                                        const SplitOptions& split) {
+  const auto began = std::chrono::steady_clock::now();
+  const auto finish = [&](BalanceCertificate c) {
+    c.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    return c;
+  };
+  // The pieces to the handover, then one run from the hull of their states (the loop is the same
+  // at every sample, so a trajectory in that hull at the handover stays in that run's tube). The
+  // pieces record their states at 1, 2 and 3 times the handover; the earliest from which the run
+  // is certified is taken.
+  const double period = law.period_s;
+  const auto handover_periods =
+      static_cast<std::size_t>(std::max(1.0, std::round(split.handover_s / period)));
+  const auto horizon_periods =
+      static_cast<std::size_t>(std::ceil(options.horizon_s / period - 1e-9));
+  std::vector<std::size_t> checkpoints;
+  for (std::size_t m = 1; m <= kHandoverTries && split.handover_s > 0; ++m) {
+    if (m * handover_periods < horizon_periods) checkpoints.push_back(m * handover_periods);
+  }
+  if (!checkpoints.empty()) {
+    VerifyOptions first = options;
+    first.horizon_s = static_cast<double>(checkpoints.back()) * period;
+    PiecesRun pieces = run_pieces(law, loop, start, limits, first, split, checkpoints);
+    if (!pieces.certificate.certified()) {
+      pieces.certificate.horizon_s = options.horizon_s;
+      return finish(std::move(pieces.certificate));
+    }
+    for (std::size_t j = 0; j < checkpoints.size(); ++j) {
+      const double handover_s = static_cast<double>(checkpoints[j]) * period;
+      VerifyOptions rest = options;
+      rest.horizon_s = options.horizon_s - handover_s;
+      const detail::LoopRun after =
+          detail::run_loop(law, loop, pieces.at_checkpoints[j], limits, rest);
+      if (!after.certificate.certified()) continue;
+      BalanceCertificate out = std::move(pieces.certificate);
+      out.steps.resize(checkpoints[j]);
+      out.horizon_s = options.horizon_s;
+      out.handover_s = handover_s;
+      out.largest_symbol_count =
+          std::max(out.largest_symbol_count, after.certificate.largest_symbol_count);
+      for (LoopStepBox step : after.certificate.steps) {
+        step.t0_s += handover_s;
+        step.t1_s += handover_s;
+        out.steps.push_back(step);
+      }
+      return finish(std::move(out));
+    }
+  }
+  return finish(run_pieces(law, loop, start, limits, options, split, {}).certificate);
 }
 
 }  // namespace furuta::verification

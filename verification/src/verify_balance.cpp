@@ -4,12 +4,14 @@
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "affine_form.hpp"
 #include "furuta/control/upright_lqr.hpp"
 #include "furuta/verification/balance_certificate.hpp"
 #include "loop_maps.hpp"
+#include "loop_run.hpp"
 #include "remainder_jet.hpp"
 
 namespace furuta::verification {
@@ -253,7 +255,8 @@ std::optional<Failure> outside(FailureKind kind, double t_s, const Interval& val
 }
 
 void check_arguments(const control::BalanceControllerSpec& law, const LoopModel& loop,
-                     const LoopStart& start, const VerifyOptions& options) {
+                     const std::variant<LoopStart, detail::LoopStateBox>& from,
+                     const VerifyOptions& options) {
   const auto fail = [](const std::string& what) {
     throw std::invalid_argument("verify_balance: " + what);
   };
@@ -282,8 +285,15 @@ void check_arguments(const control::BalanceControllerSpec& law, const LoopModel&
            " must be a bounded interval > 0 (>= 0 for a friction)");
     }
   }
-  for (const StateBox* box : {&start.state, &start.estimate_error}) {
-    if (!bounded(*box)) fail("the start boxes must be bounded");
+  if (const LoopStart* start = std::get_if<LoopStart>(&from)) {
+    for (const StateBox* box : {&start->state, &start->estimate_error}) {
+      if (!bounded(*box)) fail("the start boxes must be bounded");
+    }
+  } else {
+    const detail::LoopStateBox& box = std::get<detail::LoopStateBox>(from);
+    if (!std::all_of(box.begin(), box.end(), [](const Interval& v) { return v.is_bounded(); })) {
+      fail("the start boxes must be bounded");
+    }
   }
   if (!(options.horizon_s > 0) || !std::isfinite(options.horizon_s)) {
     fail("the horizon must be a finite number > 0 s");
@@ -292,10 +302,12 @@ void check_arguments(const control::BalanceControllerSpec& law, const LoopModel&
 
 }  // namespace
 
-BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, const LoopModel& loop,
-                                  const LoopStart& start, const LoopLimits& limits,
-                                  const VerifyOptions& options) {
-  check_arguments(law, loop, start, options);
+namespace detail {
+
+LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                 const std::variant<LoopStart, LoopStateBox>& from, const LoopLimits& limits,
+                 const VerifyOptions& options, const std::vector<std::size_t>& checkpoints) {
+  check_arguments(law, loop, from, options);
   const auto began = std::chrono::steady_clock::now();
   const double period = law.period_s;
   const double reading_s = period - loop.reading_age_s;
@@ -330,27 +342,28 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
   const double duty_bound = max_steps * law.duty_step;
   const double law_limit = std::min(law.region.fall_rad, law.region.release_rad);
 
-  BalanceCertificate out;
+  LoopRun run;
+  BalanceCertificate& out = run.certificate;
   out.horizon_s = options.horizon_s;
   Symbols symbols;
   Forms4 x;  // the plant's [q1, q2 - pi, p1, p2]
   Forms4 h;
-  Forms4 start_state;
-  for (std::size_t i = 0; i < 4; ++i) start_state[i] = symbols.noise(start.state[i]);
-  for (std::size_t i = 0; i < 4; ++i) {
-    h[i] = LinearCombination()
-               .add(start_state[i])
-               .add(symbols.noise(start.estimate_error[i]))
-               .result();
-  }
-  {
+  if (const LoopStart* start = std::get_if<LoopStart>(&from)) {
+    Forms4 start_state;
+    for (std::size_t i = 0; i < 4; ++i) start_state[i] = symbols.noise(start->state[i]);
+    for (std::size_t i = 0; i < 4; ++i) {
+      h[i] = LinearCombination()
+                 .add(start_state[i])
+                 .add(symbols.noise(start->estimate_error[i]))
+                 .result();
+    }
     // p = M(q2) dq: the upright M exactly, its change over the start's angles as an interval.
     const std::array<Interval, 4> excess =
-        detail::mass_excess(plant, loop.parameters, start.state[1]);
+        detail::mass_excess(plant, loop.parameters, start->state[1]);
     x[0] = start_state[0];
     x[1] = start_state[1];
     for (std::size_t i = 0; i < 2; ++i) {
-      const Interval extra = excess[i * 2] * start.state[2] + excess[i * 2 + 1] * start.state[3];
+      const Interval extra = excess[i * 2] * start->state[2] + excess[i * 2 + 1] * start->state[3];
       x[2 + i] = LinearCombination()
                      .add(Interval(plant.mass(static_cast<Eigen::Index>(i), 0)), start_state[2])
                      .add(Interval(plant.mass(static_cast<Eigen::Index>(i), 1)), start_state[3])
@@ -436,15 +449,62 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
         .result();
   };
 
+  // The error coordinates of the loop's state (to_error_coordinates on the forms).
+  const auto plant_form_as_estimate = [&](const Forms4& z, std::size_t i) {
+    if (i < 2) return z[i];
+    const auto row = static_cast<Eigen::Index>(i - 2);
+    return LinearCombination()
+        .add(Interval(plant.inverse(row, 0)), z[2])
+        .add(Interval(plant.inverse(row, 1)), z[3])
+        .result();
+  };
+  const auto law_duty_form = [&](const Forms4& estimate, const AffineForm& on_way) {
+    LinearCombination sum;
+    for (std::size_t i = 0; i < 4; ++i) sum.add(Interval(-law.gain[i]), estimate[i]);
+    if (law.delayed == 1) sum.add(Interval(-law.gain[4]), on_way);
+    return sum.result();
+  };
+
   AffineForm old_duty = zero;  // sent at the last sample but one: the board's target until the lag
   AffineForm board = zero;     // the duty the board applies at the sample
   AffineForm law_applied = zero;
-  std::optional<AffineForm> first = law_duty(h, zero, 0.0);
-  if (!first) {
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-    return out;
+  AffineForm new_duty = zero;  // sent at the sample, on its way
+  if (const LoopStateBox* box = std::get_if<LoopStateBox>(&from)) {
+    for (std::size_t i = 0; i < 4; ++i) x[i] = symbols.noise((*box)[i]);
+    for (std::size_t i = 0; i < 4; ++i) {
+      h[i] = LinearCombination()
+                 .add(plant_form_as_estimate(x, i))
+                 .add(symbols.noise((*box)[4 + i]))
+                 .result();
+    }
+    old_duty = symbols.noise((*box)[8]);
+    new_duty =
+        LinearCombination().add(law_duty_form(h, old_duty)).add(symbols.noise((*box)[9])).result();
+    board = LinearCombination().add(old_duty).add(symbols.noise((*box)[10])).result();
+    law_applied = LinearCombination().add(old_duty).add(symbols.noise((*box)[11])).result();
+    if (auto failure = outside(FailureKind::duty_limit, 0.0, detail::range(new_duty), duty_bound)) {
+      out.failure = failure;
+    }
+  } else {
+    std::optional<AffineForm> first = law_duty(h, zero, 0.0);
+    if (first) new_duty = *first;
   }
-  AffineForm new_duty = *first;  // sent at the sample, on its way
+  const auto error_box = [&]() {
+    LoopStateBox y;
+    for (std::size_t i = 0; i < 4; ++i) {
+      y[i] = detail::range(x[i]);
+      y[4 + i] = detail::range(difference(h[i], plant_form_as_estimate(x, i)));
+    }
+    y[8] = detail::range(old_duty);
+    y[9] = detail::range(difference(new_duty, law_duty_form(h, old_duty)));
+    y[10] = detail::range(difference(board, old_duty));
+    y[11] = detail::range(difference(law_applied, old_duty));
+    return y;
+  };
+  if (out.failure) {
+    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    return run;
+  }
 
   const auto periods = static_cast<std::size_t>(std::ceil(options.horizon_s / period - 1e-9));
   const Interval zero_interval(0.0);
@@ -857,9 +917,21 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
     new_duty = state[9];
     board = state[10];
     law_applied = state[11];
+    if (run.at_checkpoints.size() < checkpoints.size() &&
+        checkpoints[run.at_checkpoints.size()] == k + 1) {
+      run.at_checkpoints.push_back(error_box());
+    }
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
-  return out;
+  return run;
+}
+
+}  // namespace detail
+
+BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, const LoopModel& loop,
+                                  const LoopStart& start, const LoopLimits& limits,
+                                  const VerifyOptions& options) {
+  return detail::run_loop(law, loop, start, limits, options).certificate;
 }
 
 StartRegion largest_start(const control::BalanceControllerSpec& law, const LoopModel& loop,

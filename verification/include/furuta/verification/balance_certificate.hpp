@@ -100,7 +100,9 @@ struct BalanceCertificate {
   double horizon_s = 0;
   double seconds = 0;  // wall time
   std::size_t largest_symbol_count = 0;
-  std::size_t pieces = 1;  // of the parameter box, each proven on its own
+  std::size_t pieces = 1;  // of the start and parameter boxes, each proven on its own
+  // From this instant on (0: none) the tube is one run from the hull of the pieces' states there.
+  double handover_s = 0;
 
   bool certified() const { return !failure.has_value(); }
 };
@@ -119,6 +121,11 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
 // boxes are the pieces' hulls; else the failure of the piece that failed first.
 struct SplitOptions {
   std::size_t max_pieces = 32;
+  // The pieces run to this instant (rounded to whole periods); from there one run proves the rest
+  // from the hull of their states, the loop's whole state (plant, filter, duties on their way) as
+  // a box, when it is certified (else the pieces run to the horizon). 0: the pieces run to the
+  // horizon.
+  double handover_s = 1.0;
 };
 BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& law,
                                         const LoopModel& loop, const LoopStart& start,
