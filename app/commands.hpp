@@ -240,8 +240,8 @@ struct ControllerVerifyOptions {
   double horizon_s = 10.0;
   bool start_region = false;  // also bisect the largest certified start
   std::size_t max_pieces = 32;
-  double handover_s = 1.0;  // SplitOptions::handover_s
-  std::size_t max_symbols = 1500;
+  double handover_s = 0.0;  // SplitOptions::handover_s
+  std::size_t max_symbols = 1000;
   std::size_t sampled = 40;          // trajectories of the sampled check
   std::filesystem::path output_dir;  // report.html, verification.json, verification.svg
 };

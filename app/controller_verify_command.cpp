@@ -163,7 +163,14 @@ int run_controller_verify_command(const ControllerVerifyOptions& options, std::o
   input.split = split;
   try {
     input.certificate = verification::verify_balance_split(law, loop, start, limits, verify, split);
-    if (options.start_region) {
+    if (options.start_region && input.certificate.certified()) {
+      // The whole start is the region: the bisection would begin by proving it again.
+      verification::StartRegion whole;
+      whole.scale = 1.0;
+      whole.start = start;
+      whole.certificate = input.certificate;
+      input.start_region = whole;
+    } else if (options.start_region) {
       input.start_region =
           verification::largest_start(law, loop, start, limits, verify, split, 1.0, 6);
     }
@@ -171,12 +178,14 @@ int run_controller_verify_command(const ControllerVerifyOptions& options, std::o
     return refuse(e.what());
   }
   // The check runs against a certified tube when there is one: the start box's, else the
-  // largest certified start's.
+  // largest certified start's; none when neither is (a failed run's boxes are one piece's).
   const bool on_region =
       !input.certificate.certified() && input.start_region && input.start_region->scale > 0;
-  const verification::SampledCheck sampled = verification::sampled_check(
-      law, loop, on_region ? input.start_region->start : start,
-      on_region ? input.start_region->certificate : input.certificate, options.sampled, kDrawn, 1);
+  const bool any_certified = input.certificate.certified() || on_region;
+  const verification::SampledCheck sampled =
+      verification::sampled_check(law, loop, on_region ? input.start_region->start : start,
+                                  on_region ? input.start_region->certificate : input.certificate,
+                                  any_certified ? options.sampled : 0, kDrawn, 1);
   input.sampled.on_start_region = on_region;
   input.sampled.trajectories = sampled.trajectories;
   input.sampled.checks = sampled.check.checks;
@@ -212,15 +221,23 @@ int run_controller_verify_command(const ControllerVerifyOptions& options, std::o
     const verification::StartRegion& r = *input.start_region;
     if (r.scale > 0) {
       out << "largest start certified: the pendulum within " << r.scale * options.start_deg
-          << " deg and " << r.scale * options.start_deg_s << " deg/s (" << r.verifications
-          << " verifications)\n";
+          << " deg and " << r.scale * options.start_deg_s << " deg/s (";
+      if (r.verifications == 0) {
+        out << "the start itself)\n";
+      } else {
+        out << r.verifications << " verifications)\n";
+      }
     } else {
       out << "no start certified down to " << options.start_deg / 64 << " deg\n";
     }
   }
-  out << "sampled check" << (on_region ? " (the largest certified start)" : "") << ": "
-      << input.sampled.trajectories << " trajectories, " << input.sampled.checks << " checks, "
-      << input.sampled.outside << " outside the tube\n";
+  if (any_certified) {
+    out << "sampled check" << (on_region ? " (the largest certified start)" : "") << ": "
+        << input.sampled.trajectories << " trajectories, " << input.sampled.checks << " checks, "
+        << input.sampled.outside << " outside the tube\n";
+  } else {
+    out << "sampled check: none, no tube was certified\n";
+  }
   out << "wrote " << (options.output_dir / "report.html").string() << ", verification.json and "
       << "verification.svg\n";
   if (input.sampled.outside > 0) {

@@ -351,8 +351,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096));
   verify_cmd
       ->add_option("--handover", verify.handover_s,
-                   "Seconds the pieces run before one run from their states takes over (default "
-                   "1; 0: the pieces run to the horizon)")
+                   "Seconds the pieces run before one run from the hull of their states takes "
+                   "over, when it is certified (default 0: the pieces run to the horizon)")
       ->check(furuta::app::finite_in(0.0, 3600.0));
   verify_cmd
       ->add_option("--sampled", verify.sampled,

@@ -243,9 +243,11 @@ void section_start_region(Html& h, const VerificationReportInput& in) {
     return;
   }
   const bool certified = r.certificate.certified();
+  const std::string how = r.verifications == 0 ? "the start box itself, certified above"
+                                               : std::to_string(r.verifications) +
+                                                     " verifications by bisection on the scale";
   h.paragraph("The largest start certified: the start box scaled by " + short_number(r.scale, 6) +
-                  " about its centre (" + std::to_string(r.verifications) +
-                  " verifications by bisection on the scale), " +
+                  " about its centre (" + how + "), " +
                   (certified ? "certified to " + seconds_text(r.certificate.horizon_s)
                              : std::string("not certified")) +
                   ".",
@@ -261,7 +263,11 @@ void section_sampled(Html& h, const VerificationReportInput& in) {
   h.element("h2", "Sampled check");
   h.raw("\n");
   if (s.trajectories == 0) {
-    h.paragraph("Not run: no trajectory was simulated point by point.", "absent");
+    const bool any_certified =
+        in.certificate.certified() || (in.start_region && in.start_region->scale > 0);
+    h.paragraph(any_certified ? "Not run: no trajectory was simulated point by point."
+                              : "Not run: no tube was certified to check against.",
+                "absent");
     h.raw("</section>\n");
     return;
   }

@@ -23,6 +23,10 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180;
 // A start (deg, and five times it in deg/s) one run does not certify and its pieces do.
 constexpr double kStartDeg = 1.6;
+// A relative spread of mu1, mu3, mu4 and a start (deg, five times it in deg/s) that one run
+// certifies with the spread carried as sensitivities and not with it as a new error each period.
+constexpr double kMassSpread = 1.4e-3;
+constexpr double kMassStartDeg = 0.2;
 
 using Rig = testing::SimulatedRig;
 using testing::simulated_rig;
@@ -142,6 +146,24 @@ TEST(BalanceCertificate, StartPiecesCertifyWhatOneRunCannot) {
   EXPECT_EQ(pieces.handover_s, 0.0);
   ASSERT_EQ(pieces.steps.size(), 188u);
   const SampledCheck check = sampled_check(law, loop, start, pieces, 40, 0, 3);
+  EXPECT_EQ(check.check.outside, 0u) << "first outside at " << check.check.first_outside_s << " s";
+}
+
+// The mass matrix's parameters' spread carried as sensitivities (the state's first order in
+// them, the same factor all along): one run over mu1, mu3, mu4 each within +-kMassSpread, the
+// sampled check's corners of those three inside the tube.
+TEST(BalanceCertificate, MassParametersSpreadInOneRun) {
+  const Rig rig = simulated_rig();
+  const control::BalanceControllerSpec law = designed(rig);
+  LoopModel loop = loop_around(rig, law, 0.0);
+  for (Interval* mu : {&loop.parameters.mu1, &loop.parameters.mu3, &loop.parameters.mu4}) {
+    *mu = *mu * (Interval(1.0) + Interval(-kMassSpread, kMassSpread));
+  }
+  const LoopStart start = start_within(rig, kMassStartDeg * kDeg, 5 * kMassStartDeg * kDeg);
+  const BalanceCertificate c = verify_balance(law, loop, start, limits_of(law), for_seconds(4));
+  ASSERT_TRUE(c.certified()) << "failed at " << c.failure->t_s << " s, kind "
+                             << static_cast<int>(c.failure->kind);
+  const SampledCheck check = sampled_check(law, loop, start, c, 40, 0, 5);
   EXPECT_EQ(check.check.outside, 0u) << "first outside at " << check.check.first_outside_s << " s";
 }
 

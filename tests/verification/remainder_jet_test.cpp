@@ -21,11 +21,18 @@ namespace {
 using detail::RemainderJet;
 using interval::Interval;
 
+Eigen::Matrix2d upright_mass(const model::Parameters<double>& p) {
+  Eigen::Matrix2d m;
+  m << p.mu1, -p.mu3, -p.mu3, p.mu4;
+  return m;
+}
+
 struct Plant {
   model::Parameters<double> centre{1.04e-3, 2.56e-3, 8.2e-4, 1.32e-3, 7.4e-2, 8.1e-2, 6.4e-4};
   double kd = 0.6;
   double kw = 0.155;
-  detail::MomentumPlant momentum = detail::momentum_plant(centre, kd, kw);
+  detail::MomentumPlant momentum =
+      detail::momentum_plant(centre, kd, kw, upright_mass(centre).inverse());
   model::Parameters<Interval> point = centre.map([](double v) { return Interval(v); });
 };
 

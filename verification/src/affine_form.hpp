@@ -20,6 +20,8 @@ struct AffineForm {
   double centre = 0;
   Eigen::VectorXd coef;  // may be shorter than the symbols handed out: the rest are 0
   double err = 0;
+  // sum |coef| when known (>= 0; set where coef is made), else < 0: computed when asked.
+  double norm = -1;
 };
 
 // An enclosure of every value the form takes.
@@ -66,7 +68,12 @@ using CoordinateMap = std::function<std::vector<Interval>(const std::vector<Inte
 // loop contracts each direction on its own (the plant's state and the filter's error, rather than
 // the state and the estimate) keep the merged part from growing. Renumbers: the forms'
 // coefficients and `symbols` describe a set enclosing the old one.
+//
+// `sensitivities` (optional): forms d_k of the same quantities, the value being forms +
+// sum_k eta_k d_k for factors eta_k in [-1, 1] shared by all; the merged symbols' columns count
+// with |base| + sum_k |d_k| (into the base's box), and d_k's errors join the base's.
 void reduce(std::vector<AffineForm>& forms, Symbols& symbols, std::size_t max_symbols,
-            const CoordinateMap& to, const CoordinateMap& from);
+            const CoordinateMap& to, const CoordinateMap& from,
+            std::vector<std::vector<AffineForm>>* sensitivities = nullptr);
 
 }  // namespace furuta::verification::detail

@@ -174,6 +174,39 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
   return out;
 }
 
+SourceMaps source_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, const Eigen::Matrix4d& e,
+                       double switch_s, double s) {
+  Eigen::MatrixXd big = Eigen::MatrixXd::Zero(9, 9);
+  big.topLeftCorner(4, 4) = a;
+  big.block(0, 8, 4, 1) = b;
+  big.block(4, 0, 4, 4) = e;
+  big.block(4, 4, 4, 4) = a;
+  // The blocks (x part, duty part) at t: rows 4..7, columns 0..3 and 8.
+  const auto blocks = [&](double t) {
+    std::pair<IMatrix4, IVector4> out;
+    if (!(t > 0)) {
+      out.first.fill(Interval(0.0));
+      out.second.fill(Interval(0.0));
+      return out;
+    }
+    const std::vector<Interval> x = validated::exp_enclosure(big, Interval(t));
+    for (std::size_t i = 0; i < 4; ++i) {
+      for (std::size_t j = 0; j < 4; ++j) out.first[i * 4 + j] = x[(4 + i) * 9 + j];
+      out.second[i] = x[(4 + i) * 9 + 8];
+    }
+    return out;
+  };
+  const auto whole = blocks(s);
+  const auto late = blocks(s - switch_s);
+  SourceMaps out;
+  out.x_part = whole.first;
+  for (std::size_t i = 0; i < 4; ++i) {
+    out.new_part[i] = late.second[i];
+    out.old_part[i] = whole.second[i] - late.second[i];
+  }
+  return out;
+}
+
 PieceIntegrals piece_integrals(const Eigen::Matrix4d& a, double period_s, double s) {
   PieceIntegrals out;
   const auto integral_to = [&](double t) {
@@ -204,14 +237,14 @@ PieceIntegrals piece_integrals(const Eigen::Matrix4d& a, double period_s, double
   return out;
 }
 
-MomentumPlant momentum_plant(const model::Parameters<double>& centre, double kd, double kw) {
+MomentumPlant momentum_plant(const model::Parameters<double>& centre, double kd, double kw,
+                             const Eigen::Matrix2d& inverse) {
   MomentumPlant out;
   out.centre = centre;
   out.kd = kd;
   out.kw = kw;
-  // At q2 = pi: sin = 0, cos = -1.
-  out.mass << centre.mu1, -centre.mu3, -centre.mu3, centre.mu4;
-  out.inverse = out.mass.inverse();
+  out.inverse = inverse;
+  out.mass = inverse.inverse();
   const Eigen::Matrix2d& v = out.inverse;
   out.a.block<2, 2>(0, 2) = v;
   out.a.block<1, 2>(2, 2) = -(kw + centre.fv1) * v.row(0);
@@ -266,6 +299,78 @@ std::array<Interval, 2> rate_excess(const MomentumPlant& plant,
   const Interval w1 = dm[0] * rates[0] + dm[1] * rates[1];
   const Interval w2 = dm[2] * rates[0] + dm[3] * rates[1];
   return {-((m.m22 * w1 - m.m12 * w2) / m.det), -((m.m11 * w2 - m.m12 * w1) / m.det)};
+}
+
+UprightInverse upright_inverse(const model::Parameters<Interval>& p) {
+  // At q2 = pi: M = [mu1, -mu3; -mu3, mu4], v = M^-1 = [mu4, mu3; mu3, mu1] / det; dv/dq =
+  // -v (dM/dq) v for q = mu1, mu3, mu4 (dM/dq: e11, -(e12 + e21), e22).
+  const auto inverse_of = [](const Interval& mu1, const Interval& mu3, const Interval& mu4) {
+    const Interval det = mu1 * mu4 - interval::sqr(mu3);
+    return std::array<Interval, 3>{mu4 / det, mu3 / det, mu1 / det};  // v11, v12, v22
+  };
+  const auto derivatives = [](const std::array<Interval, 3>& v) {
+    // -v e11 v, v (e12 + e21) v, -v e22 v as (11, 12, 22).
+    const Interval& a = v[0];
+    const Interval& b = v[1];
+    const Interval& c = v[2];
+    return std::array<std::array<Interval, 3>, 3>{
+        {{-(a * a), -(a * b), -(b * b)},
+         {Interval(2.0) * a * b, a * c + b * b, Interval(2.0) * b * c},
+         {-(b * b), -(b * c), -(c * c)}}};
+  };
+  const Interval mu1c(p.mu1.mid());
+  const Interval mu3c(p.mu3.mid());
+  const Interval mu4c(p.mu4.mid());
+  const std::array<Interval, 3> at_centre = inverse_of(mu1c, mu3c, mu4c);
+  const std::array<Interval, 3> over_box = inverse_of(p.mu1, p.mu3, p.mu4);
+  const auto d_centre = derivatives(at_centre);
+  const auto d_box = derivatives(over_box);
+  const std::array<Interval, 3> radius{Interval(p.mu1.rad()), Interval(p.mu3.rad()),
+                                       Interval(p.mu4.rad())};
+  UprightInverse out;
+  out.centre << at_centre[0].mid(), at_centre[1].mid(), at_centre[1].mid(), at_centre[2].mid();
+  // v(q) = centre + sum_k eta_k radius_k dv/dq_k(centre) + rest, eta_k = (q_k - mid) / radius_k:
+  // by the mean value theorem rest = sum_k (dv/dq_k(xi) - dv/dq_k(centre)) (q_k - mid), plus the
+  // centre's rounding.
+  for (std::size_t e = 0; e < 3; ++e) {
+    Interval rest = at_centre[e] - Interval(at_centre[e].mid());
+    for (std::size_t k = 0; k < 3; ++k) {
+      const double slope = d_centre[k][e].mid();
+      out.per_parameter[k][e] = slope * radius[k].mid();
+      rest += (d_box[k][e] - Interval(slope)) * Interval(-radius[k].hi(), radius[k].hi()) +
+              (Interval(slope) * radius[k] - Interval(out.per_parameter[k][e]));
+    }
+    out.rest[e] = rest.mag();
+  }
+  return out;
+}
+
+Eigen::Matrix4d a_direction(const std::array<double, 3>& dv, double damping,
+                            double pendulum_friction) {
+  Eigen::Matrix4d out = Eigen::Matrix4d::Zero();
+  for (std::size_t e = 0; e < 3; ++e) {
+    out += dv[e] * inverse_direction(e, damping, pendulum_friction);
+  }
+  return out;
+}
+
+Eigen::Matrix4d inverse_direction(std::size_t k, double damping, double pendulum_friction) {
+  // a's entries in v: rows 0 and 1 (the kinematics) v p, row 2 -damping v row 0, row 3
+  // -pendulum_friction v row 1.
+  Eigen::Matrix4d e = Eigen::Matrix4d::Zero();
+  if (k == 0) {
+    e(0, 2) = 1;
+    e(2, 2) = -damping;
+  } else if (k == 1) {
+    e(0, 3) = 1;
+    e(1, 2) = 1;
+    e(2, 3) = -damping;
+    e(3, 2) = -pendulum_friction;
+  } else {
+    e(1, 3) = 1;
+    e(3, 3) = -pendulum_friction;
+  }
+  return e;
 }
 
 IVector4 momentum_remainder(const MomentumPlant& plant, const model::Parameters<Interval>& p,

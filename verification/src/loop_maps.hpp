@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <cstddef>
 #include <map>
 #include <utility>
 #include <vector>
@@ -64,6 +65,18 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
 
 IVector4 multiply(const IMatrix4& m, const IVector4& x);
 
+// What a perturbation e of the linear model's matrix adds at s, to first order: with the state x
+// at the sample and the duty `old` held until switch_s, `new` after it,
+// int_0^s e^(a (s - r)) e x_lin(r) dr = x_part x + old_part old + new_part new (the blocks of the
+// exponential of [[a, 0, b], [e, a, 0], [0, 0, 0]]).
+struct SourceMaps {
+  IMatrix4 x_part;
+  IVector4 old_part;
+  IVector4 new_part;
+};
+SourceMaps source_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, const Eigen::Matrix4d& e,
+                       double switch_s, double s);
+
 // For an instant s in (0, period] and each piece [k, k + 1] period / kPieces of the period (as
 // stretch_maps makes them): what a disturbance over the piece's part before s adds to the state at
 // s, int over the piece and [0, s] of e^(a (s - r)) dr (zero for a piece after s), and an upper
@@ -88,7 +101,27 @@ struct MomentumPlant {
   double kd = 0;
   double kw = 0;
 };
-MomentumPlant momentum_plant(const model::Parameters<double>& centre, double kd, double kw);
+// Linearised about upright with `inverse` as M's inverse there (the parameter box's midpoint of
+// it), mass its inverse.
+MomentumPlant momentum_plant(const model::Parameters<double>& centre, double kd, double kw,
+                             const Eigen::Matrix2d& inverse);
+
+// M's inverse at upright, v = [v11, v12; v12, v22], over the parameter box: its value at the
+// box's midpoint, its change per radius of mu1, mu3, mu4 there (entries 11, 12, 22), and a bound
+// of the rest: v = centre + sum_k eta_k per_parameter[k] + rest for eta_k = (mu_k - mid) / radius
+// in [-1, 1]. The plant's a is linear in v: a(v) = a(centre) + sum_e (v_e - centre_e)
+// inverse_direction(e).
+struct UprightInverse {
+  Eigen::Matrix2d centre = Eigen::Matrix2d::Zero();
+  std::array<std::array<double, 3>, 3> per_parameter{};
+  std::array<double, 3> rest{};
+};
+UprightInverse upright_inverse(const model::Parameters<Interval>& p);
+// a's change for v's entry e (11, 12, 22) by one.
+Eigen::Matrix4d inverse_direction(std::size_t k, double damping, double pendulum_friction);
+// a's change for v's change dv (11, 12, 22).
+Eigen::Matrix4d a_direction(const std::array<double, 3>& dv, double damping,
+                            double pendulum_friction);
 
 // M(q2)^-1 - inverse over the pendulum's angles `error` (q2 - pi) and the parameter box.
 std::array<Interval, 4> inverse_excess(const MomentumPlant& plant,

@@ -35,6 +35,7 @@ struct Jet {
   std::array<Interval, 3> d;
   std::array<Interval, 6> h;
   std::array<Interval, 10> t;
+  bool third = true;  // t is carried (else left at 0: not asked for)
 
   explicit Jet(const Interval& value) : v(value) {
     d.fill(Interval(0.0));
@@ -43,9 +44,10 @@ struct Jet {
   }
 };
 
-Jet variable(const Interval& v, std::size_t k) {
+Jet variable(const Interval& v, std::size_t k, bool third) {
   Jet out(v);
   out.d[k] = Interval(1.0);
+  out.third = third;
   return out;
 }
 
@@ -55,25 +57,28 @@ Jet constant(const Interval& v) {
 
 Jet operator+(const Jet& x, const Jet& y) {
   Jet out(x.v + y.v);
+  out.third = x.third && y.third;
   for (std::size_t k = 0; k < 3; ++k) out.d[k] = x.d[k] + y.d[k];
   for (std::size_t k = 0; k < 6; ++k) out.h[k] = x.h[k] + y.h[k];
-  for (std::size_t k = 0; k < 10; ++k) out.t[k] = x.t[k] + y.t[k];
+  for (std::size_t k = 0; k < 10 && out.third; ++k) out.t[k] = x.t[k] + y.t[k];
   return out;
 }
 
 Jet operator-(const Jet& x, const Jet& y) {
   Jet out(x.v - y.v);
+  out.third = x.third && y.third;
   for (std::size_t k = 0; k < 3; ++k) out.d[k] = x.d[k] - y.d[k];
   for (std::size_t k = 0; k < 6; ++k) out.h[k] = x.h[k] - y.h[k];
-  for (std::size_t k = 0; k < 10; ++k) out.t[k] = x.t[k] - y.t[k];
+  for (std::size_t k = 0; k < 10 && out.third; ++k) out.t[k] = x.t[k] - y.t[k];
   return out;
 }
 
 Jet operator*(const Interval& a, const Jet& x) {
   Jet out(a * x.v);
+  out.third = x.third;
   for (std::size_t k = 0; k < 3; ++k) out.d[k] = a * x.d[k];
   for (std::size_t k = 0; k < 6; ++k) out.h[k] = a * x.h[k];
-  for (std::size_t k = 0; k < 10; ++k) out.t[k] = a * x.t[k];
+  for (std::size_t k = 0; k < 10 && out.third; ++k) out.t[k] = a * x.t[k];
   return out;
 }
 
@@ -82,12 +87,13 @@ Jet operator*(const Interval& a, const Jet& x) {
 // less the last. The product adds it; the quotient (x = z y) solves for z's highest order.
 Jet product_without_last(const Jet& z, const Jet& y) {
   Jet out(z.v * y.v);
+  out.third = z.third && y.third;
   for (std::size_t k = 0; k < 3; ++k) out.d[k] = y.v * z.d[k];
   for (std::size_t k = 0; k < 6; ++k) {
     const auto [i, j] = kPairs[k];
     out.h[k] = z.h[k] * y.v + z.d[i] * y.d[j] + z.d[j] * y.d[i];
   }
-  for (std::size_t k = 0; k < 10; ++k) {
+  for (std::size_t k = 0; k < 10 && out.third; ++k) {
     const auto [i, j, l] = kTriples[k];
     out.t[k] = z.t[k] * y.v + z.h[pair_index(i, j)] * y.d[l] + z.h[pair_index(i, l)] * y.d[j] +
                z.h[pair_index(j, l)] * y.d[i] + z.d[i] * y.h[pair_index(j, l)] +
@@ -100,19 +106,20 @@ Jet operator*(const Jet& x, const Jet& y) {
   Jet out = product_without_last(x, y);
   for (std::size_t k = 0; k < 3; ++k) out.d[k] += x.v * y.d[k];
   for (std::size_t k = 0; k < 6; ++k) out.h[k] += x.v * y.h[k];
-  for (std::size_t k = 0; k < 10; ++k) out.t[k] += x.v * y.t[k];
+  for (std::size_t k = 0; k < 10 && out.third; ++k) out.t[k] += x.v * y.t[k];
   return out;
 }
 
 // z = x / y from x = z y, order by order: z's derivative = (x's - the rest of (z y)'s) / y.
 Jet operator/(const Jet& x, const Jet& y) {
   Jet z(x.v / y.v);
+  z.third = x.third && y.third;
   for (std::size_t k = 0; k < 3; ++k) z.d[k] = (x.d[k] - z.v * y.d[k]) / y.v;
   for (std::size_t k = 0; k < 6; ++k) {
     const auto [i, j] = kPairs[k];
     z.h[k] = (x.h[k] - z.d[i] * y.d[j] - z.d[j] * y.d[i] - z.v * y.h[k]) / y.v;
   }
-  for (std::size_t k = 0; k < 10; ++k) {
+  for (std::size_t k = 0; k < 10 && z.third; ++k) {
     const auto [i, j, l] = kTriples[k];
     const Interval rest = z.h[pair_index(i, j)] * y.d[l] + z.h[pair_index(i, l)] * y.d[j] +
                           z.h[pair_index(j, l)] * y.d[i] + z.d[i] * y.h[pair_index(j, l)] +
@@ -127,12 +134,13 @@ Jet operator/(const Jet& x, const Jet& y) {
 Jet chain(const Jet& x, const Interval& f, const Interval& f1, const Interval& f2,
           const Interval& f3) {
   Jet out(f);
+  out.third = x.third;
   for (std::size_t k = 0; k < 3; ++k) out.d[k] = f1 * x.d[k];
   for (std::size_t k = 0; k < 6; ++k) {
     const auto [i, j] = kPairs[k];
     out.h[k] = f2 * (x.d[i] * x.d[j]) + f1 * x.h[k];
   }
-  for (std::size_t k = 0; k < 10; ++k) {
+  for (std::size_t k = 0; k < 10 && out.third; ++k) {
     const auto [i, j, l] = kTriples[k];
     out.t[k] = f3 * (x.d[i] * x.d[j] * x.d[l]) +
                f2 * (x.h[pair_index(i, j)] * x.d[l] + x.h[pair_index(i, l)] * x.d[j] +
@@ -167,10 +175,10 @@ Jet sin_minus_identity(const Jet& x) {
 }  // namespace
 
 RemainderJet remainder_jet(const MomentumPlant& plant, const model::Parameters<Interval>& p,
-                           const Interval& kw, const std::array<Interval, 3>& y) {
-  const Jet e = variable(y[0], 0);
-  const Jet w1 = variable(y[1], 1);
-  const Jet w2 = variable(y[2], 2);
+                           const Interval& kw, const std::array<Interval, 3>& y, bool third) {
+  const Jet e = variable(y[0], 0, third);
+  const Jet w1 = variable(y[1], 1, third);
+  const Jet w2 = variable(y[2], 2, third);
   const model::Parameters<double>& centre = plant.centre;
   // At q2 = pi + e: sin q2 = -sin e, cos q2 = -cos e. M(q2) = [m11, m12; m12, m22].
   const Jet s = sin(e);
@@ -179,13 +187,13 @@ RemainderJet remainder_jet(const MomentumPlant& plant, const model::Parameters<I
   const Jet m12 = Interval(-1.0) * (p.mu3 * c);
   const Jet m22 = constant(p.mu4);
   const Jet det = m11 * m22 - m12 * m12;
-  // The rates M^-1 p = w + M^-1 (mass - M) w: the small matrix (mass - M) multiplies w first, so
-  // that w's range is not spread through p (p1 and p2 are far larger than the rates they give).
-  const Jet d11 = constant(Interval(plant.mass(0, 0))) - m11;
-  const Jet d12 = constant(Interval(plant.mass(0, 1))) - m12;
-  const Jet d22 = constant(Interval(plant.mass(1, 1))) - m22;
+  // The rates M(q2)^-1 p = w + M(q2)^-1 (M(pi) - M(q2)) w, w = M(pi)^-1 p: the small matrix
+  // M(pi) - M(q2) = [-mu2 sin^2 e, -mu3 (1 - cos e); ..., 0] multiplies w first, so that w's range
+  // is not spread through p (p1 and p2 are far larger than the rates they give).
+  const Jet d11 = Interval(-1.0) * (p.mu2 * (s * s));
+  const Jet d12 = Interval(-1.0) * (p.mu3 * (constant(Interval(1.0)) - c));
   const Jet t1 = d11 * w1 + d12 * w2;
-  const Jet t2 = d12 * w1 + d22 * w2;
+  const Jet t2 = d12 * w1;
   const Jet excess1 = (m22 * t1 - m12 * t2) / det;
   const Jet excess2 = (m11 * t2 - m12 * t1) / det;
   const Jet dq1 = w1 + excess1;

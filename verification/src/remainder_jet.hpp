@@ -1,8 +1,10 @@
 #pragma once
-// The plant's distance from its linearisation with its gradient (internal to the verifier), as a
-// function of y = (e, w1, w2): the pendulum's angle from upright and the rates the linearisation
-// gives, w = inverse p. Evaluated at a point it gives the first-order part the verifier carries in
-// the noise symbols; over a box, the gradient's range that bounds the rest (the mean value form).
+// The plant's distance from its linearisation with its derivatives (internal to the verifier), as
+// a function of y = (e, w1, w2): the pendulum's angle from upright and the rates the momenta give
+// at upright, w = M(pi)^-1 p for the plant's own parameters. The linearisation's a(v) with v the
+// plant's M(pi)^-1 (the verifier carries v's spread in sensitivities); at a point the value and
+// gradient give the first-order part the verifier carries in the noise symbols, over a box the
+// higher derivatives bound the rest (Taylor and mean value forms).
 
 #include <array>
 
@@ -21,9 +23,11 @@ struct RemainderJet {
   std::array<std::array<Interval, 10>, 4> third;
 };
 
-// n = f(z, u) - a z - b u over every y in `y` and parameter in `p` (kw the back-EMF constant),
-// without (kd - plant.kd) u: the field in momentum coordinates (MomentumPlant) with p = mass w.
+// n = f(z, u) - a(v) z - b u over every y in `y` and parameter in `p` (kw the back-EMF constant),
+// without (kd - plant.kd) u: the field in momentum coordinates (MomentumPlant), a(v) with the
+// plant's damping, pendulum friction and mug at the centre's.
+// third: also the third derivatives (else 0).
 RemainderJet remainder_jet(const MomentumPlant& plant, const model::Parameters<Interval>& p,
-                           const Interval& kw, const std::array<Interval, 3>& y);
+                           const Interval& kw, const std::array<Interval, 3>& y, bool third = true);
 
 }  // namespace furuta::verification::detail

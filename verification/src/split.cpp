@@ -77,6 +77,19 @@ std::optional<std::pair<LoopStart, LoopStart>> start_halves(const LoopStart& sta
   return std::make_pair(a, b);
 }
 
+// The largest of the start's pendulum angle and rate widths for those of `whole`.
+double share_of(const LoopStart& start, const LoopStart& whole) {
+  double share = 0;
+  for (const std::size_t k : {std::size_t{1}, std::size_t{3}}) {
+    const double full = whole.state[k].width();
+    if (full > 0) share = std::max(share, start.state[k].width() / full);
+  }
+  return share;
+}
+
+// The start is halved before the parameters down to this share of it.
+constexpr double kStartShare = 1.0 / 8;
+
 bool is_point(const model::Parameters<Interval>& p) {
   for (std::size_t k = 0; k < model::kParameterCount; ++k) {
     if (p[k].width() > 0) return false;
@@ -123,11 +136,14 @@ PiecesRun run_pieces(const control::BalanceControllerSpec& law, const LoopModel&
         continue;
       }
       if (pieces + 1 <= split.max_pieces && !failed) {
-        // The start and the parameters in turn, the start first: its transient binds first.
+        // The start while its pieces are wider than kStartShare of it in angle or rate (the
+        // transient binds first; the parameters are carried in sensitivities), then the start
+        // and the parameters in turn.
         const Piece& p = pending[i];
         const auto by_start = start_halves(p.start, start);
         const bool parameters_split = !is_point(p.parameters);
-        if (by_start && (p.splits % 2 == 0 || !parameters_split)) {
+        const bool start_wide = by_start && share_of(p.start, start) > kStartShare;
+        if (by_start && (start_wide || p.splits % 2 == 0 || !parameters_split)) {
           next.push_back(Piece{p.parameters, by_start->first, p.splits + 1});
           next.push_back(Piece{p.parameters, by_start->second, p.splits + 1});
           ++pieces;

@@ -32,6 +32,11 @@ using Forms4 = std::array<AffineForm, 4>;
 constexpr double kLawRelativeError = 1e-10;
 constexpr double kLawAbsoluteError = 1e-15;
 
+// The sensitivities carried: to mu1, mu3 and mu4 through M's inverse at upright.
+// The pieces of a period that share one expansion of the remainder (its jets).
+constexpr std::size_t kJetGroup = 2;
+constexpr std::size_t kSensitivities = 3;
+
 // An enclosure that stops growing inwards is inflated by this fraction of its width per try.
 constexpr double kInflation = 0.1;
 constexpr int kEnclosureTries = 30;
@@ -42,12 +47,6 @@ Interval symmetric(double radius) {
 
 AffineForm difference(const AffineForm& a, const AffineForm& b) {
   return LinearCombination().add(a).add(Interval(-1.0), b).result();
-}
-
-StateBox ranges(const Forms4& x) {
-  StateBox out;
-  for (std::size_t i = 0; i < 4; ++i) out[i] = detail::range(x[i]);
-  return out;
 }
 
 bool bounded(const StateBox& x) {
@@ -73,9 +72,11 @@ struct SharedRamp {
   // |g|^3 / (6 rate^2) at most: the ramp's first moment about its start, int s |ramp - step| ds,
   // which bounds what the change of e^(a r) b over the ramp adds.
   double moment = 0;
+  Interval slope;  // rho's coefficient on g (its sensitivities' too)
 };
-SharedRamp shared_ramp(const AffineForm& gap, double rate, Symbols& symbols) {
-  const Interval g = detail::range(gap);
+// `spread`: how far the gap's sensitivities to the parameters move it beyond its form's range.
+SharedRamp shared_ramp(const AffineForm& gap, double spread, double rate, Symbols& symbols) {
+  const Interval g = detail::range(gap) + symmetric(spread);
   const double a = g.lo();
   const double b = g.hi();
   // g |g| in alpha g + beta + [-err, err] over [a, b].
@@ -103,7 +104,8 @@ SharedRamp shared_ramp(const AffineForm& gap, double rate, Symbols& symbols) {
   const Interval scale = Interval(-1.0) / (Interval(2.0) * Interval(rate));
   const Interval rest = scale * (beta + Interval(-err.hi(), err.hi()));
   SharedRamp out;
-  out.rho = LinearCombination().add(scale * alpha, gap).add(symbols.noise(rest)).result();
+  out.slope = scale * alpha;
+  out.rho = LinearCombination().add(out.slope, gap).add(symbols.noise(rest)).result();
   out.bound = (interval::sqr(Interval(g.mag())) / (Interval(2.0) * Interval(rate))).hi();
   out.moment =
       (interval::pow(Interval(g.mag()), 3) / (Interval(6.0) * interval::sqr(Interval(rate)))).hi();
@@ -123,12 +125,16 @@ struct InputError {
   double ramp_to_s = 0;
   double settle_gap = 0;  // how far from `new` the applied duty can be when it starts ramping to it
 };
+// `spreads`: how far the sensitivities move applied - old, applied - new and old - new beyond
+// their forms' ranges.
 InputError input_error(const AffineForm& applied, const AffineForm& old_duty,
-                       const AffineForm& new_duty, double rate, const Interval& switch_s,
-                       const SharedRamp* ramp) {
-  const double to_old = detail::range(difference(applied, old_duty)).mag();
-  const double to_new = std::max(detail::range(difference(applied, new_duty)).mag(),
-                                 detail::range(difference(old_duty, new_duty)).mag());
+                       const AffineForm& new_duty, const std::array<double, 3>& spreads,
+                       double rate, const Interval& switch_s, const SharedRamp* ramp) {
+  const double to_old =
+      (Interval(detail::range(difference(applied, old_duty)).mag()) + Interval(spreads[0])).hi();
+  const double to_new = std::max(
+      (Interval(detail::range(difference(applied, new_duty)).mag()) + Interval(spreads[1])).hi(),
+      (Interval(detail::range(difference(old_duty, new_duty)).mag()) + Interval(spreads[2])).hi());
   const double largest = std::max(to_old, to_new);
   const auto ramp_l1 = [&](double gap) {
     if (!(rate > 0)) return Interval(0.0);
@@ -316,9 +322,41 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
   // the rest.
   const model::Parameters<double> centre =
       loop.parameters.map([](const Interval& v) { return v.mid(); });
-  const detail::MomentumPlant plant =
-      detail::momentum_plant(centre, loop.duty_torque_nm.mid(), loop.back_emf_nm_s.mid());
+  // Linearised with M's inverse at upright at the box's midpoint; its change with mu1, mu3, mu4
+  // (v = centre + sum_k eta_k per_parameter_k + rest, eta_k in [-1, 1], the same all along) is
+  // carried in sensitivities, a(v) being linear in v; the rest is a fresh error.
+  const detail::UprightInverse upright = detail::upright_inverse(loop.parameters);
+  const detail::MomentumPlant plant = detail::momentum_plant(
+      centre, loop.duty_torque_nm.mid(), loop.back_emf_nm_s.mid(), upright.centre);
   const double board_switch = loop.lag_s.mid();
+  const double damping_centre = plant.kw + centre.fv1;
+  std::array<Eigen::Matrix4d, kSensitivities> direction;
+  std::array<detail::SourceMaps, kSensitivities> source_period;
+  std::array<detail::SourceMaps, kSensitivities> source_reading;
+  std::array<double, 16> direction_abs{};  // sum_k |radius_k e_k|, entrywise
+  // What v's rest adds, entrywise at most: |rest_e inverse_direction(e)| summed.
+  std::array<double, 16> rest_abs{};
+  for (std::size_t e = 0; e < 3; ++e) {
+    const Eigen::Matrix4d d = detail::inverse_direction(e, damping_centre, centre.fv2);
+    for (std::size_t i = 0; i < 16; ++i) {
+      rest_abs[i] =
+          (Interval(rest_abs[i]) +
+           Interval(upright.rest[e]) * Interval(std::fabs(d(static_cast<Eigen::Index>(i / 4),
+                                                            static_cast<Eigen::Index>(i % 4)))))
+              .hi();
+    }
+  }
+  for (std::size_t k = 0; k < kSensitivities; ++k) {
+    direction[k] = detail::a_direction(upright.per_parameter[k], damping_centre, centre.fv2);
+    source_period[k] = detail::source_maps(plant.a, plant.b, direction[k], board_switch, period);
+    source_reading[k] =
+        detail::source_maps(plant.a, plant.b, direction[k], board_switch, reading_s);
+    for (std::size_t e = 0; e < 16; ++e) {
+      const double v = std::fabs(
+          direction[k](static_cast<Eigen::Index>(e / 4), static_cast<Eigen::Index>(e % 4)));
+      direction_abs[e] = (Interval(direction_abs[e]) + Interval(v) * Interval(1.0 + 1e-15)).hi();
+    }
+  }
   const StretchMaps plant_period = detail::stretch_maps(plant.a, plant.b, board_switch, period);
   const StretchMaps plant_reading = detail::stretch_maps(plant.a, plant.b, board_switch, reading_s);
   const detail::PieceIntegrals period_pieces = detail::piece_integrals(plant.a, period, period);
@@ -426,8 +464,8 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
   const AffineForm zero = Symbols::constant(0.0);
   // The law's duty for the estimate `estimate` with `on_way` on its way; nothing when it may reach
   // the limit.
-  const auto law_duty = [&](const Forms4& estimate, const AffineForm& on_way,
-                            double t_s) -> std::optional<AffineForm> {
+  const auto law_duty = [&](const Forms4& estimate, const AffineForm& on_way, double t_s,
+                            double sens_spread) -> std::optional<AffineForm> {
     LinearCombination raw;
     double size = 0;
     for (std::size_t i = 0; i < 4; ++i) {
@@ -437,7 +475,8 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
     if (law.delayed == 1) raw.add(Interval(-law.gain[4]), on_way);
     const AffineForm duty = raw.result();
     const Interval duty_range = detail::range(duty);
-    if (auto failure = outside(FailureKind::duty_limit, t_s, duty_range, duty_bound)) {
+    if (auto failure = outside(FailureKind::duty_limit, t_s, duty_range + symmetric(sens_spread),
+                               duty_bound)) {
       out.failure = failure;
       return std::nullopt;
     }
@@ -469,6 +508,30 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
   AffineForm board = zero;     // the duty the board applies at the sample
   AffineForm law_applied = zero;
   AffineForm new_duty = zero;  // sent at the sample, on its way
+  // The sensitivities to v's spread: each quantity is its form + sum_k eta_k its sens[k] form.
+  struct Sensitivity {
+    Forms4 x;
+    Forms4 h;
+    AffineForm old_duty;
+    AffineForm new_duty;
+    AffineForm board;
+    AffineForm law_applied;
+  };
+  std::array<Sensitivity, kSensitivities> sens;
+  for (Sensitivity& d : sens) {
+    d.x.fill(zero);
+    d.h.fill(zero);
+    d.old_duty = d.new_duty = d.board = d.law_applied = zero;
+  }
+  // How far the sensitivities move a quantity beyond its form's range: sum_k |its sens[k]|.
+  const auto spread = [&](auto&& quantity) {
+    Interval sum(0.0);
+    for (const Sensitivity& d : sens) sum += Interval(detail::range(quantity(d)).mag());
+    return sum.hi();
+  };
+  const auto widened = [&](const AffineForm& base, auto&& quantity) {
+    return detail::range(base) + symmetric(spread(quantity));
+  };
   if (const LoopStateBox* box = std::get_if<LoopStateBox>(&from)) {
     for (std::size_t i = 0; i < 4; ++i) x[i] = symbols.noise((*box)[i]);
     for (std::size_t i = 0; i < 4; ++i) {
@@ -486,19 +549,25 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       out.failure = failure;
     }
   } else {
-    std::optional<AffineForm> first = law_duty(h, zero, 0.0);
+    std::optional<AffineForm> first = law_duty(h, zero, 0.0, 0.0);
     if (first) new_duty = *first;
   }
   const auto error_box = [&]() {
     LoopStateBox y;
     for (std::size_t i = 0; i < 4; ++i) {
-      y[i] = detail::range(x[i]);
-      y[4 + i] = detail::range(difference(h[i], plant_form_as_estimate(x, i)));
+      y[i] = widened(x[i], [&](const Sensitivity& d) { return d.x[i]; });
+      y[4 + i] = widened(difference(h[i], plant_form_as_estimate(x, i)), [&](const Sensitivity& d) {
+        return difference(d.h[i], plant_form_as_estimate(d.x, i));
+      });
     }
-    y[8] = detail::range(old_duty);
-    y[9] = detail::range(difference(new_duty, law_duty_form(h, old_duty)));
-    y[10] = detail::range(difference(board, old_duty));
-    y[11] = detail::range(difference(law_applied, old_duty));
+    y[8] = widened(old_duty, [](const Sensitivity& d) { return d.old_duty; });
+    y[9] = widened(difference(new_duty, law_duty_form(h, old_duty)), [&](const Sensitivity& d) {
+      return difference(d.new_duty, law_duty_form(d.h, d.old_duty));
+    });
+    y[10] = widened(difference(board, old_duty),
+                    [](const Sensitivity& d) { return difference(d.board, d.old_duty); });
+    y[11] = widened(difference(law_applied, old_duty),
+                    [](const Sensitivity& d) { return difference(d.law_applied, d.old_duty); });
     return y;
   };
   if (out.failure) {
@@ -512,21 +581,36 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
     const double t0 = static_cast<double>(k) * period;
     const double t1 = static_cast<double>(k + 1) * period;
     const Interval duty_range =
-        hull(hull(detail::range(board), detail::range(old_duty)), detail::range(new_duty));
+        hull(hull(widened(board, [](const Sensitivity& d) { return d.board; }),
+                  widened(old_duty, [](const Sensitivity& d) { return d.old_duty; })),
+             widened(new_duty, [](const Sensitivity& d) { return d.new_duty; }));
     // The ramp to the new duty, one quantity for the board and for the law's model of it when
     // both ramp at the same rate.
     const AffineForm gap = difference(new_duty, old_duty);
+    const double gap_spread =
+        spread([](const Sensitivity& d) { return difference(d.new_duty, d.old_duty); });
     std::optional<SharedRamp> board_ramp;
     std::optional<SharedRamp> law_ramp;
-    if (loop.ramp_duty_per_s > 0) board_ramp = shared_ramp(gap, loop.ramp_duty_per_s, symbols);
-    if (law_rate > 0) {
-      law_ramp =
-          law_rate == loop.ramp_duty_per_s ? board_ramp : shared_ramp(gap, law_rate, symbols);
+    if (loop.ramp_duty_per_s > 0) {
+      board_ramp = shared_ramp(gap, gap_spread, loop.ramp_duty_per_s, symbols);
     }
-    const InputError board_error = input_error(board, old_duty, new_duty, loop.ramp_duty_per_s,
-                                               loop.lag_s, board_ramp ? &*board_ramp : nullptr);
-    const InputError law_error = input_error(law_applied, old_duty, new_duty, law_rate,
-                                             Interval(law_switch), law_ramp ? &*law_ramp : nullptr);
+    if (law_rate > 0) {
+      law_ramp = law_rate == loop.ramp_duty_per_s ? board_ramp
+                                                  : shared_ramp(gap, gap_spread, law_rate, symbols);
+    }
+    const auto applied_spreads = [&](auto&& applied) {
+      return std::array<double, 3>{
+          spread([&](const Sensitivity& d) { return difference(applied(d), d.old_duty); }),
+          spread([&](const Sensitivity& d) { return difference(applied(d), d.new_duty); }),
+          gap_spread};
+    };
+    const InputError board_error = input_error(
+        board, old_duty, new_duty, applied_spreads([](const Sensitivity& d) { return d.board; }),
+        loop.ramp_duty_per_s, loop.lag_s, board_ramp ? &*board_ramp : nullptr);
+    const InputError law_error =
+        input_error(law_applied, old_duty, new_duty,
+                    applied_spreads([](const Sensitivity& d) { return d.law_applied; }), law_rate,
+                    Interval(law_switch), law_ramp ? &*law_ramp : nullptr);
 
     // The plant over the period: the linear model's reach from the affine forms (the hull of
     // its maps to each piece of the period), plus what the field's distance from it and the
@@ -577,9 +661,15 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       for (std::size_t q = 0; q < 3; ++q) {
         const AffineForm& a = *y_forms[kPairsOfY[q][0]];
         const AffineForm& b = *y_forms[kPairsOfY[q][1]];
-        const double ra = detail::range(a).rad();
-        const double rb = detail::range(b).rad();
-        const double lambda = ra > 0 && rb > 0 ? std::sqrt(rb / ra) : 1.0;
+        // One lambda per group of pieces (the first's), so that the group's sizes combine.
+        double lambda = 0;
+        if (piece_reach.size() % kJetGroup == 0) {
+          const double ra = detail::range(a).rad();
+          const double rb = detail::range(b).rad();
+          lambda = ra > 0 && rb > 0 ? std::sqrt(rb / ra) : 1.0;
+        } else {
+          lambda = piece_reach[piece_reach.size() - piece_reach.size() % kJetGroup].pair_lambda[q];
+        }
         here.pair_lambda[q] = lambda;
         for (std::size_t sign = 0; sign < 2; ++sign) {
           const double t = sign == 0 ? 1.0 / lambda : -1.0 / lambda;
@@ -590,6 +680,32 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
         }
       }
       piece_reach.push_back(here);
+    }
+    // What the sensitivities add over the period (their linear motion; their sources, v's spread
+    // times the state, are in the remainder the enclosure bounds): e^(a r) over [0, T] on their
+    // states, int |e^(a r) b| on their duties.
+    std::array<double, 4> sens_size{};
+    for (const Sensitivity& d : sens) {
+      const double duty =
+          std::max(detail::range(d.old_duty).mag(), detail::range(d.new_duty).mag());
+      for (std::size_t i = 0; i < 4; ++i) {
+        Interval sum =
+            Interval(sens_size[i]) + Interval(plant_period.abs_integral_b[i]) * Interval(duty);
+        for (std::size_t j = 0; j < 4; ++j) {
+          sum +=
+              Interval(plant_period.over[i * 4 + j].mag()) * Interval(detail::range(d.x[j]).mag());
+        }
+        sens_size[i] = sum.hi();
+      }
+    }
+    for (std::size_t i = 0; i < 4; ++i) reach[i] = reach[i] + symmetric(sens_size[i]);
+    for (std::size_t i = 0; i < 2; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      reach_rates[i] =
+          reach_rates[i] +
+          symmetric((Interval(std::fabs(plant.inverse(r, 0))) * Interval(sens_size[2]) +
+                     Interval(std::fabs(plant.inverse(r, 1))) * Interval(sens_size[3]))
+                        .hi());
     }
     // The rates over the enclosure `box`: the reach's, plus what its excess over the reach adds.
     // (box contains the reach: the interval that, added to the reach, gives the box).
@@ -675,8 +791,32 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
                            (Interval(over[i].hi()) - Interval(reach[i].hi())).hi());
     }
     const auto v = [&](Eigen::Index i, Eigen::Index j) { return Interval(plant.inverse(i, j)); };
-    const std::array<Interval, 3> beyond_y{beyond[1], v(0, 0) * beyond[2] + v(0, 1) * beyond[3],
-                                           v(1, 0) * beyond[2] + v(1, 1) * beyond[3]};
+    // y beyond the base's forms: what the enclosure adds, the sensitivities' part, and w's own
+    // spread (v - centre) p.
+    std::array<double, 3> v_spread = upright.rest;  // |v - centre| at most, entries 11, 12, 22
+    for (std::size_t e = 0; e < 3; ++e) {
+      for (std::size_t k = 0; k < kSensitivities; ++k) {
+        v_spread[e] =
+            (Interval(v_spread[e]) + Interval(std::fabs(upright.per_parameter[k][e]))).hi();
+      }
+    }
+    const std::array<double, 3> v_spread_p{(Interval(v_spread[0]) * Interval(over[2].mag()) +
+                                            Interval(v_spread[1]) * Interval(over[3].mag()))
+                                               .hi(),
+                                           (Interval(v_spread[1]) * Interval(over[2].mag()) +
+                                            Interval(v_spread[2]) * Interval(over[3].mag()))
+                                               .hi(),
+                                           0.0};
+    const auto sens_w = [&](Eigen::Index row) {
+      return (Interval(std::fabs(plant.inverse(row, 0))) * Interval(sens_size[2]) +
+              Interval(std::fabs(plant.inverse(row, 1))) * Interval(sens_size[3]) +
+              Interval(v_spread_p[static_cast<std::size_t>(row)]))
+          .hi();
+    };
+    const std::array<Interval, 3> beyond_y{
+        beyond[1] + symmetric(sens_size[1]),
+        v(0, 0) * beyond[2] + v(0, 1) * beyond[3] + symmetric(sens_w(0)),
+        v(1, 0) * beyond[2] + v(1, 1) * beyond[3] + symmetric(sens_w(1))};
     const Interval drive_spread = (loop.duty_torque_nm - Interval(plant.kd)) * duty_range;
     struct PieceRemainder {
       IMatrix4 gradient_z;  // g in the state's coordinates
@@ -697,13 +837,38 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
                                                                      {2, 2, 2}}};
     std::vector<PieceRemainder> piece_remainders;
     piece_remainders.reserve(piece_reach.size());
-    for (const PieceReach& piece : piece_reach) {
+    // The jets per group of kJetGroup pieces: the group's middle piece's centre, the hull of the
+    // group's ranges, the largest of its pieces' polarised sizes about that centre.
+    for (std::size_t first = 0; first < piece_reach.size(); first += kJetGroup) {
+      const std::size_t last = std::min(first + kJetGroup, piece_reach.size());
+      PieceReach piece = piece_reach[(first + last) / 2];
       const std::array<double, 3> yc{piece.centre[1], piece.rate_centre[0], piece.rate_centre[1]};
+      piece.pair_lambda = piece_reach[first].pair_lambda;
+      piece.pair_sizes = {};
+      for (std::size_t j = first; j < last; ++j) {
+        const PieceReach& other = piece_reach[j];
+        piece.range[1] = hull(piece.range[1], other.range[1]);
+        for (std::size_t i = 0; i < 2; ++i) piece.rates[i] = hull(piece.rates[i], other.rates[i]);
+        const std::array<double, 3> offset{other.centre[1] - yc[0], other.rate_centre[0] - yc[1],
+                                           other.rate_centre[1] - yc[2]};
+        constexpr std::array<std::array<std::size_t, 2>, 3> kPairsOfY{{{0, 1}, {0, 2}, {1, 2}}};
+        for (std::size_t q = 0; q < 3; ++q) {
+          const double l = piece.pair_lambda[q];
+          const Interval a = Interval(l) * Interval(offset[kPairsOfY[q][0]]);
+          const Interval b = Interval(offset[kPairsOfY[q][1]]) / Interval(l);
+          piece.pair_sizes[q][0] =
+              std::max(piece.pair_sizes[q][0],
+                       (Interval(other.pair_sizes[q][0]) + Interval((a + b).mag())).hi());
+          piece.pair_sizes[q][1] =
+              std::max(piece.pair_sizes[q][1],
+                       (Interval(other.pair_sizes[q][1]) + Interval((a - b).mag())).hi());
+        }
+      }
       const std::array<Interval, 3> ybox{piece.range[1] + beyond_y[0], piece.rates[0] + beyond_y[1],
                                          piece.rates[1] + beyond_y[2]};
       const detail::RemainderJet at_centre =
           detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s,
-                                {Interval(yc[0]), Interval(yc[1]), Interval(yc[2])});
+                                {Interval(yc[0]), Interval(yc[1]), Interval(yc[2])}, false);
       const detail::RemainderJet over_box =
           detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s, ybox);
       // How far y strays from y_c over the piece: the reach's form and what lies beyond it.
@@ -797,7 +962,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
         r.constant[i] = constant;
         r.fresh[i] = fresh;
       }
-      piece_remainders.push_back(r);
+      for (std::size_t j = first; j < last; ++j) piece_remainders.push_back(r);
     }
     const auto first_order = [&](const detail::PieceIntegrals& integrals) {
       FirstOrder out = no_first_order();
@@ -832,14 +997,108 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       return out;
     };
 
-    // The plant at the readings' instant and at the next sample.
+    // The plant at the readings' instant and at the next sample. Beyond the base's carried parts:
+    // v's spread times what the state holds beyond the sensitivities' sources (the linear reach):
+    // the base's excess over it and the sensitivities themselves (second order in eta).
+    std::array<double, 4> beyond_reach{};
+    {
+      std::array<double, 4> source{};  // int |e^(a r)| |sum_k radius_k e_k| |reach|
+      std::array<double, 4> pushed{};
+      for (std::size_t i = 0; i < 4; ++i) {
+        Interval sum(0.0);
+        for (std::size_t j = 0; j < 4; ++j) {
+          sum += Interval(direction_abs[i * 4 + j]) * Interval(reach[j].mag());
+        }
+        pushed[i] = sum.hi();
+      }
+      for (std::size_t i = 0; i < 4; ++i) {
+        Interval sum(0.0);
+        for (std::size_t j = 0; j < 4; ++j) {
+          sum += Interval(plant_period.abs_integral[i * 4 + j]) * Interval(pushed[j]);
+        }
+        source[i] = sum.hi();
+      }
+      for (std::size_t i = 0; i < 4; ++i) {
+        beyond_reach[i] = (Interval(beyond[i].mag()) + Interval(2.0) * Interval(source[i]) +
+                           Interval(sens_size[i]) + Interval(1e-15) * Interval(reach[i].mag()))
+                              .hi();
+      }
+    }
+    const auto second_order = [&](const StretchMaps& m) {
+      IVector4 out;
+      for (std::size_t i = 0; i < 4; ++i) {
+        Interval sum(0.0);
+        for (std::size_t j = 0; j < 4; ++j) {
+          Interval pushed(0.0);
+          for (std::size_t l = 0; l < 4; ++l) {
+            pushed += Interval(direction_abs[j * 4 + l]) * Interval(beyond_reach[l]) +
+                      Interval(rest_abs[j * 4 + l]) * Interval(reach[l].mag());
+          }
+          sum += Interval(m.abs_integral[i * 4 + j]) * pushed;
+        }
+        out[i] = symmetric(sum.hi());
+      }
+      return out;
+    };
     const IVector4 no_disturbance{zero_interval, zero_interval, zero_interval, zero_interval};
-    const Forms4 x_read =
-        carried(plant_reading, x, old_duty, new_duty, first_order(reading_pieces),
-                disturbance(plant_reading, no_disturbance, board_error), board_error, symbols);
-    const Forms4 x_next =
-        carried(plant_period, x, old_duty, new_duty, first_order(period_pieces),
-                disturbance(plant_period, no_disturbance, board_error), board_error, symbols);
+    const auto with_second_order = [&](IVector4 added, const StretchMaps& m) {
+      const IVector4 more = second_order(m);
+      for (std::size_t i = 0; i < 4; ++i) added[i] += more[i];
+      return added;
+    };
+    const Forms4 x_read = carried(
+        plant_reading, x, old_duty, new_duty, first_order(reading_pieces),
+        with_second_order(disturbance(plant_reading, no_disturbance, board_error), plant_reading),
+        board_error, symbols);
+    const Forms4 x_next = carried(
+        plant_period, x, old_duty, new_duty, first_order(period_pieces),
+        with_second_order(disturbance(plant_period, no_disturbance, board_error), plant_period),
+        board_error, symbols);
+    // The sensitivities through the same maps, their ramps (the ramp's slope on their gaps) and,
+    // for the plant, their sources: radius_k e_k on the base's linear reach.
+    const auto ramp_effect = [&](const StretchMaps& m, const InputError& input) {
+      std::optional<IVector4> out;
+      if (input.ramp != nullptr && input.ramp_to_s <= m.length_s) {
+        const double s_end = m.length_s;
+        out = m.effect_at(s_end - input.switch_s.hi(), s_end - input.switch_s.lo());
+      }
+      return out;
+    };
+    const auto carried_sensitivity = [&](const StretchMaps& m, const Forms4& z,
+                                         const Sensitivity& d, const std::optional<IVector4>& ramp,
+                                         const SharedRamp* ramp_of,
+                                         const detail::SourceMaps* source) {
+      Forms4 out;
+      AffineForm rho = zero;
+      if (ramp && ramp_of != nullptr) {
+        rho = LinearCombination().add(ramp_of->slope, difference(d.new_duty, d.old_duty)).result();
+      }
+      for (std::size_t i = 0; i < 4; ++i) {
+        LinearCombination row;
+        for (std::size_t j = 0; j < 4; ++j) row.add(m.phi[i * 4 + j], z[j]);
+        row.add(m.gamma_old[i], d.old_duty).add(m.gamma_new[i], d.new_duty);
+        if (ramp && ramp_of != nullptr) row.add(Interval((*ramp)[i].mid()), rho);
+        if (source != nullptr) {
+          for (std::size_t j = 0; j < 4; ++j) row.add(source->x_part[i * 4 + j], x[j]);
+          row.add(source->old_part[i], old_duty).add(source->new_part[i], new_duty);
+        }
+        out[i] = row.result();
+      }
+      return out;
+    };
+    const std::optional<IVector4> board_ramp_reading = ramp_effect(plant_reading, board_error);
+    const std::optional<IVector4> board_ramp_period = ramp_effect(plant_period, board_error);
+    const std::optional<IVector4> law_ramp_reading = ramp_effect(law_reading, law_error);
+    const std::optional<IVector4> law_ramp_period = ramp_effect(law_period, law_error);
+    std::array<Sensitivity, kSensitivities> next_sens;
+    std::array<Forms4, kSensitivities> read_sens;
+    for (std::size_t k = 0; k < kSensitivities; ++k) {
+      const Sensitivity& d = sens[k];
+      read_sens[k] = carried_sensitivity(plant_reading, d.x, d, board_ramp_reading,
+                                         board_error.ramp, &source_reading[k]);
+      next_sens[k].x = carried_sensitivity(plant_period, d.x, d, board_ramp_period,
+                                           board_error.ramp, &source_period[k]);
+    }
     // The readings, within half a count.
     const AffineForm arm_reading = LinearCombination()
                                        .add(x_read[0])
@@ -850,7 +1109,11 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
             .add(x_read[1])
             .add(symbols.noise(symmetric(0.5 * loop.pendulum_count_rad)))
             .result();
-    if (auto f = outside(FailureKind::law_mode, t1, detail::range(pendulum_reading), law_limit)) {
+    Interval read_spread(0.0);
+    for (const Forms4& r : read_sens) read_spread += Interval(detail::range(r[1]).mag());
+    if (auto f =
+            outside(FailureKind::law_mode, t1,
+                    detail::range(pendulum_reading) + symmetric(read_spread.hi()), law_limit)) {
       out.failure = f;
       break;
     }
@@ -880,7 +1143,29 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
                       .add(symbols.noise(symmetric(kLawRelativeError * size + kLawAbsoluteError)))
                       .result();
     }
-    std::optional<AffineForm> next_duty = law_duty(h_next, new_duty, t1);
+    // The law's sensitivities: its model's maps, its ramp, the readings' sensitivities.
+    std::array<AffineForm, kSensitivities> next_duty_sens;
+    Interval duty_spread(0.0);
+    for (std::size_t k = 0; k < kSensitivities; ++k) {
+      const Sensitivity& d = sens[k];
+      const Forms4 predicted_k =
+          carried_sensitivity(law_reading, d.h, d, law_ramp_reading, law_error.ramp, nullptr);
+      const AffineForm arm_k = difference(read_sens[k][0], predicted_k[0]);
+      const AffineForm pendulum_k = difference(read_sens[k][1], predicted_k[1]);
+      Forms4 corrected_k;
+      for (std::size_t i = 0; i < 4; ++i) {
+        corrected_k[i] = LinearCombination()
+                             .add(d.h[i])
+                             .add(Interval(law.observer_gain[i * 2]), arm_k)
+                             .add(Interval(law.observer_gain[i * 2 + 1]), pendulum_k)
+                             .result();
+      }
+      next_sens[k].h =
+          carried_sensitivity(law_period, corrected_k, d, law_ramp_period, law_error.ramp, nullptr);
+      next_duty_sens[k] = law_duty_form(next_sens[k].h, d.new_duty);
+      duty_spread += Interval(detail::range(next_duty_sens[k]).mag());
+    }
+    std::optional<AffineForm> next_duty = law_duty(h_next, new_duty, t1, duty_spread.hi());
     if (!next_duty) break;
 
     // The duty applied at the next sample: the new one, unless its ramp may still be on.
@@ -894,21 +1179,63 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
     AffineForm board_next = applied_next(loop.lag_s.hi(), board_error, loop.ramp_duty_per_s);
     AffineForm law_next = applied_next(law_switch, law_error, law_rate);
 
+    for (std::size_t k = 0; k < kSensitivities; ++k) {
+      next_sens[k].old_duty = sens[k].new_duty;
+      next_sens[k].new_duty = next_duty_sens[k];
+      next_sens[k].board = sens[k].new_duty;
+      next_sens[k].law_applied = sens[k].new_duty;
+    }
+
+    // The boxes: the forms' ranges widened by the sensitivities'.
+    const auto widened_box = [&](const Forms4& base, auto&& part) {
+      StateBox box;
+      for (std::size_t i = 0; i < 4; ++i) {
+        Interval sum(0.0);
+        for (const Sensitivity& d : next_sens) sum += Interval(detail::range(part(d)[i]).mag());
+        box[i] = detail::range(base[i]) + symmetric(sum.hi());
+      }
+      return box;
+    };
+    const StateBox x_next_box =
+        widened_box(x_next, [](const Sensitivity& d) -> const Forms4& { return d.x; });
+    // The linear rates inverse p from the forms, widened by the sensitivities' momenta.
+    std::array<Interval, 2> x_next_rates = linear_rates(x_next);
+    {
+      std::array<double, 2> p_spread{};
+      for (const Sensitivity& d : next_sens) {
+        for (std::size_t j = 0; j < 2; ++j) {
+          p_spread[j] = (Interval(p_spread[j]) + Interval(detail::range(d.x[2 + j]).mag())).hi();
+        }
+      }
+      for (std::size_t i = 0; i < 2; ++i) {
+        const auto r = static_cast<Eigen::Index>(i);
+        x_next_rates[i] =
+            x_next_rates[i] +
+            symmetric((Interval(std::fabs(plant.inverse(r, 0))) * Interval(p_spread[0]) +
+                       Interval(std::fabs(plant.inverse(r, 1))) * Interval(p_spread[1]))
+                          .hi());
+      }
+    }
     LoopStepBox step;
     step.t0_s = t0;
     step.t1_s = t1;
     step.over = with_rates(over, rates_in(over));
-    step.at_end = with_rates(ranges(x_next), linear_rates(x_next));
-    step.estimate = ranges(h_next);
-    step.duty = detail::range(*next_duty);
+    step.at_end = with_rates(x_next_box, x_next_rates);
+    step.estimate = widened_box(h_next, [](const Sensitivity& d) -> const Forms4& { return d.h; });
+    step.duty = detail::range(*next_duty) + symmetric(duty_spread.hi());
     out.steps.push_back(step);
 
     std::vector<AffineForm> state{x_next[0], x_next[1],  x_next[2],  x_next[3],
                                   h_next[0], h_next[1],  h_next[2],  h_next[3],
                                   new_duty,  *next_duty, board_next, law_next};
+    std::vector<std::vector<AffineForm>> state_sens;
+    for (const Sensitivity& d : next_sens) {
+      state_sens.push_back({d.x[0], d.x[1], d.x[2], d.x[3], d.h[0], d.h[1], d.h[2], d.h[3],
+                            d.old_duty, d.new_duty, d.board, d.law_applied});
+    }
     out.largest_symbol_count = std::max(out.largest_symbol_count, symbols.count());
     detail::reduce(state, symbols, options.max_symbols, to_error_coordinates,
-                   from_error_coordinates);
+                   from_error_coordinates, &state_sens);
     for (std::size_t i = 0; i < 4; ++i) {
       x[i] = state[i];
       h[i] = state[4 + i];
@@ -917,6 +1244,18 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
     new_duty = state[9];
     board = state[10];
     law_applied = state[11];
+    for (std::size_t k = 0; k < kSensitivities; ++k) {
+      const std::vector<AffineForm>& f = state_sens[k];
+      Sensitivity& d = sens[k];
+      for (std::size_t i = 0; i < 4; ++i) {
+        d.x[i] = f[i];
+        d.h[i] = f[4 + i];
+      }
+      d.old_duty = f[8];
+      d.new_duty = f[9];
+      d.board = f[10];
+      d.law_applied = f[11];
+    }
     if (run.at_checkpoints.size() < checkpoints.size() &&
         checkpoints[run.at_checkpoints.size()] == k + 1) {
       run.at_checkpoints.push_back(error_box());

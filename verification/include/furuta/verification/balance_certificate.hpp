@@ -63,7 +63,7 @@ struct VerifyOptions {
   double horizon_s = 10.0;
   // The loop's state is carried as affine forms in shared noise symbols (a zonotope); beyond
   // this many symbols the smallest are merged into one per component (Girard's reduction).
-  std::size_t max_symbols = 1500;
+  std::size_t max_symbols = 1000;
 };
 
 // One loop period, [t0_s, t1_s] from the start.
@@ -113,19 +113,22 @@ BalanceCertificate verify_balance(const control::BalanceControllerSpec& law, con
                                   const LoopStart& start, const LoopLimits& limits,
                                   const VerifyOptions& options);
 
-// verify_balance over pieces of the parameter box: a piece that is not certified is halved along
-// the parameter that moves the plant most for its width (the mass matrix's: its inverse at
-// upright changes by mu1 mu4 / det(M) per relative change of mu1 or mu4 and by 2 mu3^2 / det(M)
-// of mu3; the arm's damping by fv1 / (kw + fv1) of fv1), until every piece is certified or
+// verify_balance over pieces of the start and parameter boxes: a piece that is not certified is
+// halved, its start along the pendulum's angle or rate (the wider for its share of the start) while
+// it is wider than an eighth of the start's, then the parameters and the start in turn; the
+// parameters along the one that moves the plant most for its width (the mass matrix's: its inverse
+// at upright changes by mu1 mu4 / det(M) per relative change of mu1 or mu4 and by 2 mu3^2 / det(M)
+// of mu3; the arm's damping by fv1 / (kw + fv1) of fv1); until every piece is certified or
 // max_pieces would be passed. The pieces run in parallel. Certified: every piece is, and the
 // boxes are the pieces' hulls; else the failure of the piece that failed first.
 struct SplitOptions {
   std::size_t max_pieces = 32;
-  // The pieces run to this instant (rounded to whole periods); from there one run proves the rest
-  // from the hull of their states, the loop's whole state (plant, filter, duties on their way) as
-  // a box, when it is certified (else the pieces run to the horizon). 0: the pieces run to the
-  // horizon.
-  double handover_s = 1.0;
+  // > 0: the pieces run to 1, 2 and 3 times this instant (whole periods), and one run from the
+  // hull of their states there, the loop's whole state (plant, filter, duties on their way) as a
+  // box, proves the rest when it is certified (the loop is the same at every sample); else the
+  // pieces run to the horizon. The box loses the pieces' correlations: it pays for long horizons
+  // with a point-like parameter box, rarely otherwise. 0: the pieces run to the horizon.
+  double handover_s = 0.0;
 };
 BalanceCertificate verify_balance_split(const control::BalanceControllerSpec& law,
                                         const LoopModel& loop, const LoopStart& start,
