@@ -200,7 +200,7 @@ void section_assumptions(Html& h, const VerificationReportInput& in) {
       {"arm limit", "|q1| < " + short_number(in.limits.arm_rad * kDegPerRad) + " deg"},
       {"horizon", seconds_text(in.options.horizon_s)},
       {"noise symbols, at most", std::to_string(in.options.max_symbols)},
-      {"pieces of the parameter box, at most", std::to_string(in.split.max_pieces)},
+      {"pieces of the start and parameter boxes, at most", std::to_string(in.split.max_pieces)},
   };
   h.table("verification-loop", "The drive, the board, the readings and the bounds", {"", "value"},
           loop_rows);
@@ -215,9 +215,14 @@ void section_pieces(Html& h, const VerificationReportInput& in) {
   h.raw("<section id=\"pieces\">\n");
   h.element("h2", "Pieces and time");
   h.raw("\n");
+  const std::string handover =
+      c.handover_s > 0 ? " to " + seconds_text(c.handover_s) +
+                             ", then one run from the hull of their states to the horizon,"
+                       : "";
   h.paragraph(std::to_string(c.pieces) + (c.pieces == 1 ? " piece" : " pieces") +
-              " of the parameter box (split to at most " + std::to_string(in.split.max_pieces) +
-              "), each proven on its own, in " + short_number(c.seconds, 4) + " s; at most " +
+              " of the start and parameter boxes (split to at most " +
+              std::to_string(in.split.max_pieces) + "), each proven on its own" + handover +
+              " in " + short_number(c.seconds, 4) + " s; at most " +
               std::to_string(c.largest_symbol_count) + " noise symbols at once (reduced beyond " +
               std::to_string(in.options.max_symbols) + ").");
   h.raw("</section>\n");
@@ -302,6 +307,7 @@ Json verification_json(const VerificationReportInput& input) {
   doc["horizon_s"] = c.horizon_s;
   doc["seconds"] = c.seconds;
   doc["pieces"] = c.pieces;
+  doc["handover_s"] = c.handover_s;
   doc["largest_symbol_count"] = c.largest_symbol_count;
   if (c.failure) {
     const verification::Failure& f = *c.failure;

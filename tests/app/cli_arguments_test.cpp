@@ -112,6 +112,10 @@ TEST(CliArguments, FurutaRejectsMalformedArgumentsBeforeDoingAnything) {
                                  "/README.md --parameters " FURUTA_SOURCE_DIR
                                  "/README.md --max-pieces 0",
        "--max-pieces"},
+      {std::string(FURUTA_CLI) + " controller verify " FURUTA_SOURCE_DIR
+                                 "/README.md --parameters " FURUTA_SOURCE_DIR
+                                 "/README.md --handover nan",
+       "--handover: nan is not a finite number"},
   };
   for (const auto& [line, mention] : cases) {
     const Outcome o = run(line);

@@ -176,6 +176,7 @@ TEST(VerificationJson, HoldsEveryGivenNumberAndAStepALine) {
   EXPECT_EQ(j["horizon_s"].get<double>(), 0.8);
   EXPECT_EQ(j["seconds"].get<double>(), 12.5);
   EXPECT_EQ(j["pieces"], 3);
+  EXPECT_EQ(j["handover_s"].get<double>(), 0.0);
   EXPECT_EQ(j["largest_symbol_count"], 840);
   EXPECT_TRUE(j["failure"].is_null());
 
@@ -414,7 +415,8 @@ TEST(VerificationPage, SaysWhatWasProvenUnderWhichAssumptions) {
         ">0.8 s<", ">1500<", ">32<"}) {
     EXPECT_NE(html.find(text), std::string::npos) << text;
   }
-  EXPECT_NE(html.find("3 pieces of the parameter box (split to at most 32)"), std::string::npos);
+  EXPECT_NE(html.find("3 pieces of the start and parameter boxes (split to at most 32)"),
+            std::string::npos);
   EXPECT_NE(html.find("in 12.5 s"), std::string::npos);
   EXPECT_NE(html.find("840 noise symbols"), std::string::npos);
   EXPECT_NE(html.find("scaled by 0.75"), std::string::npos);

@@ -64,27 +64,12 @@ RemainderJet jet_at(const Plant& plant, const std::array<double, 3>& y) {
                                {Interval(y[0]), Interval(y[1]), Interval(y[2])});
 }
 
-std::size_t pair_index(std::size_t i, std::size_t j) {
-  if (i > j) std::swap(i, j);
-  return i == 0 ? j : (i == 1 ? 2 + j : 5);
-}
+using detail::pair_index;
 
 std::size_t triple_index(std::array<std::size_t, 3> t) {
   std::sort(t.begin(), t.end());
-  constexpr std::array<std::array<std::size_t, 3>, 10> kTriples{{{0, 0, 0},
-                                                                 {0, 0, 1},
-                                                                 {0, 0, 2},
-                                                                 {0, 1, 1},
-                                                                 {0, 1, 2},
-                                                                 {0, 2, 2},
-                                                                 {1, 1, 1},
-                                                                 {1, 1, 2},
-                                                                 {1, 2, 2},
-                                                                 {2, 2, 2}}};
-  for (std::size_t k = 0; k < 10; ++k) {
-    if (kTriples[k] == t) return k;
-  }
-  return 10;
+  const auto at = std::find(detail::kTriples.begin(), detail::kTriples.end(), t);
+  return static_cast<std::size_t>(at - detail::kTriples.begin());
 }
 
 TEST(RemainderJet, ValueAndEachOrderAgreeWithTheFieldAndDifferences) {

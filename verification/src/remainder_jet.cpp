@@ -10,25 +10,7 @@ namespace {
 // A value and its derivatives to the third order in the three variables, each an interval:
 // forward-mode differentiation over boxes (the sum, product, quotient and chain rules hold at every
 // point of them). h and t hold the symmetric second and third derivatives by sorted index
-// (kPairs, kTriples).
-constexpr std::array<std::array<std::size_t, 2>, 6> kPairs{
-    {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}}};
-constexpr std::array<std::array<std::size_t, 3>, 10> kTriples{{{0, 0, 0},
-                                                               {0, 0, 1},
-                                                               {0, 0, 2},
-                                                               {0, 1, 1},
-                                                               {0, 1, 2},
-                                                               {0, 2, 2},
-                                                               {1, 1, 1},
-                                                               {1, 1, 2},
-                                                               {1, 2, 2},
-                                                               {2, 2, 2}}};
-
-// The position of (i, j) in kPairs, in either order.
-std::size_t pair_index(std::size_t i, std::size_t j) {
-  if (i > j) std::swap(i, j);
-  return i == 0 ? j : (i == 1 ? 2 + j : 5);
-}
+// (kPairs, kTriples in remainder_jet.hpp).
 
 struct Jet {
   Interval v;

@@ -7,12 +7,32 @@
 // higher derivatives bound the rest (Taylor and mean value forms).
 
 #include <array>
+#include <cstddef>
 
 #include "furuta/interval/interval.hpp"
 #include "furuta/model/parameters.hpp"
 #include "loop_maps.hpp"
 
 namespace furuta::verification::detail {
+
+// The second and third derivatives' indices, sorted, in the order RemainderJet holds them.
+inline constexpr std::array<std::array<std::size_t, 2>, 6> kPairs{
+    {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}}};
+inline constexpr std::array<std::array<std::size_t, 3>, 10> kTriples{{{0, 0, 0},
+                                                                      {0, 0, 1},
+                                                                      {0, 0, 2},
+                                                                      {0, 1, 1},
+                                                                      {0, 1, 2},
+                                                                      {0, 2, 2},
+                                                                      {1, 1, 1},
+                                                                      {1, 1, 2},
+                                                                      {1, 2, 2},
+                                                                      {2, 2, 2}}};
+
+// The position of (i, j) in kPairs, in either order.
+constexpr std::size_t pair_index(std::size_t i, std::size_t j) {
+  return i > j ? pair_index(j, i) : (i == 0 ? j : (i == 1 ? 2 + j : 5));
+}
 
 struct RemainderJet {
   IVector4 value;                                   // n(y), the duty's term excluded

@@ -35,6 +35,9 @@ constexpr double kLawAbsoluteError = 1e-15;
 // The sensitivities carried: to mu1, mu3 and mu4 through M's inverse at upright.
 // The pieces of a period that share one expansion of the remainder (its jets).
 constexpr std::size_t kJetGroup = 2;
+// The pairs of y's components whose products are bounded by polarisation: (e, w1), (e, w2),
+// (w1, w2).
+constexpr std::array<std::array<std::size_t, 2>, 3> kCrossPairs{{{0, 1}, {0, 2}, {1, 2}}};
 constexpr std::size_t kSensitivities = 3;
 
 // An enclosure that stops growing inwards is inflated by this fraction of its width per try.
@@ -657,10 +660,9 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
         rate_forms[i] = rate;
       }
       const std::array<const AffineForm*, 3> y_forms{&at[1], &rate_forms[0], &rate_forms[1]};
-      constexpr std::array<std::array<std::size_t, 2>, 3> kPairsOfY{{{0, 1}, {0, 2}, {1, 2}}};
       for (std::size_t q = 0; q < 3; ++q) {
-        const AffineForm& a = *y_forms[kPairsOfY[q][0]];
-        const AffineForm& b = *y_forms[kPairsOfY[q][1]];
+        const AffineForm& a = *y_forms[kCrossPairs[q][0]];
+        const AffineForm& b = *y_forms[kCrossPairs[q][1]];
         // One lambda per group of pieces (the first's), so that the group's sizes combine.
         double lambda = 0;
         if (piece_reach.size() % kJetGroup == 0) {
@@ -823,18 +825,6 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       IVector4 constant;    // n(y_c) - g y_c, the midpoints
       IVector4 fresh;       // the rest, at every instant of the piece
     };
-    constexpr std::array<std::array<std::size_t, 2>, 6> kPairOfY{
-        {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}}};
-    constexpr std::array<std::array<std::size_t, 3>, 10> kTripleOfY{{{0, 0, 0},
-                                                                     {0, 0, 1},
-                                                                     {0, 0, 2},
-                                                                     {0, 1, 1},
-                                                                     {0, 1, 2},
-                                                                     {0, 2, 2},
-                                                                     {1, 1, 1},
-                                                                     {1, 1, 2},
-                                                                     {1, 2, 2},
-                                                                     {2, 2, 2}}};
     std::vector<PieceRemainder> piece_remainders;
     piece_remainders.reserve(piece_reach.size());
     // The jets per group of kJetGroup pieces: the group's middle piece's centre, the hull of the
@@ -851,11 +841,10 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
         for (std::size_t i = 0; i < 2; ++i) piece.rates[i] = hull(piece.rates[i], other.rates[i]);
         const std::array<double, 3> offset{other.centre[1] - yc[0], other.rate_centre[0] - yc[1],
                                            other.rate_centre[1] - yc[2]};
-        constexpr std::array<std::array<std::size_t, 2>, 3> kPairsOfY{{{0, 1}, {0, 2}, {1, 2}}};
         for (std::size_t q = 0; q < 3; ++q) {
           const double l = piece.pair_lambda[q];
-          const Interval a = Interval(l) * Interval(offset[kPairsOfY[q][0]]);
-          const Interval b = Interval(offset[kPairsOfY[q][1]]) / Interval(l);
+          const Interval a = Interval(l) * Interval(offset[kCrossPairs[q][0]]);
+          const Interval b = Interval(offset[kCrossPairs[q][1]]) / Interval(l);
           piece.pair_sizes[q][0] =
               std::max(piece.pair_sizes[q][0],
                        (Interval(other.pair_sizes[q][0]) + Interval((a + b).mag())).hi());
@@ -885,8 +874,8 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       // the forms' correlation.
       std::array<Interval, 6> products;
       for (std::size_t pair = 0; pair < 6; ++pair) {
-        const std::size_t a = kPairOfY[pair][0];
-        const std::size_t b = kPairOfY[pair][1];
+        const std::size_t a = detail::kPairs[pair][0];
+        const std::size_t b = detail::kPairs[pair][1];
         const Interval box_product = Interval(reach_size[a]) * Interval(reach_size[b]);
         if (a == b) {
           products[pair] = Interval(0.0, box_product.hi());
@@ -906,7 +895,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       // 1 for three distinct.
       std::array<Interval, 10> triple_bounds;
       for (std::size_t triple = 0; triple < 10; ++triple) {
-        const auto& t = kTripleOfY[triple];
+        const auto& t = detail::kTriples[triple];
         const Interval size =
             Interval(reach_size[t[0]]) * Interval(reach_size[t[1]]) * Interval(reach_size[t[2]]);
         const double weight = t[0] == t[2] ? 1.0 / 6.0 : (t[0] == t[1] || t[1] == t[2] ? 0.5 : 1.0);
@@ -945,7 +934,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
         Interval third = first;
         for (std::size_t pair = 0; pair < 6; ++pair) {
           const Interval half =
-              kPairOfY[pair][0] == kPairOfY[pair][1] ? Interval(0.5) : Interval(1.0);
+              detail::kPairs[pair][0] == detail::kPairs[pair][1] ? Interval(0.5) : Interval(1.0);
           second += half * over_box.hessian[i][pair] * products[pair];
           third += half * at_centre.hessian[i][pair] * products[pair];
         }
@@ -1020,7 +1009,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       }
       for (std::size_t i = 0; i < 4; ++i) {
         beyond_reach[i] = (Interval(beyond[i].mag()) + Interval(2.0) * Interval(source[i]) +
-                           Interval(sens_size[i]) + Interval(1e-15) * Interval(reach[i].mag()))
+                           Interval(sens_size[i]) + Interval(1e-15) * Interval(over[i].mag()))
                               .hi();
       }
     }
@@ -1032,7 +1021,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
           Interval pushed(0.0);
           for (std::size_t l = 0; l < 4; ++l) {
             pushed += Interval(direction_abs[j * 4 + l]) * Interval(beyond_reach[l]) +
-                      Interval(rest_abs[j * 4 + l]) * Interval(reach[l].mag());
+                      Interval(rest_abs[j * 4 + l]) * Interval(over[l].mag());
           }
           sum += Interval(m.abs_integral[i * 4 + j]) * pushed;
         }
