@@ -263,6 +263,245 @@ std::optional<Failure> outside(FailureKind kind, double t_s, const Interval& val
   return std::nullopt;
 }
 
+// A piece of the period's linear reach: its forms' centres and ranges in the state's coordinates
+// and in the rates inverse p.
+struct PieceReach {
+  std::array<double, 4> centre;
+  StateBox range;
+  std::array<double, 2> rate_centre;
+  std::array<Interval, 2> rates;
+  // |lambda y_k +- y_l / lambda| over the symbols for the pairs (e, w1), (e, w2), (w1, w2),
+  // lambda balancing their sizes: the products' ranges by polarisation (correlation kept).
+  std::array<std::array<double, 2>, 3> pair_sizes;
+  std::array<double, 3> pair_lambda;
+};
+
+// The remainder over a piece of the period, to first order in its start: gradient_z (x - centre)
+// carried, constant and fresh (at every instant of the piece) beside it.
+struct PieceRemainder {
+  IMatrix4 gradient_z;  // g in the state's coordinates
+  IVector4 constant;    // n(y_c) - g y_c, the midpoints
+  IVector4 fresh;       // the rest, at every instant of the piece
+};
+
+// The remainder over each piece of the period (see run_loop): for each pair of pieces, its value
+// and gradient at the pair's centre, carried; the rest bounded by the smallest of a mean value
+// form, its range and Taylor forms of second and third order.
+std::vector<PieceRemainder> remainders_over_pieces(const detail::MomentumPlant& plant,
+                                                   const LoopModel& loop,
+                                                   const std::vector<PieceReach>& piece_reach,
+                                                   const std::array<Interval, 3>& beyond_y,
+                                                   const Interval& drive_spread) {
+  const auto v = [&](Eigen::Index i, Eigen::Index j) { return Interval(plant.inverse(i, j)); };
+  std::vector<PieceRemainder> piece_remainders;
+  piece_remainders.reserve(piece_reach.size());
+  // The jets per group of kJetGroup pieces: the group's middle piece's centre, the hull of the
+  // group's ranges, the largest of its pieces' polarised sizes about that centre.
+  for (std::size_t first = 0; first < piece_reach.size(); first += kJetGroup) {
+    const std::size_t last = std::min(first + kJetGroup, piece_reach.size());
+    PieceReach piece = piece_reach[(first + last) / 2];
+    const std::array<double, 3> yc{piece.centre[1], piece.rate_centre[0], piece.rate_centre[1]};
+    piece.pair_lambda = piece_reach[first].pair_lambda;
+    piece.pair_sizes = {};
+    for (std::size_t j = first; j < last; ++j) {
+      const PieceReach& other = piece_reach[j];
+      piece.range[1] = hull(piece.range[1], other.range[1]);
+      for (std::size_t i = 0; i < 2; ++i) piece.rates[i] = hull(piece.rates[i], other.rates[i]);
+      const std::array<double, 3> offset{other.centre[1] - yc[0], other.rate_centre[0] - yc[1],
+                                         other.rate_centre[1] - yc[2]};
+      for (std::size_t q = 0; q < 3; ++q) {
+        const double l = piece.pair_lambda[q];
+        const Interval a = Interval(l) * Interval(offset[kCrossPairs[q][0]]);
+        const Interval b = Interval(offset[kCrossPairs[q][1]]) / Interval(l);
+        piece.pair_sizes[q][0] =
+            std::max(piece.pair_sizes[q][0],
+                     (Interval(other.pair_sizes[q][0]) + Interval((a + b).mag())).hi());
+        piece.pair_sizes[q][1] =
+            std::max(piece.pair_sizes[q][1],
+                     (Interval(other.pair_sizes[q][1]) + Interval((a - b).mag())).hi());
+      }
+    }
+    const std::array<Interval, 3> ybox{piece.range[1] + beyond_y[0], piece.rates[0] + beyond_y[1],
+                                       piece.rates[1] + beyond_y[2]};
+    const detail::RemainderJet at_centre =
+        detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s,
+                              {Interval(yc[0]), Interval(yc[1]), Interval(yc[2])}, false);
+    const detail::RemainderJet over_box =
+        detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s, ybox);
+    // How far y strays from y_c over the piece: the reach's form and what lies beyond it.
+    std::array<double, 3> reach_size;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const Interval& v = k == 0 ? piece.range[1] : piece.rates[k - 1];
+      reach_size[k] = (Interval(std::max(v.hi() - yc[k], yc[k] - v.lo())) * Interval(1.0 + 1e-15) +
+                       Interval(beyond_y[k].mag()))
+                          .hi();
+    }
+    // The deviations' products: y_k^2 in [0, size^2]; y_k y_l = ((l y_k + y_l / l)^2 -
+    // (l y_k - y_l / l)^2) / 4, each deviation the form's plus what lies beyond it, which keeps
+    // the forms' correlation.
+    std::array<Interval, 6> products;
+    for (std::size_t pair = 0; pair < 6; ++pair) {
+      const std::size_t a = detail::kPairs[pair][0];
+      const std::size_t b = detail::kPairs[pair][1];
+      const Interval box_product = Interval(reach_size[a]) * Interval(reach_size[b]);
+      if (a == b) {
+        products[pair] = Interval(0.0, box_product.hi());
+        continue;
+      }
+      const std::size_t q = a == 0 ? b - 1 : 2;
+      const double l = piece.pair_lambda[q];
+      const Interval extra =
+          Interval(l) * Interval(beyond_y[a].mag()) + Interval(beyond_y[b].mag()) / Interval(l);
+      const Interval plus = Interval(piece.pair_sizes[q][0]) + extra;
+      const Interval minus = Interval(piece.pair_sizes[q][1]) + extra;
+      products[pair] = interval::intersect(Interval(-(interval::sqr(minus) / Interval(4.0)).hi(),
+                                                    (interval::sqr(plus) / Interval(4.0)).hi()),
+                                           symmetric(box_product.hi()));
+    }
+    // y_k y_l y_m / 6 times the number of its orderings: 1/6 for k = l = m, 1/2 for two alike,
+    // 1 for three distinct.
+    std::array<Interval, 10> triple_bounds;
+    for (std::size_t triple = 0; triple < 10; ++triple) {
+      const auto& t = detail::kTriples[triple];
+      const Interval size =
+          Interval(reach_size[t[0]]) * Interval(reach_size[t[1]]) * Interval(reach_size[t[2]]);
+      const double weight = t[0] == t[2] ? 1.0 / 6.0 : (t[0] == t[1] || t[1] == t[2] ? 0.5 : 1.0);
+      triple_bounds[triple] = Interval(weight) * symmetric(size.hi());
+    }
+    PieceRemainder r;
+    for (std::size_t i = 0; i < 4; ++i) {
+      std::array<double, 3> g;
+      for (std::size_t k = 0; k < 3; ++k) g[k] = at_centre.gradient[i][k].mid();
+      r.gradient_z[i * 4 + 0] = Interval(0.0);
+      r.gradient_z[i * 4 + 1] = Interval(g[0]);
+      r.gradient_z[i * 4 + 2] = Interval(g[1]) * v(0, 0) + Interval(g[2]) * v(1, 0);
+      r.gradient_z[i * 4 + 3] = Interval(g[1]) * v(0, 1) + Interval(g[2]) * v(1, 1);
+      const double mid = at_centre.value[i].mid();
+      Interval constant(mid);
+      // Two enclosures of the rest, intersected: the mean value form, and n over the box less
+      // the carried part over the reach (tighter where g is small, as about upright).
+      Interval mean_value = at_centre.value[i] - mid;
+      Interval direct = over_box.value[i] - mid;
+      const std::array<Interval, 3> reach_y{piece.range[1], piece.rates[0], piece.rates[1]};
+      for (std::size_t k = 0; k < 3; ++k) {
+        constant -= Interval(g[k]) * Interval(yc[k]);
+        mean_value += Interval(g[k]) * beyond_y[k] +
+                      (over_box.gradient[i][k] - Interval(g[k])) * (ybox[k] - Interval(yc[k]));
+        direct -= Interval(g[k]) * (reach_y[k] - Interval(yc[k]));
+      }
+      // Taylor forms: (grad n(y_c) - g) (y - y_c) + g beyond, then to the second order with the
+      // Hessian over the box, or to the third with the Hessian at y_c and the third
+      // derivatives over the box.
+      Interval first = at_centre.value[i] - mid;
+      for (std::size_t k = 0; k < 3; ++k) {
+        first += (at_centre.gradient[i][k] - Interval(g[k])) * symmetric(reach_size[k]) +
+                 Interval(g[k]) * beyond_y[k];
+      }
+      Interval second = first;
+      Interval third = first;
+      for (std::size_t pair = 0; pair < 6; ++pair) {
+        const Interval half =
+            detail::kPairs[pair][0] == detail::kPairs[pair][1] ? Interval(0.5) : Interval(1.0);
+        second += half * over_box.hessian[i][pair] * products[pair];
+        third += half * at_centre.hessian[i][pair] * products[pair];
+      }
+      for (std::size_t triple = 0; triple < 10; ++triple) {
+        third += over_box.third[i][triple] * triple_bounds[triple];
+      }
+      Interval fresh = interval::intersect(interval::intersect(mean_value, direct),
+                                           interval::intersect(second, third));
+      // Its midpoint is a constant over the piece.
+      const double fresh_mid = fresh.mid();
+      constant += Interval(fresh_mid);
+      fresh = fresh - Interval(fresh_mid);
+      if (i == 2) fresh += drive_spread;
+      r.constant[i] = constant;
+      r.fresh[i] = fresh;
+    }
+    for (std::size_t j = first; j < last; ++j) piece_remainders.push_back(r);
+  }
+  return piece_remainders;
+}
+
+// The remainders' part at an instant s of the period, from the pieces' integrals towards it.
+FirstOrder first_order_over(const detail::PieceIntegrals& integrals,
+                            const std::vector<PieceRemainder>& piece_remainders,
+                            const StretchMaps& plant_period) {
+  FirstOrder out = no_first_order();
+  for (std::size_t j = 0; j < piece_remainders.size(); ++j) {
+    const IMatrix4& psi = integrals.psi[j];
+    const PieceRemainder& r = piece_remainders[j];
+    const StretchMaps::Piece& maps = plant_period.pieces[j];
+    IMatrix4 psi_g;  // psi g
+    for (std::size_t i = 0; i < 4; ++i) {
+      for (std::size_t k = 0; k < 4; ++k) {
+        Interval sum(0.0);
+        for (std::size_t l = 0; l < 4; ++l) sum += psi[i * 4 + l] * r.gradient_z[l * 4 + k];
+        psi_g[i * 4 + k] = sum;
+      }
+    }
+    for (std::size_t i = 0; i < 4; ++i) {
+      for (std::size_t k = 0; k < 4; ++k) {
+        Interval sum(0.0);
+        for (std::size_t l = 0; l < 4; ++l) sum += psi_g[i * 4 + l] * maps.phi[l * 4 + k];
+        out.x_part[i * 4 + k] += sum;
+      }
+      Interval fresh(0.0);
+      for (std::size_t l = 0; l < 4; ++l) {
+        out.old_part[i] += psi_g[i * 4 + l] * maps.gamma_old[l];
+        out.new_part[i] += psi_g[i * 4 + l] * maps.gamma_new[l];
+        out.constant[i] += psi[i * 4 + l] * r.constant[l];
+        fresh += Interval(integrals.abs[j][i * 4 + l]) * Interval(r.fresh[l].mag());
+      }
+      out.fresh[i] += symmetric(fresh.hi());
+    }
+  }
+  return out;
+}
+
+// The sensitivities' maps (see run_loop): a's change per radius of mu1, mu3, mu4 (direction k),
+// what each adds to the state at the period's end and at the readings' instant on the base's
+// linear reach, sum_k |direction_k| and what v's rest adds at most, entrywise.
+struct SensitivityMaps {
+  std::array<detail::SourceMaps, kSensitivities> source_period;
+  std::array<detail::SourceMaps, kSensitivities> source_reading;
+  std::array<double, 16> direction_abs{};
+  std::array<double, 16> rest_abs{};
+};
+
+SensitivityMaps sensitivity_maps(const detail::UprightInverse& upright,
+                                 const detail::MomentumPlant& plant, double board_switch,
+                                 double period, double reading_s) {
+  const model::Parameters<double>& centre = plant.centre;
+  const double damping_centre = plant.kw + centre.fv1;
+  SensitivityMaps out;
+  std::array<Eigen::Matrix4d, kSensitivities> direction;
+  for (std::size_t e = 0; e < 3; ++e) {
+    const Eigen::Matrix4d d = detail::inverse_direction(e, damping_centre, centre.fv2);
+    for (std::size_t i = 0; i < 16; ++i) {
+      out.rest_abs[i] =
+          (Interval(out.rest_abs[i]) +
+           Interval(upright.rest[e]) * Interval(std::fabs(d(static_cast<Eigen::Index>(i / 4),
+                                                            static_cast<Eigen::Index>(i % 4)))))
+              .hi();
+    }
+  }
+  for (std::size_t k = 0; k < kSensitivities; ++k) {
+    direction[k] = detail::a_direction(upright.per_parameter[k], damping_centre, centre.fv2);
+    out.source_period[k] =
+        detail::source_maps(plant.a, plant.b, direction[k], board_switch, period);
+    out.source_reading[k] =
+        detail::source_maps(plant.a, plant.b, direction[k], board_switch, reading_s);
+    for (std::size_t e = 0; e < 16; ++e) {
+      const double v = std::fabs(
+          direction[k](static_cast<Eigen::Index>(e / 4), static_cast<Eigen::Index>(e % 4)));
+      out.direction_abs[e] =
+          (Interval(out.direction_abs[e]) + Interval(v) * Interval(1.0 + 1e-15)).hi();
+    }
+  }
+  return out;
+}
+
 void check_arguments(const control::BalanceControllerSpec& law, const LoopModel& loop,
                      const std::variant<LoopStart, detail::LoopStateBox>& from,
                      const VerifyOptions& options) {
@@ -332,34 +571,12 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
   const detail::MomentumPlant plant = detail::momentum_plant(
       centre, loop.duty_torque_nm.mid(), loop.back_emf_nm_s.mid(), upright.centre);
   const double board_switch = loop.lag_s.mid();
-  const double damping_centre = plant.kw + centre.fv1;
-  std::array<Eigen::Matrix4d, kSensitivities> direction;
-  std::array<detail::SourceMaps, kSensitivities> source_period;
-  std::array<detail::SourceMaps, kSensitivities> source_reading;
-  std::array<double, 16> direction_abs{};  // sum_k |radius_k e_k|, entrywise
-  // What v's rest adds, entrywise at most: |rest_e inverse_direction(e)| summed.
-  std::array<double, 16> rest_abs{};
-  for (std::size_t e = 0; e < 3; ++e) {
-    const Eigen::Matrix4d d = detail::inverse_direction(e, damping_centre, centre.fv2);
-    for (std::size_t i = 0; i < 16; ++i) {
-      rest_abs[i] =
-          (Interval(rest_abs[i]) +
-           Interval(upright.rest[e]) * Interval(std::fabs(d(static_cast<Eigen::Index>(i / 4),
-                                                            static_cast<Eigen::Index>(i % 4)))))
-              .hi();
-    }
-  }
-  for (std::size_t k = 0; k < kSensitivities; ++k) {
-    direction[k] = detail::a_direction(upright.per_parameter[k], damping_centre, centre.fv2);
-    source_period[k] = detail::source_maps(plant.a, plant.b, direction[k], board_switch, period);
-    source_reading[k] =
-        detail::source_maps(plant.a, plant.b, direction[k], board_switch, reading_s);
-    for (std::size_t e = 0; e < 16; ++e) {
-      const double v = std::fabs(
-          direction[k](static_cast<Eigen::Index>(e / 4), static_cast<Eigen::Index>(e % 4)));
-      direction_abs[e] = (Interval(direction_abs[e]) + Interval(v) * Interval(1.0 + 1e-15)).hi();
-    }
-  }
+  const SensitivityMaps sensitivity =
+      sensitivity_maps(upright, plant, board_switch, period, reading_s);
+  const std::array<detail::SourceMaps, kSensitivities>& source_period = sensitivity.source_period;
+  const std::array<detail::SourceMaps, kSensitivities>& source_reading = sensitivity.source_reading;
+  const std::array<double, 16>& direction_abs = sensitivity.direction_abs;
+  const std::array<double, 16>& rest_abs = sensitivity.rest_abs;
   const StretchMaps plant_period = detail::stretch_maps(plant.a, plant.b, board_switch, period);
   const StretchMaps plant_reading = detail::stretch_maps(plant.a, plant.b, board_switch, reading_s);
   const detail::PieceIntegrals period_pieces = detail::piece_integrals(plant.a, period, period);
@@ -622,16 +839,6 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
     StateBox reach;
     reach.fill(Interval::empty());
     std::array<Interval, 2> reach_rates{Interval::empty(), Interval::empty()};
-    struct PieceReach {
-      std::array<double, 4> centre;
-      StateBox range;
-      std::array<double, 2> rate_centre;
-      std::array<Interval, 2> rates;
-      // |lambda y_k +- y_l / lambda| over the symbols for the pairs (e, w1), (e, w2), (w1, w2),
-      // lambda balancing their sizes: the products' ranges by polarisation (correlation kept).
-      std::array<std::array<double, 2>, 3> pair_sizes;
-      std::array<double, 3> pair_lambda;
-    };
     std::vector<PieceReach> piece_reach;
     piece_reach.reserve(plant_period.pieces.size());
     for (const StretchMaps::Piece& piece : plant_period.pieces) {
@@ -820,170 +1027,10 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
         v(0, 0) * beyond[2] + v(0, 1) * beyond[3] + symmetric(sens_w(0)),
         v(1, 0) * beyond[2] + v(1, 1) * beyond[3] + symmetric(sens_w(1))};
     const Interval drive_spread = (loop.duty_torque_nm - Interval(plant.kd)) * duty_range;
-    struct PieceRemainder {
-      IMatrix4 gradient_z;  // g in the state's coordinates
-      IVector4 constant;    // n(y_c) - g y_c, the midpoints
-      IVector4 fresh;       // the rest, at every instant of the piece
-    };
-    std::vector<PieceRemainder> piece_remainders;
-    piece_remainders.reserve(piece_reach.size());
-    // The jets per group of kJetGroup pieces: the group's middle piece's centre, the hull of the
-    // group's ranges, the largest of its pieces' polarised sizes about that centre.
-    for (std::size_t first = 0; first < piece_reach.size(); first += kJetGroup) {
-      const std::size_t last = std::min(first + kJetGroup, piece_reach.size());
-      PieceReach piece = piece_reach[(first + last) / 2];
-      const std::array<double, 3> yc{piece.centre[1], piece.rate_centre[0], piece.rate_centre[1]};
-      piece.pair_lambda = piece_reach[first].pair_lambda;
-      piece.pair_sizes = {};
-      for (std::size_t j = first; j < last; ++j) {
-        const PieceReach& other = piece_reach[j];
-        piece.range[1] = hull(piece.range[1], other.range[1]);
-        for (std::size_t i = 0; i < 2; ++i) piece.rates[i] = hull(piece.rates[i], other.rates[i]);
-        const std::array<double, 3> offset{other.centre[1] - yc[0], other.rate_centre[0] - yc[1],
-                                           other.rate_centre[1] - yc[2]};
-        for (std::size_t q = 0; q < 3; ++q) {
-          const double l = piece.pair_lambda[q];
-          const Interval a = Interval(l) * Interval(offset[kCrossPairs[q][0]]);
-          const Interval b = Interval(offset[kCrossPairs[q][1]]) / Interval(l);
-          piece.pair_sizes[q][0] =
-              std::max(piece.pair_sizes[q][0],
-                       (Interval(other.pair_sizes[q][0]) + Interval((a + b).mag())).hi());
-          piece.pair_sizes[q][1] =
-              std::max(piece.pair_sizes[q][1],
-                       (Interval(other.pair_sizes[q][1]) + Interval((a - b).mag())).hi());
-        }
-      }
-      const std::array<Interval, 3> ybox{piece.range[1] + beyond_y[0], piece.rates[0] + beyond_y[1],
-                                         piece.rates[1] + beyond_y[2]};
-      const detail::RemainderJet at_centre =
-          detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s,
-                                {Interval(yc[0]), Interval(yc[1]), Interval(yc[2])}, false);
-      const detail::RemainderJet over_box =
-          detail::remainder_jet(plant, loop.parameters, loop.back_emf_nm_s, ybox);
-      // How far y strays from y_c over the piece: the reach's form and what lies beyond it.
-      std::array<double, 3> reach_size;
-      for (std::size_t k = 0; k < 3; ++k) {
-        const Interval& v = k == 0 ? piece.range[1] : piece.rates[k - 1];
-        reach_size[k] =
-            (Interval(std::max(v.hi() - yc[k], yc[k] - v.lo())) * Interval(1.0 + 1e-15) +
-             Interval(beyond_y[k].mag()))
-                .hi();
-      }
-      // The deviations' products: y_k^2 in [0, size^2]; y_k y_l = ((l y_k + y_l / l)^2 -
-      // (l y_k - y_l / l)^2) / 4, each deviation the form's plus what lies beyond it, which keeps
-      // the forms' correlation.
-      std::array<Interval, 6> products;
-      for (std::size_t pair = 0; pair < 6; ++pair) {
-        const std::size_t a = detail::kPairs[pair][0];
-        const std::size_t b = detail::kPairs[pair][1];
-        const Interval box_product = Interval(reach_size[a]) * Interval(reach_size[b]);
-        if (a == b) {
-          products[pair] = Interval(0.0, box_product.hi());
-          continue;
-        }
-        const std::size_t q = a == 0 ? b - 1 : 2;
-        const double l = piece.pair_lambda[q];
-        const Interval extra =
-            Interval(l) * Interval(beyond_y[a].mag()) + Interval(beyond_y[b].mag()) / Interval(l);
-        const Interval plus = Interval(piece.pair_sizes[q][0]) + extra;
-        const Interval minus = Interval(piece.pair_sizes[q][1]) + extra;
-        products[pair] = interval::intersect(Interval(-(interval::sqr(minus) / Interval(4.0)).hi(),
-                                                      (interval::sqr(plus) / Interval(4.0)).hi()),
-                                             symmetric(box_product.hi()));
-      }
-      // y_k y_l y_m / 6 times the number of its orderings: 1/6 for k = l = m, 1/2 for two alike,
-      // 1 for three distinct.
-      std::array<Interval, 10> triple_bounds;
-      for (std::size_t triple = 0; triple < 10; ++triple) {
-        const auto& t = detail::kTriples[triple];
-        const Interval size =
-            Interval(reach_size[t[0]]) * Interval(reach_size[t[1]]) * Interval(reach_size[t[2]]);
-        const double weight = t[0] == t[2] ? 1.0 / 6.0 : (t[0] == t[1] || t[1] == t[2] ? 0.5 : 1.0);
-        triple_bounds[triple] = Interval(weight) * symmetric(size.hi());
-      }
-      PieceRemainder r;
-      for (std::size_t i = 0; i < 4; ++i) {
-        std::array<double, 3> g;
-        for (std::size_t k = 0; k < 3; ++k) g[k] = at_centre.gradient[i][k].mid();
-        r.gradient_z[i * 4 + 0] = Interval(0.0);
-        r.gradient_z[i * 4 + 1] = Interval(g[0]);
-        r.gradient_z[i * 4 + 2] = Interval(g[1]) * v(0, 0) + Interval(g[2]) * v(1, 0);
-        r.gradient_z[i * 4 + 3] = Interval(g[1]) * v(0, 1) + Interval(g[2]) * v(1, 1);
-        const double mid = at_centre.value[i].mid();
-        Interval constant(mid);
-        // Two enclosures of the rest, intersected: the mean value form, and n over the box less
-        // the carried part over the reach (tighter where g is small, as about upright).
-        Interval mean_value = at_centre.value[i] - mid;
-        Interval direct = over_box.value[i] - mid;
-        const std::array<Interval, 3> reach_y{piece.range[1], piece.rates[0], piece.rates[1]};
-        for (std::size_t k = 0; k < 3; ++k) {
-          constant -= Interval(g[k]) * Interval(yc[k]);
-          mean_value += Interval(g[k]) * beyond_y[k] +
-                        (over_box.gradient[i][k] - Interval(g[k])) * (ybox[k] - Interval(yc[k]));
-          direct -= Interval(g[k]) * (reach_y[k] - Interval(yc[k]));
-        }
-        // Taylor forms: (grad n(y_c) - g) (y - y_c) + g beyond, then to the second order with the
-        // Hessian over the box, or to the third with the Hessian at y_c and the third
-        // derivatives over the box.
-        Interval first = at_centre.value[i] - mid;
-        for (std::size_t k = 0; k < 3; ++k) {
-          first += (at_centre.gradient[i][k] - Interval(g[k])) * symmetric(reach_size[k]) +
-                   Interval(g[k]) * beyond_y[k];
-        }
-        Interval second = first;
-        Interval third = first;
-        for (std::size_t pair = 0; pair < 6; ++pair) {
-          const Interval half =
-              detail::kPairs[pair][0] == detail::kPairs[pair][1] ? Interval(0.5) : Interval(1.0);
-          second += half * over_box.hessian[i][pair] * products[pair];
-          third += half * at_centre.hessian[i][pair] * products[pair];
-        }
-        for (std::size_t triple = 0; triple < 10; ++triple) {
-          third += over_box.third[i][triple] * triple_bounds[triple];
-        }
-        Interval fresh = interval::intersect(interval::intersect(mean_value, direct),
-                                             interval::intersect(second, third));
-        // Its midpoint is a constant over the piece.
-        const double fresh_mid = fresh.mid();
-        constant += Interval(fresh_mid);
-        fresh = fresh - Interval(fresh_mid);
-        if (i == 2) fresh += drive_spread;
-        r.constant[i] = constant;
-        r.fresh[i] = fresh;
-      }
-      for (std::size_t j = first; j < last; ++j) piece_remainders.push_back(r);
-    }
+    const std::vector<PieceRemainder> piece_remainders =
+        remainders_over_pieces(plant, loop, piece_reach, beyond_y, drive_spread);
     const auto first_order = [&](const detail::PieceIntegrals& integrals) {
-      FirstOrder out = no_first_order();
-      for (std::size_t j = 0; j < piece_remainders.size(); ++j) {
-        const IMatrix4& psi = integrals.psi[j];
-        const PieceRemainder& r = piece_remainders[j];
-        const StretchMaps::Piece& maps = plant_period.pieces[j];
-        IMatrix4 psi_g;  // psi g
-        for (std::size_t i = 0; i < 4; ++i) {
-          for (std::size_t k = 0; k < 4; ++k) {
-            Interval sum(0.0);
-            for (std::size_t l = 0; l < 4; ++l) sum += psi[i * 4 + l] * r.gradient_z[l * 4 + k];
-            psi_g[i * 4 + k] = sum;
-          }
-        }
-        for (std::size_t i = 0; i < 4; ++i) {
-          for (std::size_t k = 0; k < 4; ++k) {
-            Interval sum(0.0);
-            for (std::size_t l = 0; l < 4; ++l) sum += psi_g[i * 4 + l] * maps.phi[l * 4 + k];
-            out.x_part[i * 4 + k] += sum;
-          }
-          Interval fresh(0.0);
-          for (std::size_t l = 0; l < 4; ++l) {
-            out.old_part[i] += psi_g[i * 4 + l] * maps.gamma_old[l];
-            out.new_part[i] += psi_g[i * 4 + l] * maps.gamma_new[l];
-            out.constant[i] += psi[i * 4 + l] * r.constant[l];
-            fresh += Interval(integrals.abs[j][i * 4 + l]) * Interval(r.fresh[l].mag());
-          }
-          out.fresh[i] += symmetric(fresh.hi());
-        }
-      }
-      return out;
+      return first_order_over(integrals, piece_remainders, plant_period);
     };
 
     // The plant at the readings' instant and at the next sample. Beyond the base's carried parts:
