@@ -291,7 +291,8 @@ std::vector<PieceRemainder> remainders_over_pieces(const detail::MomentumPlant& 
                                                    const LoopModel& loop,
                                                    const std::vector<PieceReach>& piece_reach,
                                                    const std::array<Interval, 3>& beyond_y,
-                                                   const Interval& drive_spread) {
+                                                   const Interval& drive_spread,
+                                                   const IVector4& rounding) {
   const auto v = [&](Eigen::Index i, Eigen::Index j) { return Interval(plant.inverse(i, j)); };
   std::vector<PieceRemainder> piece_remainders;
   piece_remainders.reserve(piece_reach.size());
@@ -415,6 +416,7 @@ std::vector<PieceRemainder> remainders_over_pieces(const detail::MomentumPlant& 
       constant += Interval(fresh_mid);
       fresh = fresh - Interval(fresh_mid);
       if (i == 2) fresh += drive_spread;
+      fresh += rounding[i];
       r.constant[i] = constant;
       r.fresh[i] = fresh;
     }
@@ -498,6 +500,22 @@ SensitivityMaps sensitivity_maps(const detail::UprightInverse& upright,
       out.direction_abs[e] =
           (Interval(out.direction_abs[e]) + Interval(v) * Interval(1.0 + 1e-15)).hi();
     }
+  }
+  return out;
+}
+
+// The linearisation's momentum rows are rounded products (-(kw + fv1) v, -fv2 v): within 1e-15 of
+// each entry, relative, of the exact ones the remainder's algebra assumes; over the state's box
+// `z` that is at most this, per row.
+IVector4 linearisation_rounding(const Eigen::Matrix4d& a, const StateBox& z) {
+  IVector4 out;
+  for (std::size_t i = 0; i < 4; ++i) {
+    Interval sum(0.0);
+    for (std::size_t j = 0; j < 4; ++j) {
+      sum += Interval(std::fabs(a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)))) *
+             Interval(z[j].mag());
+    }
+    out[i] = symmetric((Interval(1e-15) * sum).hi());
   }
   return out;
 }
@@ -950,6 +968,8 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
     for (int attempt = 0; attempt < kEnclosureTries && !enclosed; ++attempt) {
       remainder = detail::momentum_remainder(plant, loop.parameters, loop.duty_torque_nm,
                                              loop.back_emf_nm_s, over, rates_in(over), duty_range);
+      const IVector4 rounding = linearisation_rounding(plant.a, over);
+      for (std::size_t i = 0; i < 4; ++i) remainder[i] += rounding[i];
       StateBox next;
       bool inside = true;
       for (std::size_t i = 0; i < 4; ++i) {
@@ -1027,8 +1047,8 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
         v(0, 0) * beyond[2] + v(0, 1) * beyond[3] + symmetric(sens_w(0)),
         v(1, 0) * beyond[2] + v(1, 1) * beyond[3] + symmetric(sens_w(1))};
     const Interval drive_spread = (loop.duty_torque_nm - Interval(plant.kd)) * duty_range;
-    const std::vector<PieceRemainder> piece_remainders =
-        remainders_over_pieces(plant, loop, piece_reach, beyond_y, drive_spread);
+    const std::vector<PieceRemainder> piece_remainders = remainders_over_pieces(
+        plant, loop, piece_reach, beyond_y, drive_spread, linearisation_rounding(plant.a, over));
     const auto first_order = [&](const detail::PieceIntegrals& integrals) {
       return first_order_over(integrals, piece_remainders, plant_period);
     };
