@@ -176,13 +176,17 @@ void reduce(std::vector<AffineForm>& forms, Symbols& symbols, std::size_t max_sy
     }
   }
   const std::size_t total = keep + (merging ? n : 0) + n;
-  for (std::size_t r = 0; r < n; ++r) {
+  // A form's coefficients on the kept symbols, in their new places; zero after them.
+  const auto kept = [&](const Eigen::VectorXd& old) {
     Eigen::VectorXd c = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(total));
-    const Eigen::VectorXd& old = forms[r].coef;
     for (std::size_t k = 0; k < keep; ++k) {
       const auto j = static_cast<Eigen::Index>(order[k]);
       if (j < old.size()) c(static_cast<Eigen::Index>(k)) = old(j);
     }
+    return c;
+  };
+  for (std::size_t r = 0; r < n; ++r) {
+    Eigen::VectorXd c = kept(forms[r].coef);
     if (merging) {
       for (std::size_t i = 0; i < n; ++i) c(static_cast<Eigen::Index>(keep + i)) = back[i][r];
     }
@@ -196,12 +200,7 @@ void reduce(std::vector<AffineForm>& forms, Symbols& symbols, std::size_t max_sy
   // base's error symbols.
   for (std::vector<AffineForm>& d : sens) {
     for (std::size_t r = 0; r < n; ++r) {
-      Eigen::VectorXd c = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(total));
-      const Eigen::VectorXd& old = d[r].coef;
-      for (std::size_t k = 0; k < keep; ++k) {
-        const auto j = static_cast<Eigen::Index>(order[k]);
-        if (j < old.size()) c(static_cast<Eigen::Index>(k)) = old(j);
-      }
+      Eigen::VectorXd c = kept(d[r].coef);
       const auto error_column = static_cast<Eigen::Index>(keep + (merging ? n : 0) + r);
       forms[r].coef(error_column) =
           (Interval(forms[r].coef(error_column)) + Interval(d[r].err) * Interval(kRaise)).hi();

@@ -120,7 +120,6 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
     out.gamma_new[i] = late[i];
     out.gamma_old[i] = whole[i] - late[i];
   }
-  out.psi = to_matrix(integral_block(a, Eigen::Matrix4d::Identity(), Interval(s)));
   const IVector4 bi = interval_vector(b);
   out.psi_over = to_matrix(integral_block(a, Eigen::Matrix4d::Identity(), Interval(0.0, s)));
   // Per piece of [0, s], one interval exponential over the piece: its hull makes e^(a r) over
@@ -170,7 +169,6 @@ StretchMaps stretch_maps(const Eigen::Matrix4d& a, const Eigen::Vector4d& b, dou
   for (std::size_t i = 0; i < 4; ++i) out.abs_integral_b[i] = sum_b[i].hi();
   if (!(s > 0)) out.over_b = bi;
 
-  out.psi_b_over = to_vector(integral_block(a, b, Interval(0.0, s)));
   return out;
 }
 

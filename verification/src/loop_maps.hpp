@@ -20,13 +20,12 @@ using IMatrix4 = std::array<Interval, 16>;  // row-major
 
 // Over [0, s] from a sample, the duty held at `old` before switch_s and at `new` from it:
 //   x(s) = phi x(0) + gamma_old old + gamma_new new + (what the rest of the input and any
-//          disturbance add, bounded with psi and over below).
+//          disturbance add, bounded with the maps over [0, s] below).
 struct StretchMaps {
   double length_s = 0;  // s
   IMatrix4 phi;         // e^(a s)
   IVector4 gamma_old;   // int over [0, min(switch, s)) of e^(a (s - r)) b dr
   IVector4 gamma_new;   // int over [switch, s] (0 when s <= switch)
-  IMatrix4 psi;         // int_0^s e^(a r) dr: what a disturbance constant over [0, s] adds
   IMatrix4 over;        // e^(a r) for every r in [0, s]
   IVector4 over_b;      // e^(a r) b for every r in [0, s]
   IMatrix4 psi_over;    // int_0^r e^(a r') dr' for every r in [0, s]
@@ -34,9 +33,8 @@ struct StretchMaps {
   // midpoint adds, at most (tighter than s |over| where a mode decays within s, as the arm's does).
   std::array<double, 16> abs_integral{};
   // The same for int_0^s |e^(a r) b| dr (the input's column, so that its entries' cancellations
-  // are kept), and int_0^r e^(a r') b dr' for every r in [0, s].
+  // are kept).
   std::array<double, 4> abs_integral_b{};
-  IVector4 psi_b_over;
   // e^(a r) b over the pieces [k, k + 1] s / kPieces of [0, s].
   std::vector<IVector4> b_pieces;
   // e^(a r) b for every r in [from, to] (within [0, s]): how an input error at instants s - r

@@ -165,20 +165,10 @@ InputError input_error(const AffineForm& applied, const AffineForm& old_duty,
   return out;
 }
 
-// What a disturbance d (in `d` at every instant) and the input's errors add to the state over
-// [0, s]: psi mid(d) + int |e^(a r)| dr |d - mid(d)| [-1, 1] + the errors through e^(a r) b.
-IVector4 disturbance(const StretchMaps& m, const IVector4& d, const InputError& input) {
-  IVector4 out;
+// What the input's errors add to the state over [0, s], through e^(a r) b.
+IVector4 input_disturbance(const StretchMaps& m, const InputError& input) {
+  IVector4 out{Interval(0.0), Interval(0.0), Interval(0.0), Interval(0.0)};
   const double s = m.length_s;
-  for (std::size_t i = 0; i < 4; ++i) {
-    Interval sum(0.0);
-    for (std::size_t j = 0; j < 4; ++j) {
-      const double mid = d[j].mid();
-      sum += m.psi[i * 4 + j] * Interval(mid) +
-             symmetric((Interval(m.abs_integral[i * 4 + j]) * Interval((d[j] - mid).mag())).hi());
-    }
-    out[i] = sum;
-  }
   // A shared ramp not over by s reaches the state only in part: its bound as an error.
   std::vector<InputErrorPart> parts = input.parts;
   if (input.ramp != nullptr && input.ramp_to_s > s) {
@@ -193,6 +183,14 @@ IVector4 disturbance(const StretchMaps& m, const IVector4& d, const InputError& 
     for (std::size_t i = 0; i < 4; ++i) out[i] += effect[i] * symmetric(part.l1);
   }
   return out;
+}
+
+// |inverse row| times momenta of magnitudes p1 and p2 at most: what they move the rates inverse p.
+double rates_of_momenta(const detail::MomentumPlant& plant, Eigen::Index row, double p1,
+                        double p2) {
+  return (Interval(std::fabs(plant.inverse(row, 0))) * Interval(p1) +
+          Interval(std::fabs(plant.inverse(row, 1))) * Interval(p2))
+      .hi();
 }
 
 // What the plant's distance from its linearisation adds to the state at an instant s of the
@@ -929,10 +927,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
     for (std::size_t i = 0; i < 2; ++i) {
       const auto r = static_cast<Eigen::Index>(i);
       reach_rates[i] =
-          reach_rates[i] +
-          symmetric((Interval(std::fabs(plant.inverse(r, 0))) * Interval(sens_size[2]) +
-                     Interval(std::fabs(plant.inverse(r, 1))) * Interval(sens_size[3]))
-                        .hi());
+          reach_rates[i] + symmetric(rates_of_momenta(plant, r, sens_size[2], sens_size[3]));
     }
     // The rates over the enclosure `box`: the reach's, plus what its excess over the reach adds.
     // (box contains the reach: the interval that, added to the reach, gives the box).
@@ -1037,8 +1032,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
                                                .hi(),
                                            0.0};
     const auto sens_w = [&](Eigen::Index row) {
-      return (Interval(std::fabs(plant.inverse(row, 0))) * Interval(sens_size[2]) +
-              Interval(std::fabs(plant.inverse(row, 1))) * Interval(sens_size[3]) +
+      return (Interval(rates_of_momenta(plant, row, sens_size[2], sens_size[3])) +
               Interval(v_spread_p[static_cast<std::size_t>(row)]))
           .hi();
     };
@@ -1096,20 +1090,19 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       }
       return out;
     };
-    const IVector4 no_disturbance{zero_interval, zero_interval, zero_interval, zero_interval};
     const auto with_second_order = [&](IVector4 added, const StretchMaps& m) {
       const IVector4 more = second_order(m);
       for (std::size_t i = 0; i < 4; ++i) added[i] += more[i];
       return added;
     };
-    const Forms4 x_read = carried(
-        plant_reading, x, old_duty, new_duty, first_order(reading_pieces),
-        with_second_order(disturbance(plant_reading, no_disturbance, board_error), plant_reading),
-        board_error, symbols);
-    const Forms4 x_next = carried(
-        plant_period, x, old_duty, new_duty, first_order(period_pieces),
-        with_second_order(disturbance(plant_period, no_disturbance, board_error), plant_period),
-        board_error, symbols);
+    const Forms4 x_read =
+        carried(plant_reading, x, old_duty, new_duty, first_order(reading_pieces),
+                with_second_order(input_disturbance(plant_reading, board_error), plant_reading),
+                board_error, symbols);
+    const Forms4 x_next =
+        carried(plant_period, x, old_duty, new_duty, first_order(period_pieces),
+                with_second_order(input_disturbance(plant_period, board_error), plant_period),
+                board_error, symbols);
     // The sensitivities through the same maps, their ramps (the ramp's slope on their gaps) and,
     // for the plant, their sources: radius_k e_k on the base's linear reach.
     const auto ramp_effect = [&](const StretchMaps& m, const InputError& input) {
@@ -1176,9 +1169,8 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
 
     // The law: its estimate carried to the readings' instant, corrected by them, carried to the
     // sample; its ramp as an input error of its own.
-    const Forms4 predicted =
-        carried(law_reading, h, old_duty, new_duty, no_first,
-                disturbance(law_reading, no_disturbance, law_error), law_error, symbols);
+    const Forms4 predicted = carried(law_reading, h, old_duty, new_duty, no_first,
+                                     input_disturbance(law_reading, law_error), law_error, symbols);
     const AffineForm arm_innovation = difference(arm_reading, predicted[0]);
     const AffineForm pendulum_innovation = difference(pendulum_reading, predicted[1]);
     Forms4 corrected;
@@ -1190,7 +1182,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
                          .result();
     }
     Forms4 h_next = carried(law_period, corrected, old_duty, new_duty, no_first,
-                            disturbance(law_period, no_disturbance, law_error), law_error, symbols);
+                            input_disturbance(law_period, law_error), law_error, symbols);
     for (std::size_t i = 0; i < 4; ++i) {
       const double size =
           std::max(detail::range(corrected[i]).mag(), detail::range(h_next[i]).mag());
@@ -1266,10 +1258,7 @@ LoopRun run_loop(const control::BalanceControllerSpec& law, const LoopModel& loo
       for (std::size_t i = 0; i < 2; ++i) {
         const auto r = static_cast<Eigen::Index>(i);
         x_next_rates[i] =
-            x_next_rates[i] +
-            symmetric((Interval(std::fabs(plant.inverse(r, 0))) * Interval(p_spread[0]) +
-                       Interval(std::fabs(plant.inverse(r, 1))) * Interval(p_spread[1]))
-                          .hi());
+            x_next_rates[i] + symmetric(rates_of_momenta(plant, r, p_spread[0], p_spread[1]));
       }
     }
     LoopStepBox step;
